@@ -1,0 +1,45 @@
+"""rbjax: the blocked force of the JIS/ISO rubber-ball heavy impact source, in JAX.
+
+Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x64``.
+"""
+
+from . import _x64  # noqa: F401  (float64 before anything else touches JAX)
+from .ball import JIS_RUBBER_BALL, Ball
+from .forces import (
+    CubicStiffening,
+    HuntCrossley,
+    KelvinVoigt,
+    Zener,
+    contact_area_m2,
+    gas_force_N,
+    reissner_stiffness_N_per_m,
+    shell_force_N,
+)
+from .impact import STATUS_CODES, STATUS_NAMES, ImpactScalars, Trajectory, impact_velocity_m_per_s
+from .model import Model, Solver
+from .simulate import ImpactResult, simulate, trajectory
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Ball",
+    "JIS_RUBBER_BALL",
+    "CubicStiffening",
+    "HuntCrossley",
+    "KelvinVoigt",
+    "Zener",
+    "Model",
+    "Solver",
+    "ImpactResult",
+    "ImpactScalars",
+    "Trajectory",
+    "STATUS_CODES",
+    "STATUS_NAMES",
+    "simulate",
+    "trajectory",
+    "impact_velocity_m_per_s",
+    "reissner_stiffness_N_per_m",
+    "gas_force_N",
+    "shell_force_N",
+    "contact_area_m2",
+]

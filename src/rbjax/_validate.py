@@ -1,0 +1,51 @@
+"""Validation at the API edge: clear messages naming the parameter, its value and the range."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import numpy as np
+
+
+def is_traced(x) -> bool:
+    """True for values that are abstract under jit/grad/vmap (they cannot be checked here)."""
+    return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def check_choice(name: str, value, choices) -> None:
+    if value not in choices:
+        raise ValueError(
+            f"{name}={value!r} is not a known option; valid: {', '.join(repr(c) for c in choices)}"
+        )
+
+
+def check_range(
+    name: str,
+    value,
+    *,
+    lower: float = -math.inf,
+    upper: float = math.inf,
+    lower_open: bool = True,
+    upper_open: bool = True,
+) -> None:
+    """Check every element of ``value`` is finite and inside the interval; skip tracers."""
+    if is_traced(value):
+        return
+    arr = np.asarray(value, dtype=float)
+    lo = "(" if lower_open else "["
+    hi = ")" if upper_open else "]"
+    valid = f"{lo}{lower:g}, {upper:g}{hi}"
+    bad = ~np.isfinite(arr)
+    if lower_open:
+        bad |= arr <= lower
+    else:
+        bad |= arr < lower
+    if upper_open:
+        bad |= arr >= upper
+    else:
+        bad |= arr > upper
+    if np.any(bad):
+        first = arr.reshape(-1)[np.argmax(bad.reshape(-1))]
+        where = "" if arr.ndim == 0 else f" (element {int(np.argmax(bad.reshape(-1)))})"
+        raise ValueError(f"{name}={first!r}{where} is outside the valid range {valid} and finite")

@@ -1,0 +1,20 @@
+"""float64 for every rbjax computation.
+
+rbjax switches JAX's ``jax_enable_x64`` flag on when it is imported (documented in the
+README, "Precision"). The flag is process-wide: code that imports rbjax gets float64 as
+JAX's default dtype too. Each public entry point checks the flag and raises if a caller
+switched it off again afterwards, rather than silently computing in float32.
+"""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+
+def require_x64() -> None:
+    """Raise ``RuntimeError`` if float64 has been switched off after importing rbjax."""
+    if not jax.config.jax_enable_x64:
+        raise RuntimeError(
+            "rbjax needs float64: jax_enable_x64 was switched off after importing rbjax; "
+            "call jax.config.update('jax_enable_x64', True)"
+        )

@@ -1,0 +1,257 @@
+"""The equation of motion (paper Eq. 7) as a diffrax ODE, solved to the exact end of contact.
+
+State y = (δ, δ̇[, internal states]) from first contact, δ(0) = 0, δ̇(0) = √(2 g h_D) (Eq. 10).
+
+    (M − M_c(δ)) δ̈ − (M/2R) δ̇² H(−δ̇) = −F(δ, δ̇, ...)                     (Eq. 7)
+
+The printed Eq. 7 writes H(δ̇); Eqs. 8–9 and the text make the flux term act in restitution
+only (δ̇ < 0), as here. The solve is split in phases at events located by a root finder on
+the solver's dense interpolant, never by a sign change on a sample grid:
+
+1. compression, from first contact to the peak of the floor force (dF/dt = 0); for the
+   elastic models this is maximum compression δ̇ = 0 (F increases with δ);
+2. (damped models only) from the force peak to maximum compression δ̇ = 0;
+3. restitution (flux term on) to the end of contact: δ = 0 for the elastic models, the
+   contact force returning to zero (or δ = 0) for damped ones.
+
+The contact time is the time of the last event; the peak force is the floor force at the
+end of phase 1; the restitution coefficient is the rebound momentum over the impact momentum.
+"""
+
+from __future__ import annotations
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .forces import reissner_stiffness_N_per_m, contact_force_N, dynamic_mass_kg, internal_rates, momentum_flux_N
+from .model import Model, Solver
+
+G_N_PER_KG = 9.80665  # standard gravity (m/s²), Eq. 10
+
+#: Status codes of an impact; every non-zero status comes with NaN outputs.
+STATUS_NAMES = {
+    0: "ok",
+    1: "step_limit",
+    2: "mass_singularity",
+    3: "deflection_limit",
+    4: "solver_failed",
+}
+STATUS_CODES = {v: k for k, v in STATUS_NAMES.items()}
+#: Fraction of 2R at which the dynamic mass M(1 − δ/2R) is taken as singular.
+SINGULAR_FRACTION = 0.999
+
+
+def impact_velocity_m_per_s(height_m):
+    """v0 = √(2 g h_D), the speed at first contact after a free fall from h_D (Eq. 10)."""
+    return jnp.sqrt(2.0 * G_N_PER_KG * height_m)
+
+
+class ImpactScalars(eqx.Module):
+    """The scalar outputs of one impact (or a batch: every field shares the batch shape)."""
+
+    contact_time_s: jax.Array
+    peak_force_N: jax.Array
+    peak_time_s: jax.Array
+    restitution: jax.Array
+    max_deflection_m: jax.Array
+    max_compression_time_s: jax.Array
+    status: jax.Array
+    num_steps: jax.Array
+
+
+def _split(y, model):
+    return y[0], y[1], y[2:]
+
+
+def _contact_force(y, ball, model):
+    d, v, z = _split(y, model)
+    return contact_force_N(d, v, z, ball, gas=model.gas, damping=model.damping, stiffening=model.stiffening)
+
+
+def floor_force_N(y, ball, model):
+    """The blocked force on the floor for state y under ``model.blocked_force``."""
+    force = _contact_force(y, ball, model)
+    if model.blocked_force == "momentum":
+        v = y[1]
+        force = force + jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
+    return force
+
+
+def _vector_field(flux_on: bool):
+    def rhs(t, y, args):
+        ball, model = args
+        d, v, z = _split(y, model)
+        force = _contact_force(y, ball, model)
+        if flux_on:
+            force = force - momentum_flux_N(v, ball)
+        accel = -force / dynamic_mass_kg(d, ball)
+        rates = internal_rates(d, v, z, ball, model.damping)
+        return jnp.concatenate([jnp.stack([v, accel]), rates])
+
+    return rhs
+
+
+_COMPRESSION = _vector_field(flux_on=False)
+_RESTITUTION = _vector_field(flux_on=True)
+
+
+def _force_rate(y, args):
+    """dF/dt of the floor force along the compression trajectory (a directional derivative)."""
+    ball, model = args
+    _, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (_COMPRESSION(0.0, y, args),))
+    return rate
+
+
+def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, dense=False):
+    event = dfx.Event(conds, solver.root_finder(), direction=directions)
+    return dfx.diffeqsolve(
+        dfx.ODETerm(rhs),
+        solver.diffrax_solver(),
+        t0,
+        t1,
+        solver.dt0(),
+        y0,
+        args,
+        saveat=dfx.SaveAt(t1=True, dense=dense),
+        stepsize_controller=solver.controller(),
+        adjoint=solver.diffrax_adjoint(),
+        event=event,
+        max_steps=solver.max_steps,
+        throw=False,
+    )
+
+
+def _ok(sol):
+    return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
+
+
+def _phases(height_m, ball, model: Model, solver: Solver, dense: bool):
+    """Solve the phases of one impact; return the diffrax solutions and the phase ends."""
+    args = (ball, model)
+    v0 = impact_velocity_m_per_s(height_m)
+    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), jnp.zeros(model.num_internal_states)])
+    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+
+    # Event functions are scaled to O(1) so that the root finder's tolerances (which also
+    # bound |cond| at the root) sit above round-off for every one of them.
+    force_scale = reissner_stiffness_N_per_m(ball) * ball.wall_m
+
+    def velocity(t, y, args, **kw):
+        return y[1] / v0
+
+    def singularity(t, y, args, **kw):
+        return (y[0] - singular) / ball.radius_m
+
+    def force_rate(t, y, args, **kw):
+        return _force_rate(y, args) / (force_scale * v0 / ball.wall_m)
+
+    if model.velocity_dependent:
+        conds, dirs = (force_rate, velocity, singularity), (False, False, True)
+    else:
+        conds, dirs = (velocity, singularity), (False, True)
+    sol1 = _solve(_COMPRESSION, 0.0, y0, args, conds, dirs, solver, dense=dense)
+    t_peak, y_peak = sol1.ts[-1], sol1.ys[-1]
+
+    if model.velocity_dependent:
+        # From the force peak on to maximum compression (zero length if they coincide).
+        t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
+        sol2 = _solve(_COMPRESSION, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense)
+        t_max, y_max = sol2.ts[-1], sol2.ys[-1]
+    else:
+        sol2, t_max, y_max = None, t_peak, y_peak
+
+    def deflection(t, y, args, **kw):
+        return y[0] / ball.wall_m
+
+    if model.velocity_dependent:
+
+        def contact(t, y, args, **kw):
+            return _contact_force(y, *args) / force_scale
+
+        conds3, dirs3 = (contact, deflection), (False, False)
+    else:
+        conds3, dirs3 = deflection, False
+    # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
+    y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
+    sol3 = _solve(_RESTITUTION, t_max, y_start, args, conds3, dirs3, solver, dense=dense)
+    return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
+
+
+def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False)
+    sol3 = sols[2]
+    t_end, y_end = sol3.ts[-1], sol3.ys[-1]
+    args = (ball, model)
+
+    peak = floor_force_N(y_peak, *args)
+    first = floor_force_N(jnp.concatenate([jnp.stack([0.0, v0]), jnp.zeros(model.num_internal_states)]), *args)
+    peak_force = jnp.maximum(peak, first)
+    peak_time = jnp.where(peak >= first, t_peak, 0.0)
+    momentum_out = -dynamic_mass_kg(y_end[0], ball) * y_end[1]
+    restitution = momentum_out / (ball.mass_kg * v0)
+
+    solved = [s for s in sols if s is not None]
+    steps = sum(s.stats["num_steps"] for s in solved)
+    step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
+    failed = ~jnp.all(jnp.stack([_ok(s) for s in solved]))
+    singular = y_max[0] >= SINGULAR_FRACTION * 2.0 * ball.radius_m * (1.0 - 1e-9)
+    outputs = jnp.stack([t_end, peak_force, restitution, y_max[0], t_max, peak_time])
+    nonfinite = ~jnp.all(jnp.isfinite(outputs))
+    too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
+    status = jnp.select(
+        [step_limit, singular, failed | nonfinite, too_deep],
+        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
+        STATUS_CODES["ok"],
+    )
+    ok = status == 0
+    nan = jnp.nan
+    return ImpactScalars(
+        contact_time_s=jnp.where(ok, t_end, nan),
+        peak_force_N=jnp.where(ok, peak_force, nan),
+        peak_time_s=jnp.where(ok, peak_time, nan),
+        restitution=jnp.where(ok, restitution, nan),
+        max_deflection_m=jnp.where(ok, y_max[0], nan),
+        max_compression_time_s=jnp.where(ok, t_max, nan),
+        status=status.astype(jnp.int32),
+        num_steps=jnp.asarray(steps, dtype=jnp.int32),
+    )
+
+
+class Trajectory(eqx.Module):
+    """State and floor force of one impact (or a batch) sampled at given times (0 after contact)."""
+
+    time_s: jax.Array
+    deflection_m: jax.Array
+    velocity_m_per_s: jax.Array
+    force_N: jax.Array
+    in_contact: jax.Array
+
+
+def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
+    v0, (sol1, sol2, sol3), (t_peak, _), (t_max, _) = _phases(height_m, ball, model, solver, dense=True)
+    t_end = sol3.ts[-1]
+    args = (ball, model)
+
+    def at(t):
+        # Each phase's interpolant is evaluated inside its own interval only (clipped), so an
+        # unused branch can never feed NaN into values or gradients.
+        y = sol1.evaluate(jnp.clip(t, 0.0, t_peak))
+        if sol2 is not None:
+            length = t_max - t_peak
+            y2 = sol2.evaluate(jnp.clip(t, t_peak, t_max))
+            y = jnp.where((t > t_peak) & (length > 0.0), y2, y)
+        y3 = sol3.evaluate(jnp.clip(t, t_max, t_end))
+        y = jnp.where(t > t_max, y3, y)
+        inside = (t >= 0.0) & (t < t_end)
+        y = jnp.where(inside, y, jnp.zeros_like(y))
+        force = jnp.where(inside, floor_force_N(y, *args), 0.0)
+        return y[0], y[1], force, inside
+
+    d, v, f, inside = jax.vmap(at)(times_s)
+    return Trajectory(time_s=times_s, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside)
+
+
+impact_batch = eqx.filter_jit(eqx.filter_vmap(_impact, in_axes=(0, 0, 0, None)))
+trajectory_batch = eqx.filter_jit(eqx.filter_vmap(_trajectory, in_axes=(0, 0, 0, None, None)))

@@ -1,0 +1,217 @@
+"""The public forward model: ``simulate`` and its frozen result."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._validate import check_range, is_traced
+from ._x64 import require_x64
+from .ball import JIS_RUBBER_BALL, Ball
+from .impact import STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
+from .model import Model, Solver
+
+#: The paper's output grid (§2.4): 44.1 kHz over 1 s.
+PAPER_RATE_Hz = 44_100.0
+PAPER_DURATION_S = 1.0
+
+
+def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0) -> Model:
+    """A ``Model`` from the keyword options of ``simulate`` (validated)."""
+    return Model(
+        gas=gas,
+        blocked_force=blocked_force,
+        damping=damping,
+        stiffening=stiffening,
+        max_deflection_ratio=max_deflection_ratio,
+    )
+
+
+def _broadcast_inputs(height_m, ball: Ball, model: Model):
+    """Flatten height, ball and model parameters to one batch axis (shape kept for outputs)."""
+    height = jnp.asarray(height_m, dtype=jnp.float64)
+    ball = ball.as_arrays()
+    arrays, static = eqx.partition(model, eqx.is_array_like)
+    arrays = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=jnp.float64), arrays)
+    leaves = [height, *jax.tree_util.tree_leaves(ball), *jax.tree_util.tree_leaves(arrays)]
+    shape = jnp.broadcast_shapes(*(x.shape for x in leaves))
+    flat = lambda x: jnp.broadcast_to(x, shape).reshape(-1)  # noqa: E731
+    height = flat(height)
+    ball = jax.tree_util.tree_map(flat, ball)
+    model = eqx.combine(jax.tree_util.tree_map(flat, arrays), static)
+    return shape, height, ball, model
+
+
+class ImpactResult(eqx.Module):
+    """Scalar outputs of ``simulate`` per drop height; the force history is computed on request.
+
+    Every scalar field has the broadcast shape of the inputs. Where ``status != 0`` the scalar
+    outputs are NaN and ``status_name`` says why (``step_limit``, ``mass_singularity``,
+    ``deflection_limit``, ``solver_failed``).
+    """
+
+    height_m: jax.Array
+    contact_time_s: jax.Array
+    peak_force_N: jax.Array
+    peak_time_s: jax.Array
+    restitution: jax.Array
+    max_deflection_m: jax.Array
+    status: jax.Array
+    num_steps: jax.Array
+    ball: Ball
+    model: Model
+    solver: Solver = eqx.field(static=True)
+    rate_Hz: float = eqx.field(static=True, default=PAPER_RATE_Hz)
+    duration_s: float = eqx.field(static=True, default=PAPER_DURATION_S)
+
+    @property
+    def ok(self):
+        return self.status == 0
+
+    @property
+    def status_name(self):
+        """Status names with the shape of ``status`` (a str for a single impact)."""
+        codes = np.asarray(self.status)
+        names = np.vectorize(STATUS_NAMES.get, otypes=[object])(codes)
+        return str(names) if codes.ndim == 0 else names
+
+    def raise_for_status(self) -> "ImpactResult":
+        """Raise ``RuntimeError`` naming the heights whose solve failed; return self otherwise."""
+        codes = np.asarray(self.status).reshape(-1)
+        if np.any(codes != 0):
+            heights = np.broadcast_to(np.asarray(self.height_m), np.shape(self.status)).reshape(-1)
+            bad = [f"height_m={h:g}: {STATUS_NAMES[int(c)]}" for h, c in zip(heights, codes) if c != 0]
+            raise RuntimeError("impact solve failed: " + "; ".join(bad[:10]))
+        return self
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """The history grid: ``rate_Hz`` samples per second over ``duration_s``."""
+        return np.arange(int(round(self.rate_Hz * self.duration_s))) / self.rate_Hz
+
+    @property
+    def force_N(self) -> jax.Array:
+        """Blocked-force histories on ``time_s`` (computed on access; zero after contact)."""
+        return self.history().force_N
+
+    def history(self, rate_Hz: float | None = None, duration_s: float | None = None) -> Trajectory:
+        """Deflection, velocity and floor force sampled at ``rate_Hz`` over ``duration_s``.
+
+        Only the samples during contact are integrated; the rest of the record is zero.
+        """
+        rate = self.rate_Hz if rate_Hz is None else rate_Hz
+        duration = self.duration_s if duration_s is None else duration_s
+        return force_history(self.height_m, self.ball, self.model, self.solver, rate_Hz=rate, duration_s=duration, contact_time_s=self.contact_time_s)
+
+    def plot(self, ax=None, *, rate_Hz: float | None = None):
+        """Plot the force histories over the contact (one line per height)."""
+        from .plot import plot_histories
+
+        return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
+
+
+def simulate(
+    height_m,
+    ball: Ball = JIS_RUBBER_BALL,
+    *,
+    gas: str = "adiabatic",
+    blocked_force: str = "paper",
+    damping=None,
+    stiffening=None,
+    max_deflection_ratio: float = 2.0,
+    solver: Solver | None = None,
+    rate_Hz: float = PAPER_RATE_Hz,
+    duration_s: float = PAPER_DURATION_S,
+) -> ImpactResult:
+    """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2).
+
+    ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
+    may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
+    ``jax.grad`` (``jax.jacfwd`` with ``Solver(adjoint="forward")``).
+
+    Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
+    ``.force_N`` / ``.history()`` integrate the histories on request.
+    """
+    require_x64()
+    check_range("height_m", height_m, lower=0.0)
+    check_range("rate_Hz", rate_Hz, lower=0.0)
+    check_range("duration_s", duration_s, lower=0.0)
+    if not isinstance(ball, Ball):
+        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
+    solver = Solver() if solver is None else solver
+    model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, max_deflection_ratio=max_deflection_ratio)
+    return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s)
+
+
+def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S) -> ImpactResult:
+    shape, height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
+    out = impact_batch(height, flat_ball, flat_model, solver)
+    out = jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+    return ImpactResult(
+        height_m=height.reshape(shape),
+        contact_time_s=out.contact_time_s,
+        peak_force_N=out.peak_force_N,
+        peak_time_s=out.peak_time_s,
+        restitution=out.restitution,
+        max_deflection_m=out.max_deflection_m,
+        status=out.status,
+        num_steps=out.num_steps,
+        ball=ball,
+        model=model,
+        solver=solver,
+        rate_Hz=float(rate_Hz),
+        duration_s=float(duration_s),
+    )
+
+
+def trajectory(height_m, times_s, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
+    """State and floor force at the given times (1-D, shared by all heights); differentiable.
+
+    The building block for fitting: ``times_s`` is static in shape, so this jits and goes
+    through ``jax.jacfwd`` (with ``Solver(adjoint="forward")``).
+    """
+    require_x64()
+    check_range("height_m", height_m, lower=0.0)
+    model = Model() if model is None else model
+    solver = Solver() if solver is None else solver
+    shape, height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
+    times = jnp.asarray(times_s, dtype=jnp.float64)
+    traj = trajectory_batch(height, flat_ball, flat_model, solver, times)
+    return jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), traj)
+
+
+def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None) -> Trajectory:
+    """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
+
+    Only the first ⌈t_c·rate⌉ + 1 samples are integrated (t_c: the longest contact time of the
+    batch, computed first if not given); the rest of the record is zeros.
+    """
+    n_total = int(round(rate_Hz * duration_s))
+    if contact_time_s is None:
+        contact_time_s = _simulate(height_m, ball, model, solver).contact_time_s
+    if is_traced(contact_time_s):
+        n_contact = n_total
+    else:
+        tc = np.asarray(contact_time_s, dtype=float)
+        longest = np.nanmax(tc) if np.any(np.isfinite(tc)) else 0.0
+        n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
+    times = jnp.arange(n_contact) / rate_Hz
+    traj = trajectory(height_m, times, ball, model, solver)
+    pad = n_total - n_contact
+
+    def padded(x):
+        widths = [(0, 0)] * (x.ndim - 1) + [(0, pad)]
+        return jnp.pad(x, widths)
+
+    return Trajectory(
+        time_s=jnp.arange(n_total) / rate_Hz,
+        deflection_m=padded(traj.deflection_m),
+        velocity_m_per_s=padded(traj.velocity_m_per_s),
+        force_N=padded(traj.force_N),
+        in_contact=padded(traj.in_contact),
+    )
