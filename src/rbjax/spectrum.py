@@ -1,0 +1,470 @@
+"""Force exposure level L_FE in octave and one-third-octave bands, and the force spectrum.
+
+The processing is the one of Schoenwald, Zeitler & Nightingale (2011), §2.4: the blocked
+force is recorded (or predicted) as a 1 s record at 44.1 kHz, an FFT is taken of the whole
+record (rectangular window, no detrending) and the energy spectrum is "band filtered in the
+frequency domain" to give the octave-band force exposure level (paper Eq. 11)::
+
+    L_FE = 10 log10( (1/T0) ∫ F²(t)/F0² dt ),   T0 = 1 s,  F0 = 1 N.
+
+Bands are the base-ten fractional-octave bands of IEC 61260-1:2014 (Clause 5.2: octave
+frequency ratio G = 10^(3/10); Clause 5.3: reference frequency f_r = 1000 Hz; Clause 5.4:
+exact mid-band frequencies f_m = f_r G^(x/b) for odd b; the band-edge frequencies
+f_1,2 = f_m G^(∓1/(2b)) defined with them in Clause 5), labelled with their nominal
+mid-band frequencies (IEC 61260-1:2014 Annex E, the R10 preferred numbers of ISO 266).
+The filters here are ideal (brick-wall): every rfft bin belongs to exactly one band, with
+``lower <= f < upper``, so contiguous bands tile the spectrum and band energies add up to
+the total energy exactly (Parseval).
+
+Everything that takes a force array is pure JAX in float64 and differentiable
+(``jax.grad``/``jax.jacfwd``), batchable on leading axes (the time axis is the last one),
+and usable under ``jit``/``vmap`` with a concrete (Python or NumPy) ``rate_Hz``. The band
+tables are plain NumPy. This module knows nothing about solvers.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from decimal import Decimal
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import _x64  # noqa: F401  (float64 on)
+from ._validate import check_range, is_traced
+
+__all__ = [
+    "OCTAVE_BANDS",
+    "THIRD_OCTAVE_BANDS",
+    "OCTAVE_RATIO_G",
+    "REFERENCE_FREQUENCY_Hz",
+    "band_centres_Hz",
+    "band_edges_Hz",
+    "nominal_centres_Hz",
+    "energy_spectrum",
+    "band_energies_N2s",
+    "lfe_dB",
+    "lfe_total_dB",
+    "lfe_octave_dB",
+    "lfe_third_octave_dB",
+    "force_spectrum_dB",
+    "contact_resonance_Hz",
+    "lfe_increase_per_doubling_dB",
+]
+
+#: Octave frequency ratio of base-ten filters, G = 10^(3/10) (IEC 61260-1:2014, 5.2).
+OCTAVE_RATIO_G = 10.0 ** (3.0 / 10.0)
+#: Reference frequency f_r (IEC 61260-1:2014, 5.3).
+REFERENCE_FREQUENCY_Hz = 1000.0
+
+#: Octave bands of the rubber-ball L_FE spectrum, 31.5 Hz to 1 kHz (paper Fig. 8; the
+#: standards tolerance 31.5-500 Hz, see ``rbjax.standards``).
+OCTAVE_BANDS = ("31.5", "63", "125", "250", "500", "1000")
+#: One-third-octave bands 25 Hz to 1.25 kHz (the thirds inside OCTAVE_BANDS).
+THIRD_OCTAVE_BANDS = (
+    "25", "31.5", "40", "50", "63", "80", "100", "125", "160",
+    "200", "250", "315", "400", "500", "630", "800", "1000", "1250",
+)  # fmt: skip
+
+# R10 preferred numbers (ISO 3, ISO 266): the nominal mid-band frequencies of the
+# base-ten one-third-octave bands, IEC 61260-1:2014 Annex E, one decade.
+_R10 = ("1", "1.25", "1.6", "2", "2.5", "3.15", "4", "5", "6.3", "8")
+
+# Fine-grid spacing for locating the contact resonance (before refinement).
+_RESONANCE_GRID_Hz = 0.1
+# Newton refinement steps of the resonance (each clipped to one grid step).
+_RESONANCE_NEWTON_STEPS = 4
+# Frequencies per block when evaluating the DTFT at arbitrary frequencies.
+_DTFT_BLOCK = 64
+
+
+# --------------------------------------------------------------------------------------
+# IEC 61260-1 band tables (NumPy)
+# --------------------------------------------------------------------------------------
+
+
+def _check_fraction(fraction) -> int:
+    if fraction not in (1, 3) or isinstance(fraction, bool):
+        raise ValueError(f"fraction={fraction!r} must be 1 (octave) or 3 (one-third octave)")
+    return int(fraction)
+
+
+def _check_frequency_range(fmin_Hz, fmax_Hz) -> tuple[float, float]:
+    check_range("fmin_Hz", fmin_Hz, lower=0.0)
+    check_range("fmax_Hz", fmax_Hz, lower=0.0)
+    fmin_Hz, fmax_Hz = float(fmin_Hz), float(fmax_Hz)
+    if fmax_Hz < fmin_Hz:
+        raise ValueError(f"fmax_Hz={fmax_Hz!r} must be >= fmin_Hz={fmin_Hz!r}")
+    return fmin_Hz, fmax_Hz
+
+
+def _nominal_label(third_index: int) -> str:
+    """Nominal mid-band frequency (IEC 61260-1:2014 Annex E) of the base-ten third with
+    band number ``third_index`` (0 at 1 kHz): the R10 preferred number of that decade."""
+    decade, step = divmod(third_index, 10)
+    value = Decimal(_R10[step]) * Decimal(10) ** (3 + decade)
+    return format(value.normalize(), "f")
+
+
+@functools.lru_cache(maxsize=64)
+def _band_numbers(fraction: int, fmin_Hz: float, fmax_Hz: float) -> tuple[int, ...]:
+    """Band numbers x (f_m = f_r G^(x/b)) whose nominal mid-band frequency is in [fmin, fmax]."""
+    b = fraction
+    log_G = math.log10(OCTAVE_RATIO_G)
+    x_lo = math.floor(b * math.log10(fmin_Hz / REFERENCE_FREQUENCY_Hz) / log_G) - 2
+    x_hi = math.ceil(b * math.log10(fmax_Hz / REFERENCE_FREQUENCY_Hz) / log_G) + 2
+    third = 3 // b  # an octave's band number x is the third-octave band number 3x
+    tol = 1e-12
+    return tuple(
+        x
+        for x in range(x_lo, x_hi + 1)
+        if fmin_Hz * (1 - tol) <= float(_nominal_label(third * x)) <= fmax_Hz * (1 + tol)
+    )
+
+
+def band_centres_Hz(fraction: int, fmin_Hz: float, fmax_Hz: float) -> np.ndarray:
+    """Exact base-ten mid-band frequencies f_m = 1000 Hz · G^(x/b), G = 10^(3/10).
+
+    IEC 61260-1:2014, Clause 5.2 (G, base ten), 5.3 (f_r = 1000 Hz) and 5.4 (exact mid-band
+    frequencies, odd bandwidth designator b). Returns the bands whose *nominal* mid-band
+    frequency (Annex E) lies in [fmin_Hz, fmax_Hz], e.g. octaves 31.5 Hz to 1 kHz give
+    31.62, 63.10, 125.89, 251.19, 501.19, 1000 Hz.
+
+    Args:
+      fraction: bandwidth designator b: 1 (octave) or 3 (one-third octave).
+      fmin_Hz, fmax_Hz: range of nominal mid-band frequencies, Hz (inclusive).
+    """
+    b = _check_fraction(fraction)
+    fmin_Hz, fmax_Hz = _check_frequency_range(fmin_Hz, fmax_Hz)
+    x = np.asarray(_band_numbers(b, fmin_Hz, fmax_Hz), dtype=float)
+    return REFERENCE_FREQUENCY_Hz * OCTAVE_RATIO_G ** (x / b)
+
+
+def band_edges_Hz(fraction: int, fmin_Hz: float, fmax_Hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper band-edge frequencies f_1,2 = f_m · G^(∓1/(2b)), Hz.
+
+    IEC 61260-1:2014, Clause 5 (band-edge frequencies from the exact mid-band frequencies
+    of 5.4, G of 5.2). Adjacent bands share an edge: upper[i] == lower[i + 1].
+    """
+    centres = band_centres_Hz(fraction, fmin_Hz, fmax_Hz)
+    half = OCTAVE_RATIO_G ** (1.0 / (2 * int(fraction)))
+    return centres / half, centres * half
+
+
+def nominal_centres_Hz(fraction: int, fmin_Hz: float, fmax_Hz: float) -> list[str]:
+    """Nominal mid-band frequencies as labels ("31.5", "63", ..., "1000"), IEC 61260-1:2014
+    Annex E, for the same bands as :func:`band_centres_Hz`."""
+    b = _check_fraction(fraction)
+    fmin_Hz, fmax_Hz = _check_frequency_range(fmin_Hz, fmax_Hz)
+    return [_nominal_label((3 // b) * x) for x in _band_numbers(b, fmin_Hz, fmax_Hz)]
+
+
+# --------------------------------------------------------------------------------------
+# energy spectrum and band energies (JAX)
+# --------------------------------------------------------------------------------------
+
+
+def _as_force(force_N) -> jax.Array:
+    x = jnp.asarray(force_N, dtype=jnp.float64)
+    if x.ndim < 1 or x.shape[-1] < 1:
+        raise ValueError(
+            f"force_N has shape {tuple(x.shape)}; expected (..., n_samples) with n_samples >= 1"
+        )
+    return x
+
+
+def _check_rate(rate_Hz) -> None:
+    check_range("rate_Hz", rate_Hz, lower=0.0)
+
+
+def _rfft_freq_Hz(n: int, rate_Hz) -> jax.Array:
+    """rfft bin frequencies k · rate/n (computed so that bin k is exactly k·Δf)."""
+    return jnp.arange(n // 2 + 1, dtype=jnp.float64) * (rate_Hz / n)
+
+
+def _one_sided_weights(n: int) -> jax.Array:
+    """2 for bins that stand for a ± pair of frequencies, 1 for DC and (even n) Nyquist."""
+    w = np.full(n // 2 + 1, 2.0)
+    w[0] = 1.0
+    if n % 2 == 0:
+        w[-1] = 1.0
+    return jnp.asarray(w)
+
+
+def _abs2(z) -> jax.Array:
+    """|z|² written as re² + im² (differentiable at z = 0, unlike abs(z)**2)."""
+    return jnp.real(z) ** 2 + jnp.imag(z) ** 2
+
+
+def energy_spectrum(force_N, rate_Hz) -> tuple[jax.Array, jax.Array]:
+    """One-sided energy spectral density of a force record, (N²·s)/Hz.
+
+    F(f_k) ≈ DFT_k / rate (the Fourier integral ∫F(t) e^{-2πift} dt by the rectangle
+    rule) at the rfft bins f_k = k·rate/n of the record as it is (rectangular window, no
+    detrending, paper §2.4); E_k = w_k |F(f_k)|² with w_k = 2, except w = 1 at DC and, for
+    even n, at Nyquist. Parseval holds exactly: sum(E)·Δf = sum(F²)/rate = ∫F² dt (the
+    integral of paper Eq. 11), Δf = rate/n.
+
+    Args:
+      force_N: force record(s), shape (..., n); the last axis is time.
+      rate_Hz: sampling rate, Hz.
+
+    Returns:
+      (freq_Hz, energy_N2s_per_Hz): shapes (n//2 + 1,) and (..., n//2 + 1).
+    """
+    _check_rate(rate_Hz)
+    return _energy_spectrum(_as_force(force_N), rate_Hz)
+
+
+@jax.jit
+def _energy_spectrum(x, rate_Hz):
+    n = x.shape[-1]
+    spectrum_Ns = jnp.fft.rfft(x, axis=-1) / rate_Hz
+    return _rfft_freq_Hz(n, rate_Hz), _one_sided_weights(n) * _abs2(spectrum_Ns)
+
+
+def _band_mask(freq_Hz, lower_Hz, upper_Hz) -> jax.Array:
+    """(n_bands, n_bins) 0/1 matrix: bin f belongs to band i when lower_i <= f < upper_i."""
+    lo = jnp.asarray(lower_Hz, dtype=jnp.float64)[:, None]
+    hi = jnp.asarray(upper_Hz, dtype=jnp.float64)[:, None]
+    return ((freq_Hz[None, :] >= lo) & (freq_Hz[None, :] < hi)).astype(jnp.float64)
+
+
+def _check_edges(lower_Hz, upper_Hz) -> None:
+    lo, hi = np.shape(lower_Hz), np.shape(upper_Hz)
+    if len(lo) != 1 or lo != hi:
+        raise ValueError(
+            f"lower_Hz (shape {lo}) and upper_Hz (shape {hi}) must be 1-D of equal length"
+        )
+    if not (is_traced(lower_Hz) or is_traced(upper_Hz)):
+        lower, upper = np.asarray(lower_Hz, float), np.asarray(upper_Hz, float)
+        if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(upper <= lower):
+            raise ValueError(
+                f"band edges lower_Hz={lower.tolist()}, upper_Hz={upper.tolist()} must be "
+                "non-NaN with lower_Hz < upper_Hz in every band"
+            )
+
+
+def band_energies_N2s(force_N, rate_Hz, lower_Hz, upper_Hz) -> jax.Array:
+    """Force energy ∫F_band² dt in each band by ideal (brick-wall) filtering, N²·s.
+
+    Each rfft bin f_k of :func:`energy_spectrum` is assigned to the band with
+    lower ≤ f_k < upper (half-open), so contiguous bands tile the spectrum and their
+    energies add up exactly to the total (paper §2.4: "band filtered in the frequency
+    domain").
+
+    Args:
+      force_N: force record(s), shape (..., n).
+      rate_Hz: sampling rate, Hz.
+      lower_Hz, upper_Hz: band edges, shape (n_bands,), Hz.
+
+    Returns:
+      energies, shape (..., n_bands), N²·s.
+    """
+    _check_rate(rate_Hz)
+    _check_edges(lower_Hz, upper_Hz)
+    return _band_energies(_as_force(force_N), rate_Hz, lower_Hz, upper_Hz)
+
+
+@jax.jit
+def _band_energies(x, rate_Hz, lower_Hz, upper_Hz):
+    freq_Hz, esd = _energy_spectrum(x, rate_Hz)
+    delta_f_Hz = rate_Hz / x.shape[-1]
+    return (esd * delta_f_Hz) @ _band_mask(freq_Hz, lower_Hz, upper_Hz).T
+
+
+def lfe_dB(energy_N2s, T0_s: float = 1.0, F0_N: float = 1.0) -> jax.Array:
+    """Force exposure level L_FE = 10 log10( E / (T0 F0²) ), dB re 1 N (paper Eq. 11).
+
+    ``energy_N2s`` is E = ∫F² dt (over the record, or of one band), N²·s; T0 = 1 s and
+    F0 = 1 N are the paper's reference duration and force. Zero energy gives -inf.
+    """
+    return 10.0 * jnp.log10(jnp.asarray(energy_N2s, dtype=jnp.float64) / (T0_s * F0_N**2))
+
+
+def lfe_total_dB(force_N, rate_Hz) -> jax.Array:
+    """Broadband L_FE of the record(s) (paper Eq. 11), with ∫F² dt = sum(F²)/rate."""
+    _check_rate(rate_Hz)
+    return _lfe_total_dB(_as_force(force_N), rate_Hz)
+
+
+@jax.jit
+def _lfe_total_dB(x, rate_Hz):
+    return lfe_dB(jnp.sum(x**2, axis=-1) / rate_Hz)
+
+
+def _band_lfe_dB(force_N, rate_Hz, fraction: int, labels: tuple[str, ...]) -> jax.Array:
+    lower, upper = band_edges_Hz(fraction, float(labels[0]), float(labels[-1]))
+    return lfe_dB(band_energies_N2s(force_N, rate_Hz, lower, upper))
+
+
+def lfe_octave_dB(force_N, rate_Hz) -> jax.Array:
+    """Octave-band L_FE (paper Eq. 11, §2.4) over :data:`OCTAVE_BANDS` (31.5 Hz–1 kHz),
+    dB re 1 N; shape (..., 6). Bands of IEC 61260-1:2014 (5.2, 5.4), ideal filters."""
+    return _band_lfe_dB(force_N, rate_Hz, 1, OCTAVE_BANDS)
+
+
+def lfe_third_octave_dB(force_N, rate_Hz) -> jax.Array:
+    """One-third-octave-band L_FE (paper Eq. 11) over :data:`THIRD_OCTAVE_BANDS`
+    (25 Hz–1.25 kHz), dB re 1 N; shape (..., 18). IEC 61260-1:2014 base-ten bands."""
+    return _band_lfe_dB(force_N, rate_Hz, 3, THIRD_OCTAVE_BANDS)
+
+
+# --------------------------------------------------------------------------------------
+# narrow-band force spectrum and the contact resonance
+# --------------------------------------------------------------------------------------
+
+
+@jax.jit
+def _dtft_Ns(x, rate_Hz, freq_Hz) -> jax.Array:
+    """F(f) ≈ sum_n x_n e^{-2πi f n/rate} / rate at arbitrary frequencies; shape (..., m)."""
+    n_idx = jnp.arange(x.shape[-1], dtype=jnp.float64)
+
+    def at(f_Hz):
+        phase = (-2.0 * jnp.pi / rate_Hz) * f_Hz * n_idx
+        return (x @ jnp.cos(phase) + 1j * (x @ jnp.sin(phase))) / rate_Hz
+
+    values = jax.lax.map(at, freq_Hz, batch_size=_DTFT_BLOCK)  # (m, ...)
+    return jnp.moveaxis(values, 0, -1)
+
+
+def force_spectrum_dB(force_N, rate_Hz, freq_Hz=None) -> tuple[jax.Array, jax.Array]:
+    """Narrow-band force spectrum level 20 log10(|F(f)| / 1 N·s), dB (paper Fig. 12).
+
+    F(f) = ∫F(t) e^{-2πift} dt is approximated by the DTFT of the samples,
+    sum_n F_n e^{-2πi f n/rate} / rate: at the rfft bins when ``freq_Hz`` is None (an FFT),
+    otherwise at the given frequencies (any grid, e.g. 0.1 Hz, finer than the 1/duration
+    bin spacing). Exact zeros of F give -inf.
+
+    Returns:
+      (freq_Hz, level_dB): shapes (m,) and (..., m).
+    """
+    _check_rate(rate_Hz)
+    x = _as_force(force_N)
+    if freq_Hz is None:
+        freq = _rfft_freq_Hz(x.shape[-1], rate_Hz)
+        spectrum_Ns = _rfft_Ns(x, rate_Hz)
+    else:
+        freq = jnp.atleast_1d(jnp.asarray(freq_Hz, dtype=jnp.float64))
+        if freq.ndim != 1:
+            raise ValueError(f"freq_Hz has shape {tuple(freq.shape)}; expected 1-D")
+        spectrum_Ns = _dtft_Ns(x, rate_Hz, freq)
+    return freq, 10.0 * jnp.log10(_abs2(spectrum_Ns))
+
+
+@jax.jit
+def _rfft_Ns(x, rate_Hz) -> jax.Array:
+    return jnp.fft.rfft(x, axis=-1) / rate_Hz
+
+
+def _dtft_derivatives(x, rate_Hz, f_Hz):
+    """X(f), X'(f), X''(f) of the DTFT (per record; x (b, n), f (b,))."""
+    t_s = jnp.arange(x.shape[-1], dtype=jnp.float64) / rate_Hz
+    kernel = jnp.exp(-2j * jnp.pi * f_Hz[:, None] * t_s[None, :]) / rate_Hz * x
+    d = -2j * jnp.pi * t_s
+    return kernel.sum(-1), (kernel * d).sum(-1), (kernel * d**2).sum(-1)
+
+
+def _first_notch_bin(power, k_lo, k_hi):
+    """Index of the first local minimum of ``power`` (last axis) among bins k_lo..k_hi,
+    and whether there is one (k_lo >= 1, k_hi <= last bin - 1)."""
+    k = jnp.arange(1, power.shape[-1] - 1)
+    mid, left, right = power[..., 1:-1], power[..., :-2], power[..., 2:]
+    is_min = (mid < left) & (mid <= right) & (k >= k_lo) & (k <= k_hi)
+    return 1 + jnp.argmax(is_min, axis=-1), jnp.any(is_min, axis=-1)
+
+
+def contact_resonance_Hz(force_N, rate_Hz, fmin_Hz: float = 20.0, fmax_Hz: float = 200.0) -> jax.Array:
+    """The "fundamental contact resonance": the first minimum (notch) of the narrow-band
+    force spectrum |F(f)| above ``fmin_Hz`` (paper §4.2, Fig. 12: 66 Hz at 10 cm and
+    73 Hz at 160 cm drop height for a ~20 ms pulse; a half-sine of duration T has it at
+    1.5/T).
+
+    The spectrum is evaluated on a fine grid (≤ 0.1 Hz, the zero-padded FFT, i.e. the exact
+    DTFT there), the first local minimum in [fmin_Hz, fmax_Hz] is taken, and refined by
+    Newton steps on d|F|²/df = 0 with the analytic DTFT derivatives (each step clipped to
+    one grid step). The result is differentiable with respect to the force (through the
+    refinement; the grid search itself is held fixed). NaN where there is no minimum.
+
+    Args:
+      force_N: force record(s), shape (..., n).
+      rate_Hz: sampling rate, Hz (concrete: it sets the grid).
+      fmin_Hz, fmax_Hz: search range, Hz, 0 < fmin < fmax < rate/2.
+
+    Returns:
+      resonance frequency, Hz, shape (...).
+    """
+    _check_rate(rate_Hz)
+    rate = float(rate_Hz)
+    check_range("fmin_Hz", fmin_Hz, lower=0.0, upper=rate / 2)
+    check_range("fmax_Hz", fmax_Hz, lower=float(fmin_Hz), upper=rate / 2)
+    x = _as_force(force_N)
+    n = x.shape[-1]
+    n_fft = max(n, math.ceil(rate / _RESONANCE_GRID_Hz))
+    step_Hz = rate / n_fft
+    k_lo = max(1, math.ceil(float(fmin_Hz) / step_Hz))
+    k_hi = min(n_fft // 2 - 1, math.floor(float(fmax_Hz) / step_Hz))
+    f = _refined_notch_Hz(x.reshape((-1, n)), rate, n_fft, k_lo, k_hi)
+    return f.reshape(x.shape[:-1])
+
+
+@functools.partial(jax.jit, static_argnames=("rate_Hz", "n_fft"))
+def _refined_notch_Hz(x, rate_Hz: float, n_fft: int, k_lo, k_hi) -> jax.Array:
+    """First notch of |F(f)| on the grid k·rate/n_fft, k_lo ≤ k ≤ k_hi, Newton-refined;
+    x of shape (b, n); NaN where the grid has no local minimum."""
+    step_Hz = rate_Hz / n_fft
+    grid = jnp.fft.rfft(jax.lax.stop_gradient(x), n=n_fft, axis=-1)
+    k, found = _first_notch_bin(_abs2(grid), k_lo, k_hi)
+
+    def newton(_, f):
+        X, X1, X2 = _dtft_derivatives(x, rate_Hz, f)
+        slope = 2.0 * jnp.real(jnp.conj(X) * X1)
+        curvature = 2.0 * (_abs2(X1) + jnp.real(jnp.conj(X) * X2))
+        safe = curvature > 0
+        step = -slope / jnp.where(safe, curvature, 1.0)
+        return f + jnp.where(safe, jnp.clip(step, -step_Hz, step_Hz), 0.0)
+
+    f = jax.lax.fori_loop(0, _RESONANCE_NEWTON_STEPS, newton, k.astype(jnp.float64) * step_Hz)
+    return jnp.where(found, f, jnp.nan)
+
+
+# --------------------------------------------------------------------------------------
+# level against drop height (paper Figs. 10-11)
+# --------------------------------------------------------------------------------------
+
+
+def lfe_increase_per_doubling_dB(height_m, lfe_dB, ref_height_m: float = 1.0) -> jax.Array:
+    """Increase of L_FE per doubling of drop height, dB: the least-squares slope of L_FE
+    against log2(h / h_ref) (paper §4.2, Figs. 10-11; ~3 dB for a linear source whose force
+    scales with the impact speed sqrt(2 g h), Eq. 10).
+
+    Args:
+      height_m: drop heights, shape (n_heights,), m (> 0, at least two distinct).
+      lfe_dB: levels, shape (n_heights,) or (n_heights, n_bands) (any trailing shape):
+        heights on the first axis, bands on the last.
+      ref_height_m: reference height of the abscissa (moves the intercept, not the slope).
+
+    Returns:
+      slope in dB per doubling, shape lfe_dB.shape[1:].
+    """
+    check_range("height_m", height_m, lower=0.0)
+    check_range("ref_height_m", ref_height_m, lower=0.0)
+    h = jnp.asarray(height_m, dtype=jnp.float64)
+    y = jnp.asarray(lfe_dB, dtype=jnp.float64)
+    if h.ndim != 1 or y.ndim < 1 or y.shape[0] != h.shape[0] or h.shape[0] < 2:
+        raise ValueError(
+            f"height_m has shape {tuple(h.shape)} and lfe_dB has shape {tuple(y.shape)}; "
+            "expected (n_heights,) and (n_heights, ...) with n_heights >= 2"
+        )
+    if not is_traced(height_m) and np.ptp(np.asarray(height_m, float)) == 0:
+        raise ValueError(f"height_m={np.asarray(height_m).tolist()} needs at least two distinct heights")
+    return _least_squares_slope(jnp.log2(h / ref_height_m), y)
+
+
+@jax.jit
+def _least_squares_slope(u, y) -> jax.Array:
+    """Slope of y (first axis) against u, per trailing index."""
+    du = (u - u.mean()).reshape((-1,) + (1,) * (y.ndim - 1))
+    return jnp.sum(du * (y - y.mean(axis=0)), axis=0) / jnp.sum(du**2, axis=0)
