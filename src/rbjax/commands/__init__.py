@@ -1,0 +1,108 @@
+"""Subcommands of the ``rbjax`` command line, one module each, discovered automatically.
+
+A command module in this package exposes ``register(subparsers)``: it adds its subparser
+(preferably with :func:`add_command`, which gives it ``--json`` and the one-line error
+handling) and sets ``func`` to a callable ``func(args) -> int`` (the exit code)::
+
+    def register(subparsers):
+        p = add_command(subparsers, "mycmd", help="one line", description="longer text")
+        p.add_argument("--height-m", type=float, required=True)
+        p.set_defaults(func=run)
+
+Modules whose name starts with ``_`` and modules without ``register`` are skipped, so a
+package-private helper module can live here too. Helpers for the commands: :func:`emit_json`
+(strict JSON on stdout, NaN → null), :func:`progress` (one line on stderr) and
+:func:`format_table`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+
+class UsageError(ValueError):
+    """A bad command line (unknown option, bad choice, unparsable number)."""
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose errors raise :class:`UsageError` instead of printing usage.
+
+    ``rbjax.cli.main`` turns the error into the single line ``rbjax: error: <message>`` and
+    exit code 2, like every other bad input.
+    """
+
+    def error(self, message):
+        command = self.prog.removeprefix("rbjax").strip()
+        raise UsageError(f"{command}: {message}" if command else message)
+
+
+def add_command(subparsers, name: str, *, help: str, description: str | None = None) -> argparse.ArgumentParser:
+    """Add a subcommand parser with ``--json`` and the house formatting."""
+    parser = subparsers.add_parser(
+        name,
+        help=help,
+        description=description or help,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_json_flag(parser)
+    return parser
+
+
+def add_json_flag(parser: argparse.ArgumentParser) -> None:
+    """Add ``--json`` (machine-readable output on stdout) unless the parser already has it."""
+    try:
+        parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout (progress stays on stderr)")
+    except argparse.ArgumentError:
+        pass  # the command defined its own --json
+
+
+def jsonable(x):
+    """Plain Python for ``json``: arrays to lists, NaN/inf to ``None`` (JSON ``null``)."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (str, bool)) or x is None:
+        return x
+    if hasattr(x, "to_dict"):
+        return jsonable(x.to_dict())
+    arr = np.asarray(x)
+    if arr.dtype == object:
+        return [jsonable(v) for v in arr.tolist()] if arr.ndim else jsonable(arr.item())
+    if arr.ndim:
+        return [jsonable(v) for v in arr.tolist()]
+    value = arr.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def emit_json(obj, file=None) -> None:
+    """Write ``obj`` as strict JSON (no NaN tokens) to stdout."""
+    print(json.dumps(jsonable(obj), indent=2, allow_nan=False), file=file or sys.stdout)
+
+
+def progress(message: str, *, enabled: bool = True) -> None:
+    """One progress line on stderr (never stdout, so ``--json`` output stays clean)."""
+    if enabled:
+        print(f"rbjax: {message}", file=sys.stderr, flush=True)
+
+
+def format_table(header: list[str], rows: list[list[str]]) -> str:
+    """A plain-text table with right-aligned columns."""
+    widths = [max(len(str(c)) for c in col) for col in zip(header, *rows)]
+    line = lambda cells: "  ".join(str(c).rjust(w) for c, w in zip(cells, widths))  # noqa: E731
+    return "\n".join([line(header), line(["-" * w for w in widths]), *(line(r) for r in rows)])
+
+
+def fmt(value, spec: str = ".1f", *, missing: str = "—") -> str:
+    """Format a number, or ``missing`` for None/NaN."""
+    if value is None:
+        return missing
+    value = float(value)
+    return missing if not math.isfinite(value) else format(value, spec)

@@ -1,0 +1,162 @@
+"""``rbjax fit``: fit the rubber's properties (and a damping model) to measured force histories."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import warnings
+from pathlib import Path
+
+from . import add_command, emit_json, progress
+
+DESCRIPTION = """\
+Fit Young's modulus E (with ν held at 0.5: only E/√(1−ν²) is identifiable, paper Eqs. 1–3)
+and the parameters of a damping model to force histories of drops from several heights,
+through the measuring chain (causal 4th-order low-pass) as the data went through it.
+Without --model every candidate is fitted and cross-validated over the heights (as
+`rbjax select`, several minutes) and the recommended one is kept.
+
+models: paper (elastic, §2), kelvin-voigt, hunt-crossley, zener, each optionally
++stiffening. Parameters for --fix: youngs_Pa, poisson, damping_Ns_per_m (kelvin-voigt),
+alpha_s_per_m (hunt-crossley), stiffness_ratio and relaxation_time_s (zener), beta
+(+stiffening), and the ball's radius_m, wall_m, mass_kg.
+
+examples:
+  rbjax fit recordings/ --model hunt-crossley --blocked-force momentum
+  rbjax fit h*.csv --model zener --fix poisson=0.49 --json > fit.json
+  rbjax simulate --height-m 1.0 --params fit.json
+"""
+
+
+def add_data_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``fit`` and ``select`` for reading and conditioning the recordings."""
+    p.add_argument("paths", nargs="+", metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy) or directories of them")
+    p.add_argument(
+        "--lowpass-hz",
+        default="auto",
+        metavar="HZ",
+        help="cutoff of the measuring chain's causal 4th-order Butterworth low-pass, applied to the "
+        "predictions too; 'none' for no filter; default 'auto' (as the recordings declare; 1250 Hz for "
+        "the shipped emulated recordings)",
+    )
+    p.add_argument("--all-drops", action="store_true", help="fit every drop as its own record (default: the frequency-domain average per height)")
+    p.add_argument("--gas", choices=("adiabatic", "none"), default="adiabatic", help="gas force F_G (Eq. 4, corrected); default adiabatic")
+
+
+def parse_lowpass(value: str):
+    if value == "auto":
+        return "auto"
+    if value.lower() == "none":
+        return None
+    try:
+        cutoff = float(value)
+    except ValueError:
+        raise ValueError(f"--lowpass-hz={value!r}: give a cutoff in Hz, 'none' or 'auto'") from None
+    if not cutoff > 0:
+        raise ValueError(f"--lowpass-hz={value!r} must be positive (valid range: (0, inf))")
+    return cutoff
+
+
+def parse_fix(items) -> dict:
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ValueError(f"--fix {item!r}: expected NAME=VALUE, e.g. poisson=0.49")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise ValueError(f"--fix {item!r}: {value!r} is not a number") from None
+    return out
+
+
+def load_fit_data(args):
+    """Read and condition the recordings named on the command line (warnings as stderr lines)."""
+    from ..fit import load_data, prepare_data
+
+    lowpass = parse_lowpass(args.lowpass_hz)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        recs = load_data([Path(p) for p in args.paths], lowpass_Hz=lowpass)
+        data = prepare_data(recs, average=not args.all_drops)
+    for w in caught:
+        progress(f"warning: {w.message}")
+    chain = f"{data.lowpass_Hz:g} Hz low-pass" if data.lowpass_Hz else "no low-pass"
+    progress(f"{len(recs)} recordings, {data.n_records} records at {', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})")
+    return data
+
+
+def register(subparsers) -> None:
+    p = add_command(subparsers, "fit", help="fit E and a damping model to measured force histories", description=DESCRIPTION)
+    add_data_options(p)
+    p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening); default: choose by cross-validation")
+    p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
+    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
+    p.add_argument("--optimizer", choices=("lm", "gauss-newton", "adam", "lbfgs"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")
+    p.add_argument("--out", default=None, metavar="DIR", help="write fit.json and plots (histories, L_FE bands, correlations) into DIR")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(func=run)
+
+
+def _check_model_and_fix(model, fix):
+    from ..fit import _FIXED_BALL_FIELDS, _validate_fix
+
+    if model is not None:
+        _validate_fix(model, fix)  # raises on an unknown model or parameter
+        return
+    common = {"youngs_Pa", "poisson", *_FIXED_BALL_FIELDS}
+    extra = sorted(set(fix) - common)
+    if extra:
+        raise ValueError(
+            f"--fix {', '.join(extra)}: without --model only parameters every candidate has can be fixed "
+            f"({', '.join(sorted(common))}); give --model"
+        )
+    _validate_fix("paper", fix)
+
+
+def run(args) -> int:
+    from ..fit import fit
+
+    fix = parse_fix(args.fix)
+    _check_model_and_fix(args.model, fix)
+    parse_lowpass(args.lowpass_hz)
+    data = load_fit_data(args)
+    selection = None
+    if args.model is None:
+        from ..selection import BLOCKED_FORCES, select_model
+
+        forces = BLOCKED_FORCES if args.blocked_force is None else (args.blocked_force,)
+        progress("no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)")
+        selection = select_model(data, blocked_forces=forces, gas=args.gas, fix=fix, optimizer=args.optimizer, progress=not args.quiet)
+        result = selection.recommended.fit
+        progress(f"recommended: {selection.recommended.label}")
+    else:
+        result = fit(
+            data,
+            args.model,
+            blocked_force=args.blocked_force or "paper",
+            gas=args.gas,
+            fix=fix,
+            optimizer=args.optimizer,
+            progress=not args.quiet,
+        )
+    out = result.to_dict()
+    if selection is not None:
+        out["selection"] = selection.to_dict()
+    if args.out is not None:
+        folder = Path(args.out)
+        folder.mkdir(parents=True, exist_ok=True)
+        from . import jsonable
+
+        (folder / "fit.json").write_text(json.dumps(jsonable(out), indent=2, allow_nan=False))
+        for path in result.plot(folder):
+            progress(f"wrote {path}")
+        progress(f"wrote {folder / 'fit.json'}")
+    if args.json:
+        emit_json(out)
+    else:
+        if selection is not None:
+            print(selection.table())
+            print()
+        print(result.summary())
+    return 0

@@ -1,0 +1,67 @@
+"""``rbjax sweep CONFIG.toml``: global sensitivity (Sobol, Morris) and conformance probability."""
+
+from __future__ import annotations
+
+from . import add_command, emit_json, progress
+
+DESCRIPTION = """\
+Run a batched study of the rubber-ball impact described by a TOML file, sharded over all JAX
+devices (one CPU, several CPU devices with XLA_FLAGS=--xla_force_host_platform_device_count=N,
+or GPUs):
+
+  kind = "sobol"        first- and total-order Sobol indices with bootstrap intervals
+  kind = "morris"       Morris elementary-effect screening
+  kind = "conformance"  Monte Carlo probability of meeting the rubber-ball tolerances
+                        (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2)
+
+The format is described in the rbjax.sweep module docstring; examples are shipped in
+rbjax/examples/sweeps/. A progress bar goes to stderr. With --out FILE.json the summary is
+written as JSON (plain text, readable anywhere) and every evaluated sample beside it as
+FILE.samples.npz (compact float64 arrays with their names, numpy.load).
+
+examples:
+  rbjax sweep src/rbjax/examples/sweeps/sobol.toml --out sobol.json
+  rbjax sweep conformance.toml --json
+"""
+
+
+def register(subparsers) -> None:
+    p = add_command(subparsers, "sweep", help="global sensitivity and conformance probability from a TOML config", description=DESCRIPTION)
+    p.add_argument("config", metavar="CONFIG.toml", help="the study to run")
+    p.add_argument("--out", default=None, metavar="FILE.json", help="write the summary (JSON) and the samples (FILE.samples.npz)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--distributed",
+        action="store_true",
+        help="multi-host run: call jax.distributed.initialize() first (SLURM/Open MPI/TPU detected); "
+        "start the same command on every host; process 0 writes the output",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import time
+
+    from ..sweep import load_config, run_sweep, write_outputs
+
+    import jax
+
+    if args.distributed:
+        jax.distributed.initialize()
+    config = load_config(args.config)
+    progress(f"running {config.get('kind')!r} sweep from {args.config}")
+    start = time.perf_counter()
+    result = run_sweep(config, progress=not args.no_progress)
+    seconds = time.perf_counter() - start
+    evaluations = getattr(result, "n_evaluations", getattr(result, "n_samples", None))
+    progress(f"{evaluations} impact evaluations in {seconds:.1f} s ({evaluations / seconds:.0f} per s)")
+    if jax.process_index() != 0:
+        return 0
+    if args.out:
+        for path in write_outputs(result, args.out, config):
+            progress(f"wrote {path}")
+    if args.json:
+        emit_json({"config": config, **result.to_dict()})
+    else:
+        print(result.table())
+    return 0
