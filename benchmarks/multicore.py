@@ -1,0 +1,62 @@
+"""Lever: both CPU cores. XLA:CPU runs a vmapped solve on one core; splitting the batch over two
+host devices (``--xla_force_host_platform_device_count=2``, ``jax.shard_map`` over the batch axis)
+runs the halves in parallel. Scalar outputs at batch 10 000 (quick: 1000), one device vs two.
+
+The XLA flag must be set before JAX starts, so this script sets it itself; run it on its own:
+``.venv/bin/python benchmarks/multicore.py [--quick]`` (run_all.py does).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2").strip()
+
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from _common import finish_machine_info, machine_info, parse_args, quadrature_reference, time_call, write_json  # noqa: E402
+
+import jax  # noqa: E402
+from jax.sharding import Mesh, NamedSharding, PartitionSpec as P  # noqa: E402
+
+import rbjax  # noqa: E402
+from rbjax.impact import _impact  # noqa: E402
+from rbjax.quadrature import impact_quadrature  # noqa: E402
+from rbjax.simulate import _broadcast_inputs, make_model  # noqa: E402
+
+RECOMMENDED = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10)
+
+
+def main():
+    args = parse_args(__doc__.splitlines()[0])
+    info = machine_info()
+    t0 = time.perf_counter()
+    n = 1000 if args.quick else 10_000
+    model = make_model()
+    heights = np.linspace(0.1, 1.6, n)
+    _, h, b, _ = _broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
+    ref = quadrature_reference(heights)["contact_time_s"]
+    devices = jax.devices()
+    mesh = Mesh(np.array(devices[:2]), ("batch",))
+    rows = []
+    for name, one in (("ode, recommended tsit5 1e-7/1e-10", lambda hh, bb: _impact(hh, bb, model, RECOMMENDED).contact_time_s),
+                      ("quadrature, n_nodes=10", lambda hh, bb: impact_quadrature(hh, bb, model, n_nodes=10).contact_time_s)):
+        batched = jax.vmap(one)
+        single = jax.jit(batched)
+        sharded = jax.jit(jax.shard_map(batched, mesh=mesh, in_specs=(P("batch"), P("batch")), out_specs=P("batch")))
+        spec = NamedSharding(mesh, P("batch"))
+        hs, bs = jax.device_put(h, spec), jax.device_put(b, spec)
+        for label, fn, args_ in (("1 device", single, (h, b)), ("2 devices (shard_map)", sharded, (hs, bs))):
+            t = time_call(lambda: fn(*args_), min_repeats=5)
+            err = float(np.max(np.abs(np.asarray(t["out"]) / ref - 1)))
+            rows.append({"variant": name, "devices": label, "batch": n, "impacts_per_s": n / t["median_s"], "best_impacts_per_s": n / t["min_s"],
+                         "first_s": t["first_s"], "median_s": t["median_s"], "min_s": t["min_s"], "contact_rel_err": err})
+            print(f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best {n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}", flush=True)
+    write_json("multicore" + ("_quick" if args.quick else ""), {"machine": finish_machine_info(info), "devices": [str(d) for d in devices],
+                                                                "rows": rows, "wall_s": time.perf_counter() - t0})
+
+
+if __name__ == "__main__":
+    main()
