@@ -852,11 +852,15 @@ class _Problem:
             rows.append(w * (feats[:, 3:] - self.measured["lfe_octave_dB"][k]).reshape(-1))
             jrows.append(w * jfeat[:, 3:, :].reshape(-1, jfeat.shape[-1]))
         if self.poisson_prior is not None:
+            # The history rows are not whitened (their scale is 1/peak or 1/noise, and the
+            # noise is correlated), so the prior row is put in their units: one prior σ weighs
+            # as much as one σ̂√τ of the history residuals (σ̂, τ taken as constants here).
             mean, std = self.poisson_prior
             i = self.layout.index("poisson")
-            rows.append(np.array([(theta[i] - mean) / std]))
+            unit = math.sqrt(self.tau(r) * float(r @ r) / max(r.size, 1))
+            rows.append(np.array([unit * (theta[i] - mean) / std]))
             row = np.zeros((1, len(theta)))
-            row[0, i] = 1.0 / std
+            row[0, i] = unit / std
             jrows.append(row)
         return np.concatenate(rows), np.concatenate(jrows, axis=0)
 
@@ -1151,6 +1155,10 @@ def fit(
     for k in start_map:
         if k not in layout.physical:
             raise ValueError(f"start: unknown parameter {k!r} for model {model!r}; valid: {', '.join(layout.physical)}")
+    if poisson_prior is not None and "poisson" not in start_map:
+        # E/√(1−ν²) is all the histories determine, so the optimum has ν at the prior mean:
+        # start there rather than crawl along the curved E–ν valley.
+        start_map["poisson"] = poisson_prior[0]
     theta = _start_values(problem, layout, ball, {k: v for k, v in fixed.items() if k in layout.physical}, start_map, fit_mask)
     auto_start = warm is None and "youngs_Pa" not in start_map and "youngs_Pa" not in fixed
     if warm is not None:
@@ -1169,6 +1177,7 @@ def fit(
 
     # 2. identifiability from the Jacobian with ν free
     physical_free = [n for n in layout.physical if n not in fixed]
+    prior_held = False
     ident_msg, nu_flagged, cos_e_nu = _identifiability_check(problem, layout, theta, out, physical_free)
     notes = []
     if "poisson" in physical_free and "youngs_Pa" not in physical_free:
@@ -1191,6 +1200,13 @@ def fit(
             f"E and ν are not separately identifiable from the histories (|cos| = {cos_e_nu:.8f}); "
             f"ν is determined by its prior N({poisson_prior[0]:g}, {poisson_prior[1]:g}²)."
         )
+        if nu_flagged:
+            # The histories fix only E/√(1−ν²), so the posterior mode has ν at the prior mean
+            # exactly: optimise with ν held there (the curved E–ν valley is a trap for LM) and
+            # fold the prior into the covariance afterwards.
+            prior_held = True
+            physical_free.remove("poisson")
+            theta[layout.index("poisson")] = poisson_prior[0]
     else:
         notes.append(f"ν held at {theta[layout.index('poisson')]:g} as given; E/√(1−ν²) is what the data determine.")
 
@@ -1228,7 +1244,11 @@ def fit(
     if poisson_prior is not None and "poisson" in physical_free:
         i = free_names.index("poisson")
         info[i, i] += (dtheta[layout.index("poisson")] / poisson_prior[1]) ** 2
-    cov_phi = np.linalg.pinv(info, rcond=1e-12, hermitian=True)
+    scale_info = np.sqrt(np.maximum(np.diag(info), 1e-300))
+    cov_phi = np.linalg.pinv(info / np.outer(scale_info, scale_info), rcond=1e-13, hermitian=True) / np.outer(scale_info, scale_info)
+    if prior_held:
+        free_names, physical_free, cov_phi = _fold_in_poisson_prior(free_names, physical_free, cov_phi, theta, layout, poisson_prior)
+        free = np.array([layout.index(n) for n in free_names], dtype=int)
     std_phi = np.sqrt(np.clip(np.diag(cov_phi), 0, None))
 
     parameters = {}
@@ -1303,6 +1323,29 @@ def fit(
         onset_shift_s=theta[layout.shift_slice].copy(),
         theta=theta,
     )
+
+
+def _fold_in_poisson_prior(free_names, physical_free, cov_phi, theta, layout, prior):
+    """Add ν ~ N(mean, std²) to a covariance fitted with ν held at the mean (in φ = (log E, logit ν, …)).
+
+    With ν held, the fitted log E is log E_eff + ½log(1 − ν²) at ν fixed; letting ν vary
+    by its prior at fixed E_eff adds a = ∂log E/∂ν = −ν/(1 − ν²) times ν's deviation to log E.
+    """
+    nu, std = float(theta[layout.index("poisson")]), prior[1]
+    dnu_dphi = float(_from_phi("poisson", _to_phi("poisson", nu))[1])
+    a = -nu / (1.0 - nu**2)
+    ie = free_names.index("youngs_Pa")
+    n = len(free_names)
+    cov = np.zeros((n + 1, n + 1))
+    order = list(range(ie + 1)) + [n] + list(range(ie + 1, n))  # ν right after E
+    cov[:n, :n] = cov_phi
+    cov[n, n] = (std / dnu_dphi) ** 2
+    cov[ie, ie] += a**2 * std**2
+    cov[ie, n] = cov[n, ie] = a * std**2 / dnu_dphi
+    cov = cov[np.ix_(order, order)]
+    names = free_names[: ie + 1] + ["poisson"] + free_names[ie + 1 :]
+    phys = [p for p in layout.physical if p in physical_free or p == "poisson"]
+    return names, phys, cov
 
 
 def _height_mask(data: FitData, heights) -> np.ndarray:
