@@ -971,11 +971,20 @@ def _run_optax(obj, u0, optimizer, max_steps):
         opt = optax.lbfgs()
 
         def value_host(uu):
-            r = obj(np.asarray(uu))[0]
-            return np.asarray(0.5 * r @ r)
+            r, jac = obj(np.asarray(uu))[:2]
+            return np.asarray(0.5 * r @ r), np.asarray(jac.T @ r)
 
+        shapes = (jax.ShapeDtypeStruct((), jnp.float64), jax.ShapeDtypeStruct(u.shape, jnp.float64))
+
+        @jax.custom_jvp
         def value_fn(uu):
-            return jax.pure_callback(value_host, jax.ShapeDtypeStruct((), jnp.float64), uu, vmap_method="sequential")
+            return jax.pure_callback(value_host, shapes, uu, vmap_method="sequential")[0]
+
+        @value_fn.defjvp
+        def _value_jvp(primals, tangents):
+            # the line search differentiates the value: its gradient is Jᵀr, exact from the model
+            value, grad = jax.pure_callback(value_host, shapes, primals[0], vmap_method="sequential")
+            return value, grad @ tangents[0]
 
         extra = {"value_fn": value_fn}
     state = opt.init(u)
