@@ -244,3 +244,23 @@ def test_damped_model_raises():
         impact_quadrature(1.0, BALL, rbjax.Model(), n_nodes=1)
     with pytest.raises(ValueError, match="height_m"):
         impact_quadrature(-1.0, BALL, rbjax.Model())
+
+
+def test_too_coarse_a_rule_near_the_mass_singularity_is_flagged():
+    # δ_max = 0.998·2R: the integrands' pole at s = 2R sits 0.2 % outside the interval and the
+    # default 32-node rule would miss the contact time by ~6e-4 while looking fine
+    youngs, height = 25_118.8643151, 5.41169527
+    ball = BALL.replace(youngs_Pa=youngs)
+    model = rbjax.Model(gas="none", max_deflection_ratio=100.0)
+    ref = _reference(height, gas="none", blocked_force="paper", beta=0.0, youngs_Pa=youngs)
+    assert ref["max_deflection_m"] / (2 * 0.089) > 0.998
+    coarse = impact_quadrature(height, ball, model)
+    assert int(coarse.status) == rbjax.STATUS_CODES["solver_failed"]
+    assert np.isnan(float(coarse.contact_time_s))
+    fine = impact_quadrature(height, ball, model, n_nodes=160)
+    assert int(fine.status) == 0
+    for name in FIELDS:
+        assert float(getattr(fine, name)) == pytest.approx(ref[name], rel=1e-8), name
+    # the ODE path needs no such care: adaptive steps resolve the fast passage near 2R
+    ode = rbjax.simulate(height, ball, gas="none", max_deflection_ratio=100.0)
+    assert float(ode.contact_time_s) == pytest.approx(ref["contact_time_s"], rel=1e-8)

@@ -137,6 +137,17 @@ def test_step_limit_with_tiny_budget():
     assert np.all(np.asarray(res.num_steps) > 0)
 
 
+def test_failed_solve_gives_a_nan_history_not_a_plausible_one():
+    # the same heights with a step budget that runs out, and with the default one
+    heights = np.array([0.1, 1.0])
+    bad = rbjax.simulate(heights, solver=rbjax.Solver(max_steps=4)).history(duration_s=0.05)
+    good = rbjax.simulate(heights).history(duration_s=0.05)
+    assert np.asarray(bad.status).tolist() == [rbjax.STATUS_CODES["step_limit"]] * 2
+    assert np.all(np.isnan(np.asarray(bad.force_N))) and not np.any(np.asarray(bad.in_contact))
+    assert np.asarray(good.status).tolist() == [0, 0]
+    assert np.all(np.isfinite(np.asarray(good.force_N))) and np.max(np.asarray(good.force_N)) > 400.0
+
+
 # ------------------------------------------------------------------------------------------------
 # heavy damping: over-damped Kelvin–Voigt (contact ends where the contact force returns to zero)
 

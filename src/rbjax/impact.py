@@ -179,6 +179,21 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool):
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 
 
+def _status(sols, y_max, outputs, ball, model: Model):
+    """The status code of one impact from its phase solutions and outputs (see STATUS_NAMES)."""
+    solved = [s for s in sols if s is not None]
+    step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
+    failed = ~jnp.all(jnp.stack([_ok(s) for s in solved]))
+    singular = y_max[0] >= SINGULAR_FRACTION * 2.0 * ball.radius_m * (1.0 - 1e-9)
+    nonfinite = ~jnp.all(jnp.isfinite(outputs))
+    too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
+    return jnp.select(
+        [step_limit, singular, failed | nonfinite, too_deep],
+        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
+        STATUS_CODES["ok"],
+    ).astype(jnp.int32)
+
+
 def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False)
     sol3 = sols[2]
@@ -194,17 +209,7 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
 
     solved = [s for s in sols if s is not None]
     steps = sum(s.stats["num_steps"] for s in solved)
-    step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
-    failed = ~jnp.all(jnp.stack([_ok(s) for s in solved]))
-    singular = y_max[0] >= SINGULAR_FRACTION * 2.0 * ball.radius_m * (1.0 - 1e-9)
-    outputs = jnp.stack([t_end, peak_force, restitution, y_max[0], t_max, peak_time])
-    nonfinite = ~jnp.all(jnp.isfinite(outputs))
-    too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
-    status = jnp.select(
-        [step_limit, singular, failed | nonfinite, too_deep],
-        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
-        STATUS_CODES["ok"],
-    )
+    status = _status(sols, y_max, jnp.stack([t_end, peak_force, restitution, y_max[0], t_max, peak_time]), ball, model)
     ok = status == 0
     nan = jnp.nan
     return ImpactScalars(
@@ -214,25 +219,31 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
         restitution=jnp.where(ok, restitution, nan),
         max_deflection_m=jnp.where(ok, y_max[0], nan),
         max_compression_time_s=jnp.where(ok, t_max, nan),
-        status=status.astype(jnp.int32),
+        status=status,
         num_steps=jnp.asarray(steps, dtype=jnp.int32),
     )
 
 
 class Trajectory(eqx.Module):
-    """State and floor force of one impact (or a batch) sampled at given times (0 after contact)."""
+    """State and floor force of one impact (or a batch) sampled at given times (0 after contact).
+
+    Where ``status != 0`` (see ``STATUS_NAMES``) the solve failed and the samples are NaN.
+    """
 
     time_s: jax.Array
     deflection_m: jax.Array
     velocity_m_per_s: jax.Array
     force_N: jax.Array
     in_contact: jax.Array
+    status: jax.Array
 
 
 def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
-    v0, (sol1, sol2, sol3), (t_peak, _), (t_max, _) = _phases(height_m, ball, model, solver, dense=True)
+    v0, (sol1, sol2, sol3), (t_peak, _), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=True)
     t_end = sol3.ts[-1]
     args = (ball, model)
+    status = _status((sol1, sol2, sol3), y_max, jnp.stack([t_end, t_max, t_peak, y_max[0]]), ball, model)
+    failed = status != 0
 
     def at(t):
         # Each phase's interpolant is evaluated inside its own interval only (clipped), so an
@@ -247,10 +258,11 @@ def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajec
         inside = (t >= 0.0) & (t < t_end)
         y = jnp.where(inside, y, jnp.zeros_like(y))
         force = jnp.where(inside, floor_force_N(y, *args), 0.0)
-        return y[0], y[1], force, inside
+        # a failed solve gives NaN, never a plausible-looking history
+        return jnp.where(failed, jnp.nan, y[0]), jnp.where(failed, jnp.nan, y[1]), jnp.where(failed, jnp.nan, force), inside & ~failed
 
     d, v, f, inside = jax.vmap(at)(times_s)
-    return Trajectory(time_s=times_s, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside)
+    return Trajectory(time_s=times_s, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside, status=status)
 
 
 impact_batch = eqx.filter_jit(eqx.filter_vmap(_impact, in_axes=(0, 0, 0, None)))

@@ -214,4 +214,5 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
         velocity_m_per_s=padded(traj.velocity_m_per_s),
         force_N=padded(traj.force_N),
         in_contact=padded(traj.in_contact),
+        status=traj.status,
     )

@@ -208,6 +208,7 @@ def sharded_map(
     n = leaves[0].shape[0]
     if n == 0 or any(x.shape[:1] != (n,) for x in leaves):
         raise ValueError(f"inputs must share a non-empty leading axis; got shapes {[x.shape for x in leaves]}")
+    chunk_size = min(chunk_size, math.ceil(n / len(devices)))  # a small study pads no further than one chunk
     step = chunk_size * len(devices)
     n_steps = math.ceil(n / step)
     pad = n_steps * step - n
@@ -218,7 +219,7 @@ def sharded_map(
     replicated = NamedSharding(sharding.mesh, PartitionSpec())
     shared = jax.tree_util.tree_map(lambda x: _global_array(np.asarray(x), replicated), shared)
 
-    from tqdm.auto import tqdm
+    from tqdm import tqdm  # a text bar on stderr, also inside notebooks
 
     outs = []
     with tqdm(total=n, desc=desc, unit="eval", file=sys.stderr, disable=not progress, leave=False) as bar:
