@@ -203,16 +203,18 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
     times = jnp.arange(n_contact) / rate_Hz
     traj = trajectory(height_m, times, ball, model, solver)
     pad = n_total - n_contact
+    failed = (traj.status != 0)[..., None]
 
     def padded(x):
         widths = [(0, 0)] * (x.ndim - 1) + [(0, pad)]
-        return jnp.pad(x, widths)
+        # a failed solve stays NaN over the whole record, padding included
+        return jnp.where(failed, jnp.nan, jnp.pad(x, widths))
 
     return Trajectory(
         time_s=jnp.arange(n_total) / rate_Hz,
         deflection_m=padded(traj.deflection_m),
         velocity_m_per_s=padded(traj.velocity_m_per_s),
         force_N=padded(traj.force_N),
-        in_contact=padded(traj.in_contact),
+        in_contact=jnp.pad(traj.in_contact, [(0, 0)] * (traj.in_contact.ndim - 1) + [(0, pad)]),
         status=traj.status,
     )
