@@ -161,3 +161,52 @@ def test_raise_for_status_returns_the_result_when_ok():
     result = rbjax.simulate(HEIGHTS_M)
     assert result.raise_for_status() is result
     assert result.status_name.tolist() == ["ok"] * len(HEIGHTS_M)
+
+
+# ------------------------------------------------------------------------------------------------
+# records, sample times, parameter files, sweeps
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [({"rate_Hz": -1.0}, "rate_Hz"), ({"duration_s": float("nan")}, "duration_s"), ({"duration_s": 1e-9}, "duration_s")])
+def test_bad_record_for_a_history(kwargs, name):
+    result = rbjax.simulate(1.0)
+    with pytest.raises(ValueError, match=name):
+        result.history(**kwargs)
+
+
+@pytest.mark.parametrize("times", [np.array([0.0, np.nan]), np.zeros((2, 3))])
+def test_bad_sample_times_for_a_trajectory(times):
+    with pytest.raises(ValueError, match="times_s"):
+        rbjax.trajectory(1.0, times)
+
+
+@pytest.mark.parametrize(
+    ("model", "match"),
+    [
+        ({"damping": {"name": "zener", "stiffness_ratio": 1.0, "relaxation_time_s": 1e-3, "foo": 1}}, "unknown keys"),
+        ({"damping": 5}, "damping"),
+        ({"stiffening": {"b": 1.0}}, "stiffening"),
+        (3, "model"),
+    ],
+)
+def test_bad_model_in_a_parameter_file(model, match):
+    from rbjax.serialize import model_from_dict
+
+    with pytest.raises(ValueError, match=match):
+        model_from_dict(model)
+
+
+def test_sweep_samples_are_validated_jointly():
+    # each value alone is a valid wall or radius; the pair (wall 40 mm, radius 30 mm) is not
+    from rbjax.sweep import evaluate
+
+    with pytest.raises(ValueError, match="wall_m"):
+        evaluate({"radius_m": np.array([0.09, 0.03]), "wall_m": np.array([0.03, 0.04])})
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [({"extra_weights": {"lfe": float("nan")}}, "extra_weights"), ({"max_steps": 0}, "max_steps")])
+def test_bad_fit_options(kwargs, name):
+    from rbjax.fit import fit
+
+    with pytest.raises(ValueError, match=name):
+        fit(None, "paper", **kwargs)  # rejected before any data are read

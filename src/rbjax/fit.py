@@ -1126,7 +1126,7 @@ def fit(
     autocorrelation of the pre-contact noise), so that they are comparable across models.
     """
     from .model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS
-    from ._validate import check_choice
+    from ._validate import check_choice, check_range
 
     base, stiff = _parse_model(model)
     check_choice("blocked_force", blocked_force, BLOCKED_FORCE_OPTIONS)
@@ -1144,11 +1144,14 @@ def fit(
         if not (-1.0 < mean < 0.5 and std > 0):
             raise ValueError(f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0")
         poisson_prior = (mean, std)
-    for k in extra_weights or {}:
+    for k, w in (extra_weights or {}).items():
         if k not in ("contact_time", "peak_force", "lfe"):
             raise ValueError(f"extra_weights: unknown term {k!r}; valid: contact_time, peak_force, lfe")
+        check_range(f"extra_weights[{k!r}]", w, lower=0.0, lower_open=False)
     if max_steps is None:
         max_steps = {"lm": 40, "gauss-newton": 40, "adam": 300, "lbfgs": 100}[optimizer]
+    elif not (isinstance(max_steps, (int, np.integer)) and max_steps >= 1):
+        raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 1")
     fixed = _validate_fix(model, fix)
     if "poisson" in fixed and poisson_prior is not None:
         raise ValueError("poisson is both fixed and given a prior; choose one")

@@ -245,6 +245,10 @@ def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
     """(recommended, candidates within the noise of the best) by the rule in :data:`RULE`."""
     if not candidates:
         raise ValueError("no candidates to choose from")
+    failed = [c for c in candidates if not math.isfinite(c.cv_error_pct)]
+    candidates = [c for c in candidates if math.isfinite(c.cv_error_pct)]
+    if not candidates:
+        raise ValueError(f"every candidate failed cross-validation (non-finite held-out error): {', '.join(c.label for c in failed)}")
     best = min(candidates, key=lambda c: c.cv_error_pct)
     within = tuple(c for c in candidates if c is best or _paired(c, best)[0] <= _paired(c, best)[1])
     chosen = min(within, key=lambda c: (c.n_physical, c.cv_error_pct))

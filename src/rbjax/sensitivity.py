@@ -34,10 +34,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._validate import check_range
-from ._x64 import require_x64
 from .ball import JIS_RUBBER_BALL, Ball
 from .model import Model, Solver
-from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, _simulate, make_model, trajectory
+from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, _simulate, check_inputs, make_model, trajectory
 from .sweep import BALL_PARAMETERS, assemble, canonical_name, evaluate, parameter_names
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
@@ -132,7 +131,9 @@ class Sensitivity:
         unknown = set(outputs) - set(self.outputs)
         if unknown:
             raise ValueError(f"outputs {sorted(unknown)} are not known; valid: {', '.join(self.outputs)}")
-        check_range("height_index", height_index, lower=-1.0, upper=len(self.height_m), lower_open=True)
+        n = len(self.height_m)
+        if not (isinstance(height_index, (int, np.integer)) and 0 <= height_index < n):
+            raise ValueError(f"height_index={height_index!r} is outside the valid range: an integer in [0, {n - 1}]")
         i = int(height_index)
         el = self.elasticity
         ncols = min(3, len(outputs))
@@ -196,6 +197,7 @@ def local_sensitivity(
     blocked_force: str = "paper",
     damping=None,
     stiffening=None,
+    model: Model | None = None,
     lfe: bool = True,
     solver: Solver | None = None,
     rate_Hz: float = PAPER_RATE_Hz,
@@ -209,7 +211,8 @@ def local_sensitivity(
         wrt: parameter names (any letter case), default all: ``height_m``, ``radius_m``,
             ``wall_m``, ``mass_kg``, ``youngs_Pa``, ``poisson``, the fields of ``damping``
             (e.g. ``damping_Ns_per_m``) and ``beta`` with ``stiffening``.
-        gas, blocked_force, damping, stiffening: the model, as in ``rbjax.simulate``.
+        gas, blocked_force, damping, stiffening: the model, as in ``rbjax.simulate`` (or pass
+            ``model``, e.g. from ``rbjax.serialize.load_params``).
         lfe: also differentiate L_FE in the octave bands 31.5 Hz–1 kHz (Eq. 11, §2.4).
         solver: integration settings (its adjoint is set to ``"forward"``).
         rate_Hz, duration_s: the force record for L_FE (default the paper's 44.1 kHz × 1 s).
@@ -218,16 +221,12 @@ def local_sensitivity(
         A ``Sensitivity``; heights whose solve is flagged (status ≠ 0) have NaN values and
         derivatives.
     """
-    require_x64()
-    check_range("height_m", height_m, lower=0.0)
-    check_range("rate_Hz", rate_Hz, lower=0.0)
-    check_range("duration_s", duration_s, lower=0.0)
-    if not isinstance(ball, Ball):
-        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
+    check_inputs(height_m, ball, rate_Hz, duration_s)
     heights = np.atleast_1d(np.asarray(height_m, dtype=np.float64))
     if heights.ndim != 1:
         raise ValueError(f"height_m has shape {np.shape(height_m)}; expected a scalar or 1-D array")
-    model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+    if model is None:
+        model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
     valid = parameter_names(model)
     wrt = valid if wrt is None else tuple(dict.fromkeys(canonical_name(w, model) for w in ([wrt] if isinstance(wrt, str) else wrt)))
     if not wrt:

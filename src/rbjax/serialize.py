@@ -37,12 +37,33 @@ def ball_to_dict(ball: Ball) -> dict:
     return _fields(ball)
 
 
+def _table(what: str, d) -> dict:
+    if not isinstance(d, dict):
+        raise ValueError(f"{what}: expected a table/object of parameters, got {d!r}")
+    return d
+
+
 def ball_from_dict(d: dict) -> Ball:
+    d = _table("ball", d)
     names = [f.name for f in dataclasses.fields(Ball)]
     missing = [n for n in names if n not in d]
     if missing:
         raise ValueError(f"ball parameters missing {missing}; expected keys {names}")
-    return Ball(**{n: float(d[n]) for n in names})
+    try:
+        return Ball(**{n: float(d[n]) for n in names})
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"ball: bad parameter value ({err})") from err
+
+
+def _construct(what: str, cls, fields: dict):
+    valid = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(fields) - set(valid))
+    if unknown:
+        raise ValueError(f"{what}: unknown keys {unknown}; valid: {valid}")
+    try:
+        return cls(**fields)
+    except TypeError as err:
+        raise ValueError(f"{what}: bad parameters ({err}); valid keys: {valid}") from err
 
 
 def model_to_dict(model: Model) -> dict:
@@ -60,16 +81,17 @@ def model_to_dict(model: Model) -> dict:
 
 
 def model_from_dict(d: dict) -> Model:
+    d = _table("model", d)
     damping = d.get("damping")
     if damping is not None:
-        damping = dict(damping)
+        damping = dict(_table("damping", damping))
         name = damping.pop("name", None)
         if name not in DAMPING_MODELS:
             raise ValueError(f"damping name={name!r} is not known; valid: {sorted(DAMPING_MODELS)}")
-        damping = DAMPING_MODELS[name](**damping)
+        damping = _construct(f"damping {name!r}", DAMPING_MODELS[name], damping)
     stiffening = d.get("stiffening")
     if stiffening is not None:
-        stiffening = CubicStiffening(**stiffening)
+        stiffening = _construct("stiffening", CubicStiffening, _table("stiffening", stiffening))
     return Model(
         gas=d.get("gas", "adiabatic"),
         blocked_force=d.get("blocked_force", "paper"),

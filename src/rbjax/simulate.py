@@ -115,6 +115,19 @@ class ImpactResult(eqx.Module):
         return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
 
 
+def check_inputs(height_m, ball, rate_Hz=None, duration_s=None) -> None:
+    """The checks at the API edge shared by simulate, trajectory, histories and sensitivities."""
+    require_x64()
+    check_range("height_m", height_m, lower=0.0)
+    if not isinstance(ball, Ball):
+        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
+    if rate_Hz is not None:
+        check_range("rate_Hz", rate_Hz, lower=0.0)
+        check_range("duration_s", duration_s, lower=0.0)
+        if int(round(rate_Hz * duration_s)) < 1:
+            raise ValueError(f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need rate_Hz·duration_s ≥ 1")
+
+
 def simulate(
     height_m,
     ball: Ball = JIS_RUBBER_BALL,
@@ -137,12 +150,7 @@ def simulate(
     Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
     ``.force_N`` / ``.history()`` integrate the histories on request.
     """
-    require_x64()
-    check_range("height_m", height_m, lower=0.0)
-    check_range("rate_Hz", rate_Hz, lower=0.0)
-    check_range("duration_s", duration_s, lower=0.0)
-    if not isinstance(ball, Ball):
-        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
+    check_inputs(height_m, ball, rate_Hz, duration_s)
     solver = Solver() if solver is None else solver
     model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, max_deflection_ratio=max_deflection_ratio)
     return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s)
@@ -175,8 +183,10 @@ def trajectory(height_m, times_s, ball: Ball = JIS_RUBBER_BALL, model: Model | N
     The building block for fitting: ``times_s`` is static in shape, so this jits and goes
     through ``jax.jacfwd`` (with ``Solver(adjoint="forward")``).
     """
-    require_x64()
-    check_range("height_m", height_m, lower=0.0)
+    check_inputs(height_m, ball)
+    if np.ndim(times_s) != 1:
+        raise ValueError(f"times_s has shape {np.shape(times_s)}; expected a 1-D array of times")
+    check_range("times_s", times_s)
     model = Model() if model is None else model
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
@@ -188,9 +198,10 @@ def trajectory(height_m, times_s, ball: Ball = JIS_RUBBER_BALL, model: Model | N
 def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None) -> Trajectory:
     """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
 
-    Only the first ⌈t_c·rate⌉ + 1 samples are integrated (t_c: the longest contact time of the
+    Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
     batch, computed first if not given); the rest of the record is zeros.
     """
+    check_inputs(height_m, ball, rate_Hz, duration_s)
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
         contact_time_s = _simulate(height_m, ball, model, solver).contact_time_s

@@ -324,8 +324,8 @@ def evaluate(
     n = {v.shape[0] for v in named.values()}
     if len(n) != 1:
         raise ValueError(f"samples must all have the same length; got {dict((k, v.shape[0]) for k, v in named.items())}")
-    for k, v in named.items():  # the constructors validate concrete values and name the parameter
-        assemble({k: v}, height_m, ball, model)
+    # the constructors validate concrete values (jointly: e.g. wall < radius) and name the parameter
+    assemble(named, height_m, ball, model)
     check_range("height_m", named.get("height_m", height_m), lower=0.0)
     (size,) = n
     batch = {k: np.full(size, v) for k, v in nominal_parameters(height_m, ball, model).items()} | named
@@ -364,6 +364,8 @@ def _base(config: dict):
     from .serialize import model_from_dict
 
     ball_fields = config.get("ball", {})
+    if not isinstance(ball_fields, dict):
+        raise ValueError(f"ball = {ball_fields!r}: expected a [ball] table")
     unknown = set(ball_fields) - set(BALL_PARAMETERS)
     if unknown:
         raise ValueError(f"[ball] has unknown keys {sorted(unknown)}; valid: {', '.join(BALL_PARAMETERS)}")
@@ -416,7 +418,10 @@ def run_sweep(config: dict, *, progress: bool = False, devices=None):
     ranges = config.get("ranges")
     if not ranges:
         raise ValueError(f"a {kind} sweep needs a [ranges] table of [low, high] per parameter")
-    outputs = tuple(config.get("outputs", ("contact_time_s", "peak_force_N", "restitution")))
+    outputs = config.get("outputs", ("contact_time_s", "peak_force_N", "restitution"))
+    if isinstance(outputs, str) or not isinstance(outputs, (list, tuple)):
+        raise ValueError(f"outputs = {outputs!r}: expected a list of output names")
+    outputs = tuple(outputs)
     if kind == "sobol":
         section = config.get("sobol", {})
         return sens.global_sensitivity(

@@ -70,10 +70,7 @@ def run(args) -> int:
         args.height_m,
         ball,
         wrt=wrt,
-        gas=model.gas,
-        blocked_force=model.blocked_force,
-        damping=model.damping,
-        stiffening=model.stiffening,
+        model=model,
         lfe=not args.no_lfe,
     )
     rows = result.to_dict()

@@ -48,8 +48,8 @@ def load_ball_and_model(args):
 
         try:
             ball, model = load_params(args.params)
-        except (TypeError, KeyError, AttributeError) as err:
-            raise ValueError(f"--params {args.params}: bad ball/model parameters ({err})") from err
+        except ValueError as err:
+            raise ValueError(f"--params {args.params}: {err}") from err
     else:
         ball, model = JIS_RUBBER_BALL, make_model()
     if args.youngs_pa is not None:
