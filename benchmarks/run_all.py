@@ -126,7 +126,7 @@ def render_multicore(mc):
 
 
 def render_targets(tp):
-    from _common import fmt, table
+    from _common import table
 
     rows = tp["rows"]
     scipy = tp["scipy_per_impact_s"]

@@ -31,9 +31,8 @@ import numpy as np
 
 from _common import RESULTS_DIR, finish_machine_info, machine_info, parse_args, sweep_solver, table, write_json
 
-import jax.numpy as jnp
 import rbjax
-from rbjax.impact import SINGULAR_FRACTION, STATUS_NAMES, impact_batch
+from rbjax.impact import SINGULAR_FRACTION, impact_batch
 from rbjax.quadrature import impact_quadrature_batch
 from rbjax.simulate import _broadcast_inputs, make_model
 

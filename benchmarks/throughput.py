@@ -36,14 +36,12 @@ import numpy as np
 
 from _common import (
     RESULTS_DIR,
-    block,
     finish_machine_info,
     fmt,
     machine_info,
     parse_args,
     quadrature_reference,
     scipy_impact_lean,
-    table,
     time_call,
     write_json,
 )

@@ -15,7 +15,13 @@ from .forces import (
     reissner_stiffness_N_per_m,
     shell_force_N,
 )
-from .impact import STATUS_CODES, STATUS_NAMES, ImpactScalars, Trajectory, impact_velocity_m_per_s
+from .impact import (
+    STATUS_CODES,
+    STATUS_NAMES,
+    ImpactScalars,
+    Trajectory,
+    impact_velocity_m_per_s,
+)
 from .model import Model, Solver
 from .simulate import ImpactResult, simulate, trajectory
 

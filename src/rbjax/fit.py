@@ -47,8 +47,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import sys
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -58,9 +56,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import _x64  # noqa: F401  (float64 on)
+from ._progress import progress
 from .ball import JIS_RUBBER_BALL, Ball
-from .forces import DAMPING_MODELS, CubicStiffening, HuntCrossley, KelvinVoigt, Zener, reissner_stiffness_N_per_m
+from .forces import (
+    DAMPING_MODELS,
+    CubicStiffening,
+    HuntCrossley,
+    reissner_stiffness_N_per_m,
+)
+from .impact import G_N_PER_KG
 from .model import Model, Solver
+from .spectrum import OCTAVE_BANDS
 
 __all__ = [
     "MODEL_NAMES",
@@ -89,8 +95,6 @@ SCALES = ("noise", "peak")
 FEATURE_FRACTION = 0.05
 #: Bound b of the optional drop-height errors, |Δh| < b (m).
 HEIGHT_ERROR_BOUND_M = 0.01
-#: Standard gravity for v0 = √(2 g h) (Eq. 10).
-_G = 9.80665
 
 _DAMPING_PARAMS = {
     "paper": (),
@@ -98,7 +102,6 @@ _DAMPING_PARAMS = {
     "hunt-crossley": ("alpha_s_per_m",),
     "zener": ("stiffness_ratio", "relaxation_time_s"),
 }
-_BALL_FIELDS = ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
 _FIXED_BALL_FIELDS = ("radius_m", "wall_m", "mass_kg")
 _UNITS = {
     "youngs_Pa": "Pa",
@@ -113,13 +116,6 @@ _UNITS = {
     "mass_kg": "kg",
 }
 # feature vector of one record: t_rise, t_fall, peak, L_FE in the six octave bands
-_N_FEATURES = 9
-
-
-def _octave_bands():
-    from .spectrum import OCTAVE_BANDS
-
-    return OCTAVE_BANDS
 
 
 # ----------------------------------------------------------------------------------------------
@@ -569,7 +565,7 @@ class FitResult:
             "correlations": {"names": list(names), "matrix": np.asarray(matrix).tolist()},
             "identifiability": self.identifiability,
             "per_height": [_plain(row) for row in self.per_height],
-            "octave_bands_Hz": list(_octave_bands()),
+            "octave_bands_Hz": list(OCTAVE_BANDS),
             "residual_rms_N": self.residual_rms_N,
             "converged": bool(self.converged),
             "message": self.message,
@@ -594,7 +590,7 @@ class FitResult:
             else:
                 lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
         lines.append("identifiability: " + self.identifiability)
-        bands = _octave_bands()
+        bands = OCTAVE_BANDS
         header = ["h (m)", "fit", "rms (N)", "t_c meas (ms)", "t_c fit (ms)", "peak meas (N)", "peak fit (N)"] + [f"ΔL {b}" for b in bands]
         rows = []
         for r in self.per_height:
@@ -610,8 +606,9 @@ class FitResult:
     def plot(self, out_dir) -> list[Path]:
         """Write ``histories.png`` (measured vs fitted with residuals), ``lfe_bands.png`` and
         ``correlations.png`` into ``out_dir``; return their paths."""
-        from . import plot as _plot  # noqa: F401  (selects the Agg backend without a display)
         import matplotlib.pyplot as plt
+
+        from . import plot as _plot  # noqa: F401  (selects the Agg backend without a display)
 
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -634,7 +631,7 @@ class FitResult:
         fig.savefig(paths[-1], dpi=120)
         plt.close(fig)
 
-        bands = _octave_bands()
+        bands = OCTAVE_BANDS
         fig, ax = plt.subplots(figsize=(7.0, 4.5), layout="constrained")
         x = np.arange(len(bands))
         for k, row in enumerate(self.per_height):
@@ -728,7 +725,7 @@ class _Objective:
             cost = 0.5 * float(r @ r)
             free = set(self.free.tolist())
             shown = ", ".join(f"{n}={theta[i]:.5g}" for i, n in enumerate(self.p.layout.physical) if i in free)
-            _progress_line(f"{self.label} eval {self.evaluations}: cost {cost:.9g}, rms {self.p.history_rms_N(out):.3g} N, {shown}")
+            progress(f"{self.label} eval {self.evaluations}: cost {cost:.9g}, rms {self.p.history_rms_N(out):.3g} N, {shown}")
         if len(self._cache) > 8:
             self._cache.pop(next(iter(self._cache)))
         self._cache[key] = (r, jac_phi, theta, out)
@@ -758,10 +755,6 @@ def _whitening(jac, full=False) -> np.ndarray:
     if d.size == 0 or d.min() <= 1e-8 * d.max():
         return np.diag(1.0 / norms)
     return np.diag(1.0 / norms) @ np.linalg.inv(r)
-
-
-def _progress_line(msg):
-    print(f"rbjax: {msg}", file=sys.stderr, flush=True)
 
 
 class _Problem:
@@ -1024,7 +1017,7 @@ def _start_values(problem: _Problem, layout: _Layout, ball: Ball, fixed: dict, s
     nu = fixed.get("poisson", start.get("poisson", 0.45))
     k_spring = mass * (math.pi / tc) ** 2
     e_young = k_spring * float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * float(ball.wall_m) ** 2)
-    v0 = np.sqrt(2 * _G * d.height_m)
+    v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
     impulse = d.force_N.sum(axis=1) / d.rate_Hz
     e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
     values = {"youngs_Pa": e_young, "poisson": nu}
@@ -1125,8 +1118,8 @@ def fit(
     N_eff = N/τ_noise for every model fitted to the same data (τ_noise: the integrated
     autocorrelation of the pre-contact noise), so that they are comparable across models.
     """
-    from .model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS
     from ._validate import check_choice, check_range
+    from .model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS
 
     base, stiff = _parse_model(model)
     check_choice("blocked_force", blocked_force, BLOCKED_FORCE_OPTIONS)

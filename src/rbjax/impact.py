@@ -25,7 +25,13 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .forces import reissner_stiffness_N_per_m, contact_force_N, dynamic_mass_kg, internal_rates, momentum_flux_N
+from .forces import (
+    contact_force_N,
+    dynamic_mass_kg,
+    internal_rates,
+    momentum_flux_N,
+    reissner_stiffness_N_per_m,
+)
 from .model import Model, Solver
 
 G_N_PER_KG = 9.80665  # standard gravity (m/s²), Eq. 10

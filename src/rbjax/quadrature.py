@@ -7,7 +7,7 @@ Eqs. 1–3, with optional ``CubicStiffening``, plus the gas force F_G, Eq. 4, wh
     M(1 − δ/2R) δ̈ − (M/2R) δ̇² H(−δ̇) = −F(δ),   δ(0) = 0,  δ̇(0) = v0 = √(2 g h_D) (Eq. 10)
 
 is integrated in δ instead of t. With u = δ̇² and δ̈ = ½ du/dδ
-(see /work/shared/notes/energy-balance-reduction.md):
+(the energy balance of Eq. 7):
 
 * compression (δ̇ > 0, no flux term): u_c(δ) = v0² − (4R/M) ∫₀^δ F(s)/(2R − s) ds, and the
   maximum deflection δ_max is the root of u_c;
@@ -46,7 +46,13 @@ from ._validate import check_range
 from ._x64 import require_x64
 from .ball import Ball
 from .forces import contact_force_N, reissner_stiffness_N_per_m
-from .impact import SINGULAR_FRACTION, STATUS_CODES, ImpactScalars, Trajectory, impact_velocity_m_per_s
+from .impact import (
+    SINGULAR_FRACTION,
+    STATUS_CODES,
+    ImpactScalars,
+    Trajectory,
+    impact_velocity_m_per_s,
+)
 from .model import Model
 
 #: Newton steps for δ_max. The start lies right of the root and u_c is concave and decreasing

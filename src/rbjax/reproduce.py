@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from ._progress import progress as say
 from ._validate import check_range
 from .ball import JIS_RUBBER_BALL
 from .forces import gas_force_N, shell_force_N
@@ -45,17 +46,6 @@ PAPER = {
 }
 
 
-def _key(h: float) -> str:
-    return f"{h:g}" if h != 1.0 else "1.0"
-
-
-def _progress(enabled: bool, message: str) -> None:
-    if enabled:
-        from .commands import progress
-
-        progress(f"reproduce: {message}")
-
-
 def _heights(heights_m) -> np.ndarray:
     h = np.asarray(heights_m, dtype=float).reshape(-1)
     check_range("heights_m", h, lower=0.0)
@@ -67,7 +57,13 @@ def _heights(heights_m) -> np.ndarray:
 
 def _run(heights: np.ndarray, gas: str) -> dict:
     """Simulate all heights with one gas option; spectra and band levels of the 1 s records."""
-    from .spectrum import contact_resonance_Hz, lfe_increase_per_doubling_dB, lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
+    from .spectrum import (
+        contact_resonance_Hz,
+        lfe_increase_per_doubling_dB,
+        lfe_octave_dB,
+        lfe_third_octave_dB,
+        lfe_total_dB,
+    )
 
     res = simulate(heights, gas=gas)
     hist = res.history()  # rbjax.trajectory on the paper's 44.1 kHz x 1 s grid (§2.4)
@@ -550,7 +546,7 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
         The content of ``results.json``: per-height results for ``gas`` ``adiabatic`` and
         ``none``, the comparison with the paper, the conformance at 1 m, and the file names.
     """
-    from .commands import jsonable
+    from .serialize import jsonable
     from .spectrum import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
     from .standards import check_conformance
 
@@ -560,7 +556,7 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     out.mkdir(parents=True, exist_ok=True)
     runs = {}
     for k, gas in enumerate(GAS, start=1):
-        _progress(progress, f"[{k}/4] simulating {len(heights)} drop heights, {GAS[gas]} (gas={gas!r})")
+        say(f"reproduce: [{k}/4] simulating {len(heights)} drop heights, {GAS[gas]} (gas={gas!r})", enabled=progress)
         runs[gas] = _run(heights, gas)
     comparison = _comparison(runs, heights)
     explanations = _explanations(runs, heights, comparison)
@@ -572,9 +568,9 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             if run["ok"][i1]
             else None
         )
-    _progress(progress, "[3/4] drawing figures 3-12")
+    say("reproduce: [3/4] drawing figures 3-12", enabled=progress)
     files = _figures(out, runs, heights, comparison)
-    _progress(progress, "[4/4] writing report.md and results.json")
+    say("reproduce: [4/4] writing report.md and results.json", enabled=progress)
     elapsed = time.perf_counter() - start
 
     def per_height(run):
@@ -611,5 +607,5 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     )
     (out / "report.md").write_text(_report(runs, heights, comparison, explanations, conformance, files, elapsed))
     (out / "results.json").write_text(json.dumps(results, indent=2, allow_nan=False))
-    _progress(progress, f"done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}")
+    say(f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}", enabled=progress)
     return results

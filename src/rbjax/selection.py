@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 import time
 from collections.abc import Sequence
 
 import numpy as np
 
+from ._progress import progress as say
 from .fit import MODEL_NAMES, FitResult, fit, predict, prepare_data
 
 __all__ = [
@@ -85,11 +85,6 @@ def _held_out_rows(result, heights) -> list[HeldOut]:
     return rows
 
 
-def _say(msg, progress):
-    if progress:
-        print(f"rbjax: {msg}", file=sys.stderr, flush=True)
-
-
 def cross_validate(
     data,
     model: str,
@@ -115,7 +110,7 @@ def cross_validate(
         keep = [x for x in data.heights_m if abs(x - h) > 5e-4]
         res = fit(data, model, blocked_force=blocked_force, fit_heights=keep, start=base, progress=False, **fit_kwargs)
         row = _held_out_rows(res, [h])[0]
-        _say(f"cv {model}/{blocked_force}: without {h:g} m: held-out error {row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)", progress)
+        say(f"cv {model}/{blocked_force}: without {h:g} m: held-out error {row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)", enabled=progress)
         rows.append(row)
     return tuple(rows)
 
@@ -315,9 +310,9 @@ def select_model(
     data = prepare_data(data)
     out = []
     for name, bf in pairs:
-        _say(f"select: fitting {name}/{bf} to all heights", progress)
+        say(f"select: fitting {name}/{bf} to all heights", enabled=progress)
         base = fit(data, name, blocked_force=bf, progress=False, **fit_kwargs)
-        _say(f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}", progress)
+        say(f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}", enabled=progress)
         folds = cross_validate(data, name, blocked_force=bf, base=base, progress=progress, **fit_kwargs)
         out.append(Candidate(name, bf, base, folds))
     chosen, within = recommend(out)
@@ -386,6 +381,6 @@ def held_out_comparison(
         start = (starts or {}).get((name, bf))
         res = fit(data, name, blocked_force=bf, fit_heights=fit_heights, start=start, progress=False, **fit_kwargs)
         rows[f"{name}/{bf}"] = tuple(_held_out_rows(res, rest))
-        _say(f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})", progress)
+        say(f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})", enabled=progress)
     rows["paper (unfitted)"] = tuple(_held_out_rows(predict(data), rest))
     return HoldOutComparison(fit_heights, rest, rows)

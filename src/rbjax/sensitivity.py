@@ -36,18 +36,26 @@ import numpy as np
 from ._validate import check_range
 from .ball import JIS_RUBBER_BALL, Ball
 from .model import Model, Solver
-from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, _simulate, check_inputs, make_model, trajectory
-from .sweep import BALL_PARAMETERS, assemble, canonical_name, evaluate, parameter_names
+from .simulate import (
+    PAPER_DURATION_S,
+    PAPER_RATE_Hz,
+    _simulate,
+    check_inputs,
+    make_model,
+    trajectory,
+)
+from .sweep import (
+    BALL_PARAMETERS,
+    assemble,
+    canonical_name,
+    evaluate,
+    lfe_output_names,
+    parameter_names,
+)
+from .sweep import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
 _LN10_OVER_10 = math.log(10.0) / 10.0
-
-
-def lfe_output_names() -> tuple[str, ...]:
-    """``lfe_31.5_dB`` … ``lfe_1000_dB``: the octave bands of ``rbjax.spectrum.OCTAVE_BANDS``."""
-    from .sweep import lfe_output_names as names
-
-    return names()
 
 
 def _is_lfe(name: str) -> bool:
@@ -124,8 +132,9 @@ class Sensitivity:
         A bar is the % change of the output (band energy for L_FE) per % change of the
         parameter. Returns the matplotlib figure (``fig.savefig("tornado.png")``).
         """
-        from . import plot as _plot  # noqa: F401  (selects a headless backend when needed)
         import matplotlib.pyplot as plt
+
+        from . import plot as _plot  # noqa: F401  (selects a headless backend when needed)
 
         outputs = self.outputs if outputs is None else tuple(outputs)
         unknown = set(outputs) - set(self.outputs)
@@ -570,7 +579,7 @@ def morris_screening(func: Callable, ranges: Mapping, n_trajectories: int, *, n_
 
 def _impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
     """Expand ``"lfe"`` to the band names; check the names; say whether L_FE is needed."""
-    valid = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m") + lfe_output_names()
+    valid = SWEEP_SCALAR_OUTPUTS + lfe_output_names()
     expanded = []
     for o in [outputs] if isinstance(outputs, str) else outputs:
         expanded.extend(lfe_output_names() if o == "lfe" else [o])
@@ -618,8 +627,8 @@ def global_sensitivity(
 
     Returns:
         ``SobolResult`` or ``MorrisResult``; ``.driver(output)`` names the parameter that drives
-        an output's spread. Elastic models use the quadrature fast path for the scalar outputs
-        when ``rbjax.quadrature`` is present; L_FE needs the force history (ODE).
+        an output's spread. Elastic models use the quadrature fast path for the scalar outputs;
+        L_FE needs the force history (ODE).
     """
     if model is None:
         model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -99,6 +100,32 @@ def model_from_dict(d: dict) -> Model:
         stiffening=stiffening,
         max_deflection_ratio=float(d.get("max_deflection_ratio", 2.0)),
     )
+
+
+def jsonable(x):
+    """Plain Python for ``json``: arrays to lists, NaN/inf to ``None`` (JSON ``null``)."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (str, bool)) or x is None:
+        return x
+    if hasattr(x, "to_dict"):
+        return jsonable(x.to_dict())
+    arr = np.asarray(x)
+    if arr.dtype == object:
+        return [jsonable(v) for v in arr.tolist()] if arr.ndim else jsonable(arr.item())
+    if arr.ndim:
+        return [jsonable(v) for v in arr.tolist()]
+    value = arr.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def to_json(obj) -> str:
+    """Strict JSON text of ``obj`` (through :func:`jsonable`: no NaN tokens)."""
+    return json.dumps(jsonable(obj), indent=2, allow_nan=False)
 
 
 def save_params(path, ball: Ball, model: Model, **extra) -> None:

@@ -35,6 +35,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from .spectrum import OCTAVE_BANDS
+
 __all__ = [
     "Tolerance",
     "RubberBallTolerances",
@@ -55,8 +57,8 @@ CLAUSE = (
 #: The octave bands (nominal mid-band frequency labels, IEC 61260-1) that carry a tolerance.
 TOLERANCED_OCTAVE_BANDS = ("31.5", "63", "125", "250", "500")
 
-# the octave bands reported by rbjax.spectrum.lfe_octave_dB (kept in step with OCTAVE_BANDS)
-_ALL_OCTAVE_BANDS = ("31.5", "63", "125", "250", "500", "1000")
+# the octave bands reported by rbjax.spectrum.lfe_octave_dB
+_ALL_OCTAVE_BANDS = OCTAVE_BANDS
 
 
 def _printed(x: float) -> float:

@@ -16,7 +16,7 @@ mesh axis.)
 
 Scalar outputs (contact time, peak force, restitution, maximum deflection, status) come from
 the ODE solve (``rbjax.impact.impact_batch``) — or from the quadrature fast path
-``rbjax.quadrature.impact_quadrature_batch`` for elastic models when that module is present.
+``rbjax.quadrature.impact_quadrature_batch`` for elastic models.
 The octave-band force exposure levels L_FE (§2.4, JIS A 1418-2) are computed from the blocked
 force on the paper's 44.1 kHz × 1 s grid: only the contact window is integrated
 (``rbjax.impact.trajectory_batch``), the rest is zeros, and ``rbjax.spectrum.lfe_octave_dB``
@@ -90,7 +90,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import math
 import sys
 import tomllib
@@ -107,6 +106,7 @@ from ._x64 import require_x64
 from .ball import JIS_RUBBER_BALL, Ball
 from .impact import impact_batch, trajectory_batch
 from .model import Model, Solver
+from .serialize import to_json
 from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, _broadcast_inputs
 
 BALL_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
@@ -236,13 +236,11 @@ def sharded_map(
 
 
 def _quadrature_batch(model: Model):
-    """The elastic-model fast path, when ``rbjax.quadrature`` provides it for this model."""
+    """The elastic-model fast path (``rbjax.quadrature``); None for damped models."""
     if model.damping is not None:
         return None
-    try:
-        from .quadrature import impact_quadrature_batch
-    except ImportError:
-        return None
+    from .quadrature import impact_quadrature_batch
+
     return impact_quadrature_batch
 
 
@@ -442,25 +440,6 @@ def run_sweep(config: dict, *, progress: bool = False, devices=None):
         n_levels=int(section.get("n_levels", 4)),
         **common,
     )
-
-
-def _json_ready(x):
-    if isinstance(x, dict):
-        return {str(k): _json_ready(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_ready(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _json_ready(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
-
-
-def to_json(summary: dict) -> str:
-    """JSON text of a summary dict; NaN becomes ``null`` (strict JSON)."""
-    return json.dumps(_json_ready(summary), indent=2, allow_nan=False)
 
 
 def write_outputs(result, path, config: dict | None = None) -> list[Path]:

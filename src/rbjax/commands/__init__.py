@@ -18,11 +18,11 @@ package-private helper module can live here too. Helpers for the commands: :func
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
-import numpy as np
+from .._progress import progress  # noqa: F401  (re-exported for the commands)
+from ..serialize import jsonable, to_json  # noqa: F401  (re-exported for the commands)
 
 
 class UsageError(ValueError):
@@ -61,36 +61,11 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
         pass  # the command defined its own --json
 
 
-def jsonable(x):
-    """Plain Python for ``json``: arrays to lists, NaN/inf to ``None`` (JSON ``null``)."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, (str, bool)) or x is None:
-        return x
-    if hasattr(x, "to_dict"):
-        return jsonable(x.to_dict())
-    arr = np.asarray(x)
-    if arr.dtype == object:
-        return [jsonable(v) for v in arr.tolist()] if arr.ndim else jsonable(arr.item())
-    if arr.ndim:
-        return [jsonable(v) for v in arr.tolist()]
-    value = arr.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def emit_json(obj, file=None) -> None:
     """Write ``obj`` as strict JSON (no NaN tokens) to stdout."""
-    print(json.dumps(jsonable(obj), indent=2, allow_nan=False), file=file or sys.stdout)
+    print(to_json(obj), file=file or sys.stdout)
 
 
-def progress(message: str, *, enabled: bool = True) -> None:
-    """One progress line on stderr (never stdout, so ``--json`` output stays clean)."""
-    if enabled:
-        print(f"rbjax: {message}", file=sys.stderr, flush=True)
 
 
 def format_table(header: list[str], rows: list[list[str]]) -> str:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import warnings
 from pathlib import Path
 
@@ -146,9 +145,9 @@ def run(args) -> int:
     if args.out is not None:
         folder = Path(args.out)
         folder.mkdir(parents=True, exist_ok=True)
-        from . import jsonable
+        from . import to_json
 
-        (folder / "fit.json").write_text(json.dumps(jsonable(out), indent=2, allow_nan=False))
+        (folder / "fit.json").write_text(to_json(out))
         for path in result.plot(folder):
             progress(f"wrote {path}")
         progress(f"wrote {folder / 'fit.json'}")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from . import add_command, emit_json, progress
@@ -89,11 +88,11 @@ def run(args) -> int:
     if comparison is not None:
         out["held_out"] = comparison.to_dict()
     if args.out is not None:
-        from . import jsonable
+        from . import to_json
 
         folder = Path(args.out)
         folder.mkdir(parents=True, exist_ok=True)
-        (folder / "selection.json").write_text(json.dumps(jsonable(out), indent=2, allow_nan=False))
+        (folder / "selection.json").write_text(to_json(out))
         progress(f"wrote {folder / 'selection.json'}")
     if args.json:
         emit_json(out)

@@ -76,7 +76,13 @@ def simulate_rows(heights_m, ball, model) -> list[dict]:
     """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok)."""
     from .. import simulate
     from ..simulate import PAPER_RATE_Hz
-    from ..spectrum import OCTAVE_BANDS, THIRD_OCTAVE_BANDS, lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
+    from ..spectrum import (
+        OCTAVE_BANDS,
+        THIRD_OCTAVE_BANDS,
+        lfe_octave_dB,
+        lfe_third_octave_dB,
+        lfe_total_dB,
+    )
     from ..standards import check_conformance
 
     heights = np.asarray(heights_m, dtype=float)

@@ -42,9 +42,9 @@ def register(subparsers) -> None:
 def run(args) -> int:
     import time
 
-    from ..sweep import load_config, run_sweep, write_outputs
-
     import jax
+
+    from ..sweep import load_config, run_sweep, write_outputs
 
     if args.distributed:
         jax.distributed.initialize()
