@@ -204,7 +204,7 @@ def test_sweep_samples_are_validated_jointly():
         evaluate({"radius_m": np.array([0.09, 0.03]), "wall_m": np.array([0.03, 0.04])})
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [({"extra_weights": {"lfe": float("nan")}}, "extra_weights"), ({"max_steps": 0}, "max_steps")])
+@pytest.mark.parametrize(("kwargs", "name"), [({"extra_weights": {"lfe": float("nan")}}, "extra_weights"), ({"max_steps": -1}, "max_steps"), ({"max_steps": 2.5}, "max_steps")])
 def test_bad_fit_options(kwargs, name):
     from rbjax.fit import fit
 

@@ -1143,8 +1143,8 @@ def fit(
         check_range(f"extra_weights[{k!r}]", w, lower=0.0, lower_open=False)
     if max_steps is None:
         max_steps = {"lm": 40, "gauss-newton": 40, "adam": 300, "lbfgs": 100}[optimizer]
-    elif not (isinstance(max_steps, (int, np.integer)) and max_steps >= 1):
-        raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 1")
+    elif not (isinstance(max_steps, (int, np.integer)) and max_steps >= 0):
+        raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)")
     fixed = _validate_fix(model, fix)
     if "poisson" in fixed and poisson_prior is not None:
         raise ValueError("poisson is both fixed and given a prior; choose one")
