@@ -299,3 +299,15 @@ def test_bad_params_file_exits_2_with_one_line(tmp_path, content, words):
     assert len(err.splitlines()) == 1 and err.startswith("rbjax: error: ")
     for w in words:
         assert w in err, (w, err)
+
+
+def test_compile_cache_location_follows_the_environment(monkeypatch, tmp_path):
+    from rbjax.cli import compile_cache_dir
+
+    monkeypatch.setenv("RBJAX_CACHE_DIR", str(tmp_path / "c"))
+    assert compile_cache_dir() == str(tmp_path / "c")
+    monkeypatch.setenv("RBJAX_CACHE_DIR", "")
+    assert compile_cache_dir() is None
+    monkeypatch.delenv("RBJAX_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert compile_cache_dir() == str(tmp_path / "xdg" / "rbjax" / "jax")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
 import sys
 
@@ -46,6 +47,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def compile_cache_dir() -> str | None:
+    """Where the command line keeps compiled programs between runs (``None``: nowhere).
+
+    ``$RBJAX_CACHE_DIR`` if set (empty: no cache), else ``$XDG_CACHE_HOME/rbjax/jax`` or
+    ``~/.cache/rbjax/jax``. JAX's persistent compilation cache: a second ``rbjax fit`` or
+    ``rbjax simulate`` skips the XLA compilation of the programs the first one built (the
+    tracing is redone). Only the command line switches it on; importing rbjax does not.
+    """
+    if "RBJAX_CACHE_DIR" in os.environ:
+        return os.environ["RBJAX_CACHE_DIR"] or None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "rbjax", "jax")
+
+
+def _enable_compile_cache() -> None:
+    import jax
+
+    path = compile_cache_dir()
+    if path is None or jax.config.jax_compilation_cache_dir:  # off, or the caller chose one
+        return
+    jax.config.update("jax_compilation_cache_dir", path)
+
+
 def _one_line(message) -> str:
     return " ".join(str(message).split())
 
@@ -63,6 +87,7 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "func", None) is None:
             parser.print_help(sys.stderr)
             return 2
+        _enable_compile_cache()
         return int(args.func(args) or 0)
     except (UsageError, DataError, ValueError, OSError) as err:
         print(f"rbjax: error: {_one_line(err)}", file=sys.stderr)
