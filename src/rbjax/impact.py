@@ -67,12 +67,12 @@ class ImpactScalars(eqx.Module):
     num_steps: jax.Array
 
 
-def _split(y, model):
+def _split(y):
     return y[0], y[1], y[2:]
 
 
 def _contact_force(y, ball, model):
-    d, v, z = _split(y, model)
+    d, v, z = _split(y)
     return contact_force_N(d, v, z, ball, gas=model.gas, damping=model.damping, stiffening=model.stiffening)
 
 
@@ -88,7 +88,7 @@ def floor_force_N(y, ball, model):
 def _vector_field(flux_on: bool):
     def rhs(t, y, args):
         ball, model = args
-        d, v, z = _split(y, model)
+        d, v, z = _split(y)
         force = _contact_force(y, ball, model)
         if flux_on:
             force = force - momentum_flux_N(v, ball)

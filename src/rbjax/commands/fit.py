@@ -118,7 +118,6 @@ def run(args) -> int:
 
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
-    parse_lowpass(args.lowpass_hz)
     data = load_fit_data(args)
     selection = None
     if args.model is None:

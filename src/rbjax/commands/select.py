@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from . import add_command, emit_json, progress
-from .fit import add_data_options, load_fit_data, parse_lowpass
+from .fit import add_data_options, load_fit_data
 
 DESCRIPTION = """\
 Fit every candidate model (damping: paper = elastic, kelvin-voigt, hunt-crossley, zener;
@@ -68,7 +68,6 @@ def run(args) -> int:
     forces = BLOCKED_FORCES if args.blocked_force == "both" else (args.blocked_force,)
     candidates = _parse_candidates(args.candidates, forces)
     held = _parse_heights(args.hold_out)
-    parse_lowpass(args.lowpass_hz)
     data = load_fit_data(args)
     if held is not None:
         import numpy as np
