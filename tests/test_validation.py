@@ -210,3 +210,14 @@ def test_bad_fit_options(kwargs, name):
 
     with pytest.raises(ValueError, match=name):
         fit(None, "paper", **kwargs)  # rejected before any data are read
+
+
+def test_record_features_of_a_cut_off_pulse_are_nan_not_made_up():
+    from rbjax.fit import record_features
+
+    t = np.arange(441) / 44100.0
+    whole = np.where(t < 0.005, 0.0, np.sin(np.pi * (t - 0.005) / 0.004)).clip(min=0.0)  # 4 ms pulse, inside
+    cut = np.sin(np.pi * (t + 0.001) / 0.004).clip(min=0.0)  # already at 70 % of its peak at t = 0
+    f = record_features(np.stack([whole, cut]), 44100.0)
+    assert f["contact_time_s"][0] == pytest.approx(0.004 * (1 - 2 * np.arcsin(0.05) / np.pi), rel=1e-3)
+    assert np.isnan(f["contact_time_s"][1]) and np.isnan(f["onset_s"][1])

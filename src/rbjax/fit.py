@@ -115,7 +115,6 @@ _UNITS = {
     "wall_m": "m",
     "mass_kg": "kg",
 }
-# feature vector of one record: t_rise, t_fall, peak, L_FE in the six octave bands
 
 
 # ----------------------------------------------------------------------------------------------
@@ -275,7 +274,8 @@ def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRA
 
     t_rise/t_fall: where the force crosses ``fraction`` × peak on the rising edge (last
     sample below the level before the peak) and the falling edge (first sample below it
-    after the peak), by linear interpolation; the contact time is t_fall − t_rise. L_FE:
+    after the peak), by linear interpolation (NaN where the record has no such sample); the
+    contact time is t_fall − t_rise. L_FE:
     paper Eq. 11 in octave bands (``rbjax.spectrum.lfe_octave_dB``) of the record
     zero-padded to ``n_pad`` samples (1 s, as in the paper's §2.4).
     """
@@ -296,6 +296,9 @@ def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRA
     j = jnp.clip(jnp.argmax(after, axis=-1)[..., None], 1, n - 1)
     xj, xj1 = take(j), take(j - 1)
     t_fall = (j - 1 + (xj1 - level) / (xj1 - xj))[..., 0] / rate_Hz
+    # no crossing inside the record (pulse cut off at either end): NaN, not a clipped index
+    t_rise = jnp.where(jnp.any(before, axis=-1), t_rise, jnp.nan)
+    t_fall = jnp.where(jnp.any(after, axis=-1), t_fall, jnp.nan)
     padded = jnp.pad(x, [(0, 0)] * (x.ndim - 1) + [(0, max(0, n_pad - n))])
     lfe = lfe_octave_dB(padded, rate_Hz)
     return jnp.concatenate([t_rise[..., None], t_fall[..., None], peak[..., None], lfe], axis=-1)

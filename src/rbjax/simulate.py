@@ -114,17 +114,21 @@ class ImpactResult(eqx.Module):
         return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
 
 
+def _check_record(rate_Hz, duration_s) -> None:
+    check_range("rate_Hz", rate_Hz, lower=0.0)
+    check_range("duration_s", duration_s, lower=0.0)
+    if int(round(rate_Hz * duration_s)) < 1:
+        raise ValueError(f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need rate_Hz·duration_s ≥ 1")
+
+
 def check_inputs(height_m, ball, rate_Hz=None, duration_s=None) -> None:
-    """The checks at the API edge shared by simulate, trajectory, histories and sensitivities."""
+    """The checks at the API edge shared by simulate, trajectory and sensitivities."""
     require_x64()
     check_range("height_m", height_m, lower=0.0)
     if not isinstance(ball, Ball):
         raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
     if rate_Hz is not None:
-        check_range("rate_Hz", rate_Hz, lower=0.0)
-        check_range("duration_s", duration_s, lower=0.0)
-        if int(round(rate_Hz * duration_s)) < 1:
-            raise ValueError(f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need rate_Hz·duration_s ≥ 1")
+        _check_record(rate_Hz, duration_s)
 
 
 def simulate(
@@ -200,7 +204,7 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
     Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
     batch, computed first if not given); the rest of the record is zeros.
     """
-    check_inputs(height_m, ball, rate_Hz, duration_s)
+    _check_record(rate_Hz, duration_s)  # heights and ball: checked by trajectory() below
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
         contact_time_s = _simulate(height_m, ball, model, solver).contact_time_s

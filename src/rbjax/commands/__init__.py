@@ -66,8 +66,6 @@ def emit_json(obj, file=None) -> None:
     print(to_json(obj), file=file or sys.stdout)
 
 
-
-
 def format_table(header: list[str], rows: list[list[str]]) -> str:
     """A plain-text table with right-aligned columns."""
     widths = [max(len(str(c)) for c in col) for col in zip(header, *rows)]
