@@ -1,5 +1,5 @@
 """Reading, checking, conditioning and averaging force-plate recordings (rbjax.data),
-and the causal Butterworth filters (rbjax.filters), checked against SciPy."""
+and the JAX causal filter of the fit (rbjax.filters.sosfilt_jax), checked against SciPy."""
 
 from __future__ import annotations
 
@@ -17,13 +17,7 @@ import scipy.signal
 import rbjax  # noqa: F401  (float64)
 from rbjax import data as D
 from rbjax.data import DataError, DataWarning
-from rbjax.filters import (
-    butter_lowpass_sos,
-    lowpass_np,
-    sos_frequency_response,
-    sosfilt_jax,
-    sosfilt_np,
-)
+from rbjax.filters import butter_lowpass_sos, lowpass_np, sosfilt_jax
 
 RATE = 44100
 NOISE_N = 0.8
@@ -80,28 +74,11 @@ def wav_bytes(payload: bytes, *, tag, bits, rate=RATE, channels=1, extensible=Fa
 # --------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("order", [1, 2, 3, 4, 5, 6, 8])
-@pytest.mark.parametrize("fc,fs", [(1250.0, 44100.0), (100.0, 1000.0), (4000.0, 10000.0)])
-def test_butter_matches_scipy(order, fc, fs):
-    sos = butter_lowpass_sos(order, fc, fs)
-    ref = scipy.signal.butter(order, fc, fs=fs, output="sos")
-    assert sos.shape == ref.shape
-    if order % 2 == 0:  # odd orders: scipy puts the zeros differently, same cascade
-        np.testing.assert_allclose(sos, ref, rtol=0, atol=1e-10)
-    f = np.linspace(0, fs / 2, 257)
-    _, h_ref = scipy.signal.sosfreqz(ref, worN=f, fs=fs)
-    np.testing.assert_allclose(sos_frequency_response(sos, f, fs), h_ref, rtol=0, atol=1e-10)
-    assert abs(abs(sos_frequency_response(sos, fc, fs)) - 2**-0.5) < 1e-10  # -3 dB at fc
-    x = np.random.default_rng(order).standard_normal(600)
-    y_ref = scipy.signal.sosfilt(ref, x)
-    np.testing.assert_allclose(sosfilt_np(sos, x), y_ref, rtol=0, atol=1e-10)
-
-
-def test_sosfilt_np_and_jax_match_scipy_batched():
-    sos = butter_lowpass_sos(4, 1250.0, RATE)
+@pytest.mark.parametrize("order", [1, 3, 4, 6])
+def test_sosfilt_jax_matches_scipy_batched(order):
+    sos = butter_lowpass_sos(order, 1250.0, RATE)
     x = np.random.default_rng(1).standard_normal((3, 2, 700)) * 100
     y_ref = scipy.signal.sosfilt(sos, x)
-    np.testing.assert_allclose(sosfilt_np(sos, x), y_ref, rtol=0, atol=1e-10)
     y_j = jax.jit(sosfilt_jax)(sos, x)
     assert y_j.dtype == jnp.float64 and y_j.shape == x.shape
     np.testing.assert_allclose(np.asarray(y_j), y_ref, rtol=0, atol=1e-10)
@@ -226,11 +203,13 @@ def test_csv_header_variants_units_and_single_column(tmp_path):
 def test_int_wav_with_calibration(tmp_path):
     x = raw_force(peak_N=1500.0)
     cal = 4000.0  # N per full scale
-    for width in (2, 3):
+    for width in (1, 2, 3, 4):
         fs = 2 ** (8 * width - 1)
         codes = np.round(x / cal * fs).astype(np.int64)
-        if width == 2:
-            payload = codes.astype("<i2").tobytes()
+        if width == 1:  # 8-bit PCM is unsigned
+            payload = (codes + 128).astype(np.uint8).tobytes()
+        elif width in (2, 4):
+            payload = codes.astype(f"<i{width}").tobytes()
         else:
             b = (codes & 0xFFFFFF).astype("<u4").tobytes()
             payload = b"".join(b[i : i + 3] for i in range(0, len(b), 4))
@@ -261,6 +240,15 @@ def test_float_wav_round_trip(tmp_path):
         r = D.read_wav(p, height_m=0.4)
         assert r.rate_Hz == RATE and r.height_m == 0.4 and r.force_N.dtype == np.float64
         np.testing.assert_array_equal(r.force_N, x.astype(np.float64))
+    # a chunk the reader does not know (a recorder's "bext") is skipped, with a note
+    blob = wav_bytes(x.astype("<f4").tobytes(), tag=3, bits=32, fact=False)
+    i = blob.index(b"data")
+    extra = b"bext" + struct.pack("<I", 4) + b"abcd"
+    p = tmp_path / "bext.wav"
+    p.write_bytes(b"RIFF" + struct.pack("<I", len(blob) - 8 + len(extra)) + blob[8:i] + extra + blob[i:])
+    r = D.read_wav(p)
+    np.testing.assert_array_equal(r.force_N, x.astype(np.float64))
+    assert any("not understood" in n for n in r.notes)
     # float64, two channels, calibration in N per full scale
     y = np.stack([x.astype(np.float64) / 2000.0, np.zeros(x.size)], axis=1).astype("<f8")
     p = tmp_path / "stereo.wav"
@@ -402,6 +390,23 @@ def test_clipping_flat_top(tmp_path):
     p.write_bytes(wav_bytes(codes.tobytes(), tag=1, bits=16))
     with pytest.raises(DataError, match=r"clip_int\.wav: clipped: \d+ sample\(s\) at full scale"):
         D.read_wav(p, calibration_N_per_FS=1000.0)
+    # 24 bit: one sample at the largest or the smallest code is clipping, one step below is not
+    codes = np.round(raw_force() / 2000.0 * 2**23).astype(np.int64)
+    for code, clipped in ((2**23 - 1, True), (2**23 - 2, False), (-(2**23), True)):
+        c = codes.copy()
+        c[1000] = code
+        b = (c & 0xFFFFFF).astype("<u4").tobytes()
+        p = tmp_path / "clip24.wav"
+        with wave.open(str(p), "wb") as w:
+            w.setnchannels(1)
+            w.setsampwidth(3)
+            w.setframerate(RATE)
+            w.writeframes(b"".join(b[i : i + 3] for i in range(0, len(b), 4)))
+        if clipped:
+            with pytest.raises(DataError, match=r"clip24\.wav: clipped: 1 sample\(s\) at full scale \(first at sample 1000\)"):
+                D.read_wav(p, calibration_N_per_FS=2000.0)
+        else:
+            assert D.read_wav(p, calibration_N_per_FS=2000.0).force_N[1000] == pytest.approx(2000.0 * code / 2**23)
 
 
 def test_bad_wav_files(tmp_path):
@@ -409,10 +414,10 @@ def test_bad_wav_files(tmp_path):
     full = wav_bytes(x.tobytes(), tag=3, bits=32)
     cases = {
         "empty.wav": (b"", "empty file"),
-        "trunc.wav": (full[: len(full) // 2], "truncated file: the data chunk declares"),
+        "trunc.wav": (full[: len(full) // 2], "truncated file: the header declares"),
         "notwav.wav": (b"hello world, not a wav file at all", "not a RIFF/WAVE"),
         "short.wav": (wav_bytes(x[:40].tobytes(), tag=3, bits=32), "only 40 samples"),
-        "alaw.wav": (wav_bytes(x.tobytes(), tag=6, bits=32), "WAV format tag 0x0006 is not supported"),
+        "alaw.wav": (wav_bytes(x.tobytes(), tag=6, bits=32), "WAV format ALAW is not supported"),
     }
     for name, (blob, match) in cases.items():
         p = tmp_path / name

@@ -701,14 +701,14 @@ def draw_samples(distributions: Mapping, n_samples: int, seed: int = 0) -> dict[
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion (Wilson 1927); (nan, nan) for n = 0."""
+    """Wilson score interval of a binomial proportion (Wilson 1927; ``scipy.stats.binomtest``);
+    (nan, nan) for n = 0."""
     if n == 0:
         return (math.nan, math.nan)
-    z = statistics.NormalDist().inv_cdf(0.5 + 0.5 * confidence)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    from scipy.stats import binomtest
+
+    ci = binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    return (float(ci.low), float(ci.high))
 
 
 @dataclasses.dataclass(frozen=True)
