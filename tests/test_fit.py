@@ -7,7 +7,7 @@ noise is added, and the sum goes through scipy.signal's 4th-order Butterworth at
 (the measuring chain); the records then pass through rbjax.data like measured files.
 
 Every fit uses six heights and the default 30 ms window, the shapes of the shipped emulated
-set, so that each model structure compiles once per session (shared with test_selection.py).
+set, so that each model structure compiles once per session.
 """
 
 from __future__ import annotations
