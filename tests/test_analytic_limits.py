@@ -7,8 +7,9 @@
    the shell force is (M/2R)v0²/(kδ_max) = ε as well), so every quantity is off by O(ε).
    The first-order terms follow from the energy balance below: δ_max = v0√(M/k)(1 − ε/3 + O(ε²))
    and e² = (1 − 2ε/3)/(1 + 2ε/3), i.e. F_max = v0√(kM)(1 − ε/3), e = 1 − 2ε/3, to O(ε²).
-2. The energy-balance reduction of /work/shared/notes/energy-balance-reduction.md for a force
-   F(δ) that depends on δ only (the paper's elastic model), done here with scipy.integrate.quad:
+2. The energy-balance reduction (the one src/rbjax/quadrature.py implements, see its module
+   docstring) for a force F(δ) that depends on δ only (the paper's elastic model), done here
+   with scipy.integrate.quad:
    u = δ̇², compression u_c(δ) = (4R/M)∫_δ^δmax F(s)/(2R − s) ds, restitution
    (2R − δ)² u_r(δ) = (4R/M)∫_δ^δmax F(s)(2R − s) ds, v_out² = u_r(0), and
    t_c = ∫₀¹ 2δ_max σ [u_c^(−1/2) + u_r^(−1/2)] dσ at δ = δ_max(1 − σ²).
@@ -113,7 +114,7 @@ QUAD = dict(epsabs=0.0, epsrel=1e-13, limit=200)
 
 
 def energy_balance(height_m, ball, gas):
-    """δ_max, contact time, rebound speed by quadrature (notes/energy-balance-reduction.md)."""
+    """δ_max, contact time, rebound speed by quadrature (the reduction of the module docstring, item 2)."""
     r, m = float(ball.radius_m), float(ball.mass_kg)
     k = shell_stiffness(r, float(ball.wall_m), float(ball.youngs_Pa), float(ball.poisson))
 
