@@ -160,23 +160,34 @@ def test_damping_terms():
     h = float(JIS.wall_m)
     d, v = np.array([0.0, 0.01, 0.03]), np.array([4.0, -1.0, 0.5])
     none = np.zeros(0)
-    kv = forces.damping_force_N(d, v, none, JIS, rbjax.KelvinVoigt(120.0))
+    kv = rbjax.KelvinVoigt(120.0).force_N(d, v, none, JIS)
     np.testing.assert_allclose(np.asarray(kv), 120.0 * v, rtol=1e-15)
-    hc1 = forces.damping_force_N(d, v, none, JIS, rbjax.HuntCrossley(0.7))
+    hc1 = rbjax.HuntCrossley(0.7).force_N(d, v, none, JIS)
     np.testing.assert_allclose(np.asarray(hc1), 0.7 * k * d * v, rtol=1e-14)
-    hc2 = forces.damping_force_N(d, v, none, JIS, rbjax.HuntCrossley(0.7, exponent=2.5))
+    hc2 = rbjax.HuntCrossley(0.7, exponent=2.5).force_N(d, v, none, JIS)
     np.testing.assert_allclose(np.asarray(hc2), 0.7 * k * d * (d / h) ** 1.5 * v, rtol=1e-13)
     zener = rbjax.Zener(0.4, 2e-3)
     state = np.array([35.0])
-    assert float(forces.damping_force_N(0.01, 2.0, state, JIS, zener)) == 35.0
-    rate = forces.internal_rates(0.01, 2.0, state, JIS, zener)
+    assert float(zener.force_N(0.01, 2.0, state, JIS)) == 35.0
+    rate = forces.internal_rates(0.01, 2.0, state, JIS, rbjax.Model(damping=zener))
     np.testing.assert_allclose(np.asarray(rate), [0.4 * k * 2.0 - 35.0 / 2e-3], rtol=1e-14)
+
+
+def test_damping_laws_in_parallel_add_their_forces_and_states():
+    d, v = 0.02, 1.5
+    state = np.array([12.0])
+    both = rbjax.Model(damping=(rbjax.KelvinVoigt(30.0), rbjax.Zener(0.2, 1e-3)), gas="none")
+    k = float(JIS.stiffness_N_per_m)
+    assert float(forces.contact_force_N(d, v, state, JIS, both)) == pytest.approx(k * d + 30.0 * v + 12.0, rel=1e-14)
+    assert both.num_internal_states == 1
+    with pytest.raises(ValueError, match="each law may appear once"):
+        rbjax.Model(damping=(rbjax.KelvinVoigt(1.0), rbjax.KelvinVoigt(2.0)))
 
 
 def test_contact_force_is_the_sum_of_the_terms():
     d, v = 0.02, -1.5
     k = float(JIS.stiffness_N_per_m)
-    total = forces.contact_force_N(d, v, np.zeros(0), JIS, gas="adiabatic", damping=rbjax.KelvinVoigt(50.0))
+    total = forces.contact_force_N(d, v, np.zeros(0), JIS, rbjax.Model(gas="adiabatic", damping=rbjax.KelvinVoigt(50.0)))
     expected = k * d + float(rbjax.gas_force_N(d, JIS)) + 50.0 * v
     assert float(total) == pytest.approx(expected, rel=1e-14)
-    assert float(forces.contact_force_N(d, v, np.zeros(0), JIS, gas="none")) == pytest.approx(k * d, rel=1e-15)
+    assert float(forces.contact_force_N(d, v, np.zeros(0), JIS, rbjax.Model(gas="none"))) == pytest.approx(k * d, rel=1e-15)

@@ -5,11 +5,9 @@ Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x6
 
 from . import _x64  # noqa: F401  (float64 before anything else touches JAX)
 from .ball import JIS_RUBBER_BALL, Ball
+from .damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
 from .forces import (
     CubicStiffening,
-    HuntCrossley,
-    KelvinVoigt,
-    Zener,
     contact_area_m2,
     gas_force_N,
     reissner_stiffness_N_per_m,
@@ -23,6 +21,7 @@ from .impact import (
     impact_velocity_m_per_s,
 )
 from .model import Model, Solver
+from .parameters import Parameter, parameter_names, parameter_table
 from .simulate import ImpactResult, simulate, trajectory
 
 __version__ = "0.1.0"
@@ -30,7 +29,12 @@ __version__ = "0.1.0"
 __all__ = [
     "Ball",
     "JIS_RUBBER_BALL",
+    "AbstractDamping",
+    "DAMPING_MODELS",
     "CubicStiffening",
+    "Parameter",
+    "parameter_names",
+    "parameter_table",
     "HuntCrossley",
     "KelvinVoigt",
     "Zener",

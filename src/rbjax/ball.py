@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
-from ._validate import check_range, is_traced
+from ._validate import is_traced
+from .parameters import POSITIVE, Parameter, check_declared
 
 
 class Ball(eqx.Module):
@@ -30,6 +32,15 @@ class Ball(eqx.Module):
     mass_kg: ArrayLike
     youngs_Pa: ArrayLike
     poisson: ArrayLike
+    PARAMETERS: ClassVar = {
+        "radius_m": Parameter("m", **POSITIVE, description="outer radius R of the shell"),
+        "wall_m": Parameter("m", **POSITIVE, description="wall thickness h (0 < h < R)"),
+        "mass_kg": Parameter("kg", **POSITIVE, description="total mass M"),
+        "youngs_Pa": Parameter("Pa", **POSITIVE, description="Young's modulus E (Eqs. 1–3)"),
+        "poisson": Parameter(
+            "1", lower=-1.0, upper=0.5, upper_open=False, transform="interval", description="Poisson's ratio ν (Eqs. 1–3)"
+        ),
+    }
 
     def __check_init__(self):
         validate_ball(self)
@@ -58,11 +69,7 @@ class Ball(eqx.Module):
 
 def validate_ball(ball: Ball) -> None:
     """Raise ``ValueError`` naming the field if a concrete ball parameter is invalid."""
-    check_range("radius_m", ball.radius_m, lower=0.0)
-    check_range("wall_m", ball.wall_m, lower=0.0)
-    check_range("mass_kg", ball.mass_kg, lower=0.0)
-    check_range("youngs_Pa", ball.youngs_Pa, lower=0.0)
-    check_range("poisson", ball.poisson, lower=-1.0, upper=0.5, upper_open=False)
+    check_declared(ball)
     if not (is_traced(ball.wall_m) or is_traced(ball.radius_m)):
         import numpy as np
 

@@ -10,11 +10,13 @@ when the caller passes one ("model no more than a scene needs").
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
-from ._validate import check_range
+from .parameters import NON_NEGATIVE, Parameter, check_declared
 
 #: Ambient (atmospheric) pressure p_a in Pa; the ball's vent hole makes p_0 = p_a (§2.2).
 AMBIENT_PRESSURE_Pa = 101_325.0
@@ -83,7 +85,7 @@ def momentum_flux_N(velocity_m_per_s, ball):
 
 
 # ----------------------------------------------------------------------------------------------
-# Extensions: each is a pytree of its parameters; the class selects the term.
+# Stiffening: a pytree of its parameter (damping laws: ``rbjax.damping``).
 
 
 class CubicStiffening(eqx.Module):
@@ -94,70 +96,10 @@ class CubicStiffening(eqx.Module):
     """
 
     beta: ArrayLike
+    PARAMETERS: ClassVar = {"beta": Parameter("1", **NON_NEGATIVE, description="cubic stiffening β in kδ(1 + β(δ/h)²)")}
 
     def __check_init__(self):
-        check_range("beta", self.beta, lower=0.0, lower_open=False)
-
-
-class KelvinVoigt(eqx.Module):
-    """Viscous damping in parallel with the shell: F_d = c δ̇ (model name ``kelvin-voigt``).
-
-    Attributes:
-        damping_Ns_per_m: c ≥ 0.
-    """
-
-    damping_Ns_per_m: ArrayLike
-    name = "kelvin-voigt"
-    num_states = 0
-
-    def __check_init__(self):
-        check_range("damping_Ns_per_m", self.damping_Ns_per_m, lower=0.0, lower_open=False)
-
-
-class HuntCrossley(eqx.Module):
-    """Hunt–Crossley damping F_d = α k δ (δ/h)^(n−1) δ̇, zero at first contact (``hunt-crossley``).
-
-    With n = 1 it is α·F_B·δ̇: damping grows with the deflection, so the pulse rises fast and
-    falls slowly, and no force jump appears at first contact.
-
-    Attributes:
-        alpha_s_per_m: α ≥ 0.
-        exponent: n ≥ 1 (static).
-    """
-
-    alpha_s_per_m: ArrayLike
-    exponent: float = eqx.field(static=True, default=1.0)
-    name = "hunt-crossley"
-    num_states = 0
-
-    def __check_init__(self):
-        check_range("alpha_s_per_m", self.alpha_s_per_m, lower=0.0, lower_open=False)
-        check_range("exponent", self.exponent, lower=1.0, lower_open=False)
-
-
-class Zener(eqx.Module):
-    """Standard linear solid: a Maxwell branch (spring k₁ = r·k, dashpot k₁τ) beside the shell.
-
-    The branch force F_M is an internal state, dF_M/dt = k₁ δ̇ − F_M/τ, F_M(0) = 0, so fast
-    impacts see the stiffer instantaneous spring (1 + r)k and the branch dissipates energy.
-    Model name ``zener``.
-
-    Attributes:
-        stiffness_ratio: r = k₁/k ≥ 0.
-        relaxation_time_s: τ > 0.
-    """
-
-    stiffness_ratio: ArrayLike
-    relaxation_time_s: ArrayLike
-    name = "zener"
-    num_states = 1
-
-    def __check_init__(self):
-        check_range("stiffness_ratio", self.stiffness_ratio, lower=0.0, lower_open=False)
-        check_range("relaxation_time_s", self.relaxation_time_s, lower=0.0)
-
-
-DAMPING_MODELS = {"kelvin-voigt": KelvinVoigt, "hunt-crossley": HuntCrossley, "zener": Zener}
+        check_declared(self)
 
 
 def shell_force_N(deflection_m, ball, stiffening=None):
@@ -168,35 +110,20 @@ def shell_force_N(deflection_m, ball, stiffening=None):
     return force
 
 
-def damping_force_N(deflection_m, velocity_m_per_s, internal, ball, damping):
-    """The damping term F_d of a damping pytree (0 without one)."""
-    if damping is None:
-        return jnp.zeros_like(deflection_m)
-    if isinstance(damping, KelvinVoigt):
-        return damping.damping_Ns_per_m * velocity_m_per_s
-    if isinstance(damping, HuntCrossley):
-        k = reissner_stiffness_N_per_m(ball)
-        shape = deflection_m
-        if damping.exponent != 1.0:  # static; a safe power keeps derivatives finite at δ = 0
-            ratio = jnp.maximum(deflection_m, 1e-300) / ball.wall_m
-            shape = shape * jnp.where(deflection_m > 0.0, ratio ** (damping.exponent - 1.0), 0.0)
-        return damping.alpha_s_per_m * k * shape * velocity_m_per_s
-    if isinstance(damping, Zener):
-        return internal[0]
-    raise TypeError(f"damping={damping!r} is not one of {sorted(DAMPING_MODELS)}")
+def contact_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
+    """Force between shell and floor, F_B + F_G + F_d (the right-hand side of Eq. 7).
 
-
-def internal_rates(deflection_m, velocity_m_per_s, internal, ball, damping):
-    """Time derivatives of the internal states of a damping term (empty for most)."""
-    if isinstance(damping, Zener):
-        k1 = damping.stiffness_ratio * reissner_stiffness_N_per_m(ball)
-        return jnp.stack([k1 * velocity_m_per_s - internal[0] / damping.relaxation_time_s])
-    return internal
-
-
-def contact_force_N(deflection_m, velocity_m_per_s, internal, ball, *, gas, damping=None, stiffening=None):
-    """Force between shell and floor, F_B + F_G + F_d (the right-hand side of Eq. 7)."""
-    force = shell_force_N(deflection_m, ball, stiffening)
-    if gas == "adiabatic":
+    ``internal`` holds the internal states of the model's damping terms, in their order.
+    """
+    force = shell_force_N(deflection_m, ball, model.stiffening)
+    if model.gas == "adiabatic":
         force = force + gas_force_N(deflection_m, ball)
-    return force + damping_force_N(deflection_m, velocity_m_per_s, internal, ball, damping)
+    for term, z in zip(model.damping, model.split_internal(internal)):
+        force = force + term.force_N(deflection_m, velocity_m_per_s, z, ball)
+    return force
+
+
+def internal_rates(deflection_m, velocity_m_per_s, internal, ball, model):
+    """Time derivatives of the internal states of the model's damping terms (concatenated)."""
+    rates = [term.internal_rates(deflection_m, velocity_m_per_s, z, ball) for term, z in zip(model.damping, model.split_internal(internal))]
+    return jnp.concatenate([jnp.zeros(0), *rates])

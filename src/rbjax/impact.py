@@ -73,16 +73,15 @@ def _split(y):
 
 def _contact_force(y, ball, model):
     d, v, z = _split(y)
-    return contact_force_N(d, v, z, ball, gas=model.gas, damping=model.damping, stiffening=model.stiffening)
+    return contact_force_N(d, v, z, ball, model)
 
 
 def floor_force_N(y, ball, model):
-    """The blocked force on the floor for state y under ``model.blocked_force``."""
-    force = _contact_force(y, ball, model)
-    if model.blocked_force == "momentum":
-        v = y[1]
-        force = force + jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
-    return force
+    """The blocked force on the floor for state y: the contact force plus the share
+    ``model.momentum_flux_weight`` of the momentum flux during compression."""
+    v = y[1]
+    flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
+    return _contact_force(y, ball, model) + model.momentum_flux_weight * flux
 
 
 def _vector_field(flux_on: bool):
@@ -93,7 +92,7 @@ def _vector_field(flux_on: bool):
         if flux_on:
             force = force - momentum_flux_N(v, ball)
         accel = -force / dynamic_mass_kg(d, ball)
-        rates = internal_rates(d, v, z, ball, model.damping)
+        rates = internal_rates(d, v, z, ball, model)
         return jnp.concatenate([jnp.stack([v, accel]), rates])
 
     return rhs

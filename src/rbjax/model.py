@@ -1,13 +1,19 @@
-"""What is modelled (terms and their options) and how it is integrated (solver settings)."""
+"""What is modelled (the terms) and how it is integrated (solver settings)."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import diffrax as dfx
 import equinox as eqx
+import numpy as np
 import optimistix as optx
+from jaxtyping import ArrayLike
 
-from ._validate import check_choice, check_range
-from .forces import DAMPING_MODELS, CubicStiffening
+from ._validate import check_choice, check_range, is_traced
+from .damping import AbstractDamping
+from .forces import CubicStiffening
+from .parameters import Parameter, check_declared
 
 GAS_OPTIONS = ("adiabatic", "none")
 #: ``paper``: the floor force is F_B + F_G (+ damping), as the paper computes it (§2.4).
@@ -16,52 +22,116 @@ GAS_OPTIONS = ("adiabatic", "none")
 BLOCKED_FORCE_OPTIONS = ("paper", "momentum")
 
 
+def _as_damping_tuple(damping) -> tuple:
+    if damping is None:
+        return ()
+    if isinstance(damping, AbstractDamping):
+        return (damping,)
+    if isinstance(damping, (tuple, list)):
+        return tuple(damping)
+    return damping  # rejected by __check_init__ with a named error
+
+
 class Model(eqx.Module):
     """The terms of the impact model. Every extension is off unless given.
 
     Attributes:
         gas: ``"adiabatic"`` (gas force F_G, Eq. 4 corrected) or ``"none"``.
-        blocked_force: ``"paper"`` or ``"momentum"`` (see ``BLOCKED_FORCE_OPTIONS``).
-        damping: ``None`` (the paper's elastic model) or a ``KelvinVoigt``, ``HuntCrossley``
-            or ``Zener`` pytree.
+        damping: damping laws acting in parallel (their forces add), each an
+            ``rbjax.AbstractDamping`` (``KelvinVoigt``, ``HuntCrossley``, ``Zener``, or your
+            own subclass); ``None``, one law, or a tuple of laws may be given.
         stiffening: ``None`` or a ``CubicStiffening`` pytree.
+        momentum_flux_weight: the share w of the momentum flux (M/2R)δ̇² the floor receives
+            during compression (a parameter, 0 ≤ w ≤ 1): 0 is ``blocked_force="paper"``, 1 is
+            ``"momentum"``. A runtime value, so models that differ only in it share one
+            compiled program.
         max_deflection_ratio: largest valid δ_max/h; beyond it the small-deflection shell
             model (§2.1: δ_max < δ_c, buckling from δ_c/h ≈ 2 for thin shells) is not valid
             and the result is flagged ``deflection_limit``.
+
+    ``Model(blocked_force="momentum")`` sets ``momentum_flux_weight=1``.
     """
 
-    gas: str = eqx.field(static=True, default="adiabatic")
-    blocked_force: str = eqx.field(static=True, default="paper")
-    damping: eqx.Module | None = None
-    stiffening: CubicStiffening | None = None
-    max_deflection_ratio: float = eqx.field(static=True, default=2.0)
+    gas: str = eqx.field(static=True)
+    damping: tuple
+    stiffening: CubicStiffening | None
+    momentum_flux_weight: ArrayLike
+    max_deflection_ratio: float = eqx.field(static=True)
+    PARAMETERS: ClassVar = {
+        "momentum_flux_weight": Parameter(
+            "1", lower=0.0, upper=1.0, lower_open=False, upper_open=False, transform="interval",
+            description="share of the momentum flux (M/2R)δ̇² in the floor force during compression",
+        )
+    }
+
+    def __init__(
+        self,
+        gas: str = "adiabatic",
+        blocked_force: str | None = None,
+        damping=None,
+        stiffening: CubicStiffening | None = None,
+        max_deflection_ratio: float = 2.0,
+        *,
+        momentum_flux_weight=None,
+    ):
+        if blocked_force is not None and momentum_flux_weight is not None:
+            raise ValueError("give blocked_force or momentum_flux_weight, not both")
+        if momentum_flux_weight is None:
+            bf = "paper" if blocked_force is None else blocked_force
+            check_choice("blocked_force", bf, BLOCKED_FORCE_OPTIONS)
+            momentum_flux_weight = 1.0 if bf == "momentum" else 0.0
+        self.gas = gas
+        self.damping = _as_damping_tuple(damping)
+        self.stiffening = stiffening
+        self.momentum_flux_weight = momentum_flux_weight
+        self.max_deflection_ratio = max_deflection_ratio
 
     def __check_init__(self):
         check_choice("gas", self.gas, GAS_OPTIONS)
-        check_choice("blocked_force", self.blocked_force, BLOCKED_FORCE_OPTIONS)
-        if self.damping is not None and not isinstance(self.damping, tuple(DAMPING_MODELS.values())):
+        check_declared(self)
+        if not isinstance(self.damping, tuple) or not all(isinstance(d, AbstractDamping) for d in self.damping):
             raise ValueError(
-                f"damping={self.damping!r} is not a damping model; valid: None or one of "
-                f"{', '.join(c.__name__ for c in DAMPING_MODELS.values())}"
+                f"damping={self.damping!r} is not a damping model; valid: None, an rbjax.AbstractDamping "
+                "(KelvinVoigt, HuntCrossley, Zener, …) or a tuple of them"
             )
+        names = [d.name for d in self.damping]
+        if len(set(names)) != len(names):
+            raise ValueError(f"damping: each law may appear once; got {names}")
         if self.stiffening is not None and not isinstance(self.stiffening, CubicStiffening):
             raise ValueError(f"stiffening={self.stiffening!r} must be None or a CubicStiffening")
         check_range("max_deflection_ratio", self.max_deflection_ratio, lower=0.0, upper=float("inf"), upper_open=False)
 
     @property
+    def blocked_force(self) -> str:
+        """``paper`` (w = 0), ``momentum`` (w = 1), or ``momentum×w`` in between (concrete w)."""
+        w = self.momentum_flux_weight
+        if is_traced(w) or np.ndim(w) != 0:
+            return "weighted"
+        w = float(w)
+        return "paper" if w == 0.0 else "momentum" if w == 1.0 else f"momentum×{w:g}"
+
+    @property
     def name(self) -> str:
-        """``paper`` or the damping model's name, with ``+stiffening`` if present."""
-        base = "paper" if self.damping is None else self.damping.name
+        """``paper`` or the damping laws' names joined by ``+``, with ``+stiffening`` if present."""
+        base = "+".join(d.name for d in self.damping) or "paper"
         return base + ("+stiffening" if self.stiffening is not None else "")
 
     @property
     def num_internal_states(self) -> int:
-        return 0 if self.damping is None else self.damping.num_states
+        return sum(d.num_states for d in self.damping)
+
+    def split_internal(self, internal) -> list:
+        """The internal-state vector cut into one slice per damping law."""
+        out, i = [], 0
+        for d in self.damping:
+            out.append(internal[i : i + d.num_states])
+            i += d.num_states
+        return out
 
     @property
     def velocity_dependent(self) -> bool:
         """True if the contact force depends on δ̇ or an internal state (damped models)."""
-        return self.damping is not None
+        return bool(self.damping)
 
 
 _SOLVERS = {
@@ -127,3 +197,23 @@ class Solver(eqx.Module):
         # Event times to ~1e-12 relative on the dense interpolant of each step (event functions
         # are scaled to O(1), and Newton's test also needs |cond| < atol at the root).
         return optx.Newton(rtol=1e-12, atol=1e-13)
+
+
+def superset_model(base: Model, laws=None, stiffening: bool = True) -> Model:
+    """``base`` with every damping law of ``laws`` (default: all registered) and the
+    stiffening present but switched off (their ``off()`` values, β = 0).
+
+    Models that differ in which of these terms are on share the superset's structure, so one
+    compiled program serves them all; the terms a candidate leaves off are held at their
+    off values.
+    """
+    from .damping import DAMPING_MODELS
+
+    laws = tuple(DAMPING_MODELS.values()) if laws is None else tuple(laws)
+    have = {type(d) for d in base.damping}
+    damping = base.damping + tuple(law.off() for law in laws if law not in have)
+    stiff = base.stiffening if base.stiffening is not None else (CubicStiffening(0.0) if stiffening else None)
+    return Model(
+        gas=base.gas, damping=damping, stiffening=stiff, max_deflection_ratio=base.max_deflection_ratio,
+        momentum_flux_weight=base.momentum_flux_weight,
+    )

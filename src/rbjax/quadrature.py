@@ -85,7 +85,7 @@ def _check(height_m, ball, model, n_nodes) -> None:
         raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
     if not isinstance(model, Model):
         raise ValueError(f"model={model!r} must be an rbjax.Model")
-    if model.damping is not None:
+    if model.damping:
         raise ValueError(
             f"model.damping={model.damping!r}: the quadrature path needs a contact force F(δ) of the "
             "deflection alone; valid: damping=None (use rbjax.simulate for damped models)"
@@ -96,7 +96,7 @@ def _check(height_m, ball, model, n_nodes) -> None:
 
 def _force(d, ball, model):
     """F(δ) = F_B (+ stiffening) (+ F_G): the right-hand side of Eq. 7 without damping."""
-    return contact_force_N(d, 0.0, (), ball, gas=model.gas, stiffening=model.stiffening)
+    return contact_force_N(d, 0.0, jnp.zeros(0), ball, model)
 
 
 def _compression_residual(d, v0, ball, model, x, w):
@@ -237,7 +237,7 @@ def impact_quadrature(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFA
     _check(height_m, ball, model, n_nodes)
     sol = _solve(height_m, ball, model, n_nodes)
     peak = _force(sol.d_max, ball, model)
-    first = (ball.mass_kg / (2.0 * ball.radius_m) * sol.v0**2) if model.blocked_force == "momentum" else jnp.zeros_like(peak)
+    first = model.momentum_flux_weight * ball.mass_kg / (2.0 * ball.radius_m) * sol.v0**2
     ok = sol.status == 0
     nan = jnp.nan
     return ImpactScalars(
@@ -312,8 +312,7 @@ def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_n
     w_c, w_r = _phase_weights(sigma, d_max, ball, model, x, w)
     velocity = jnp.where(compressing, sigma * jnp.sqrt(w_c), -sigma * jnp.sqrt(w_r) / (2.0 * ball.radius_m - deflection))
     force = _force(deflection, ball, model)
-    if model.blocked_force == "momentum":
-        force = force + jnp.where(compressing, ball.mass_kg / (2.0 * ball.radius_m) * sigma**2 * w_c, 0.0)
+    force = force + model.momentum_flux_weight * jnp.where(compressing, ball.mass_kg / (2.0 * ball.radius_m) * sigma**2 * w_c, 0.0)
 
     inside = (times >= 0.0) & (times < t_c + t_r)
     ok = sol.status == 0

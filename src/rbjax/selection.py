@@ -25,7 +25,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._progress import progress as say
-from .fit import MODEL_NAMES, FitResult, fit, predict, prepare_data
+from .fit import MODEL_NAMES, FitResult, fit, parse_model_name, predict, prepare_data
+from .model import Model, superset_model
 
 __all__ = [
     "HeldOut",
@@ -182,7 +183,7 @@ class Selection:
     elapsed_s: float
 
     def table(self) -> str:
-        from .commands import fmt, format_table
+        from .text import fmt, format_table
         from .spectrum import OCTAVE_BANDS
 
         header = ["model", "blocked force", "p", "conv", "rms (N)", "CV err (%)", "± SE", "|Δt_c| (%)", "|Δpeak| (%)"]
@@ -271,11 +272,23 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
     )
 
 
+def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
+    """One model holding the terms of every candidate named (their damping laws, and the
+    stiffening if any candidate has it): the structure of the one compiled fit program that
+    all candidates and folds run through, each with the terms it lacks held off."""
+    laws, stiff = [], False
+    for name in names:
+        terms, s = parse_model_name(name)
+        laws += [t for t in terms if t not in laws]
+        stiff = stiff or s
+    return superset_model(Model(gas=gas), laws, stiffening=stiff)
+
+
 def candidate_pairs(candidates: Sequence[str], blocked_forces: Sequence[str]) -> list[tuple[str, str]]:
     """(model, blocked force) pairs: ``"name"`` pairs with every blocked force,
     ``"name/paper"`` or ``"name/momentum"`` with that one only."""
     from ._validate import check_choice
-    from .fit import _parse_model
+    from .fit import parse_model_name
 
     if not candidates or not blocked_forces:
         raise ValueError("give at least one candidate model and one blocked-force definition")
@@ -284,7 +297,7 @@ def candidate_pairs(candidates: Sequence[str], blocked_forces: Sequence[str]) ->
     pairs = []
     for c in candidates:
         name, sep, bf = str(c).partition("/")
-        _parse_model(name)
+        parse_model_name(name)
         if sep:
             check_choice("blocked_force", bf, BLOCKED_FORCES)
             pairs.append((name, bf))
@@ -308,6 +321,7 @@ def select_model(
     t0 = time.perf_counter()
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
+    fit_kwargs.setdefault("superset", shared_structure([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic")))
     out = []
     for name, bf in pairs:
         say(f"select: fitting {name}/{bf} to all heights", enabled=progress)
@@ -316,7 +330,7 @@ def select_model(
         folds = cross_validate(data, name, blocked_force=bf, base=base, progress=progress, **fit_kwargs)
         out.append(Candidate(name, bf, base, folds))
     chosen, within = recommend(out)
-    baseline = tuple(_held_out_rows(predict(data), data.heights_m))
+    baseline = tuple(_held_out_rows(predict(data, superset=fit_kwargs["superset"]), data.heights_m))
     return Selection(
         candidates=tuple(out),
         recommended=chosen,
@@ -337,7 +351,7 @@ class HoldOutComparison:
     rows: dict  # label -> tuple[HeldOut]
 
     def table(self) -> str:
-        from .commands import fmt, format_table
+        from .text import fmt, format_table
         from .spectrum import OCTAVE_BANDS
 
         header = ["model", "h (m)", "history (%)", "Δt_c (%)", "Δpeak (%)"] + [f"ΔL {b} (dB)" for b in OCTAVE_BANDS]
@@ -372,6 +386,7 @@ def held_out_comparison(
     ``starts``: optional {(model, blocked_force): FitResult} warm starts."""
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
+    fit_kwargs.setdefault("superset", shared_structure([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic")))
     fit_heights = tuple(float(h) for h in fit_heights)
     rest = tuple(float(h) for h in data.heights_m if not any(abs(h - f) < 5e-4 for f in fit_heights))
     if not rest:
@@ -382,5 +397,5 @@ def held_out_comparison(
         res = fit(data, name, blocked_force=bf, fit_heights=fit_heights, start=start, progress=False, **fit_kwargs)
         rows[f"{name}/{bf}"] = tuple(_held_out_rows(res, rest))
         say(f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})", enabled=progress)
-    rows["paper (unfitted)"] = tuple(_held_out_rows(predict(data), rest))
+    rows["paper (unfitted)"] = tuple(_held_out_rows(predict(data, superset=fit_kwargs["superset"]), rest))
     return HoldOutComparison(fit_heights, rest, rows)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import statistics
 from typing import Callable, Mapping
 
 import jax
@@ -36,6 +35,7 @@ import numpy as np
 from ._validate import check_range
 from .ball import JIS_RUBBER_BALL, Ball
 from .model import Model, Solver
+from .parameters import parameter_table
 from .simulate import (
     PAPER_DURATION_S,
     PAPER_RATE_Hz,
@@ -44,15 +44,14 @@ from .simulate import (
     make_model,
     trajectory,
 )
-from .sweep import (
-    BALL_PARAMETERS,
+from .batch import (
     assemble,
     canonical_name,
     evaluate,
     lfe_output_names,
     parameter_names,
 )
-from .sweep import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
+from .batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
 _LN10_OVER_10 = math.log(10.0) / 10.0
@@ -251,11 +250,8 @@ def local_sensitivity(
         n_times = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
 
     ball_arrays = ball.as_arrays()
-    theta = {"height_m": jnp.asarray(heights)}
-    theta.update({p: getattr(ball_arrays, p) for p in BALL_PARAMETERS})
-    for p in valid[1 + len(BALL_PARAMETERS) :]:
-        source = model.stiffening if p == "beta" else model.damping
-        theta[p] = jnp.asarray(getattr(source, p), dtype=jnp.float64)
+    theta = {row.name: jnp.asarray(row.value, dtype=jnp.float64) for row in parameter_table(1.0, ball, model)}
+    theta["height_m"] = jnp.asarray(heights)
     fn = _local_jacobian_fn(valid, wrt, solver, n_times, n_total, float(rate_Hz))
     values, tangents, status = fn(theta, ball_arrays, model)
 

@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from .ball import Ball
-from .forces import DAMPING_MODELS, CubicStiffening
+from .damping import DAMPING_MODELS
+from .forces import CubicStiffening
 from .model import Model
 
 
@@ -68,37 +69,39 @@ def _construct(what: str, cls, fields: dict):
 
 
 def model_to_dict(model: Model) -> dict:
-    damping = None
-    if model.damping is not None:
-        damping = {"name": model.damping.name, **_fields(model.damping)}
+    """``damping`` is one table (one law), a list of tables (laws in parallel) or null."""
+    laws = [{"name": d.name, **_fields(d)} for d in model.damping]
+    damping = None if not laws else laws[0] if len(laws) == 1 else laws
     stiffening = None if model.stiffening is None else _fields(model.stiffening)
-    return {
-        "gas": model.gas,
-        "blocked_force": model.blocked_force,
-        "max_deflection_ratio": float(model.max_deflection_ratio),
-        "damping": damping,
-        "stiffening": stiffening,
-    }
+    w = float(model.momentum_flux_weight)
+    out = {"gas": model.gas}
+    out.update({"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w})
+    out.update({"max_deflection_ratio": float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
+    return out
 
 
 def model_from_dict(d: dict) -> Model:
     d = _table("model", d)
     damping = d.get("damping")
-    if damping is not None:
-        damping = dict(_table("damping", damping))
-        name = damping.pop("name", None)
+    laws = [] if damping is None else damping if isinstance(damping, list) else [damping]
+    terms = []
+    for law in laws:
+        law = dict(_table("damping", law))
+        name = law.pop("name", None)
         if name not in DAMPING_MODELS:
             raise ValueError(f"damping name={name!r} is not known; valid: {sorted(DAMPING_MODELS)}")
-        damping = _construct(f"damping {name!r}", DAMPING_MODELS[name], damping)
+        terms.append(_construct(f"damping {name!r}", DAMPING_MODELS[name], law))
     stiffening = d.get("stiffening")
     if stiffening is not None:
         stiffening = _construct("stiffening", CubicStiffening, _table("stiffening", stiffening))
+    weight = d.get("momentum_flux_weight")
     return Model(
         gas=d.get("gas", "adiabatic"),
-        blocked_force=d.get("blocked_force", "paper"),
-        damping=damping,
+        blocked_force=None if weight is not None else d.get("blocked_force", "paper"),
+        damping=tuple(terms),
         stiffening=stiffening,
         max_deflection_ratio=float(d.get("max_deflection_ratio", 2.0)),
+        momentum_flux_weight=None if weight is None else float(weight),
     )
 
 

@@ -18,11 +18,11 @@ package-private helper module can live here too. Helpers for the commands: :func
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
 from .._progress import progress  # noqa: F401  (re-exported for the commands)
 from ..serialize import jsonable, to_json  # noqa: F401  (re-exported for the commands)
+from ..text import fmt, format_table  # noqa: F401  (re-exported for the commands)
 
 
 class UsageError(ValueError):
@@ -64,18 +64,3 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 def emit_json(obj, file=None) -> None:
     """Write ``obj`` as strict JSON (no NaN tokens) to stdout."""
     print(to_json(obj), file=file or sys.stdout)
-
-
-def format_table(header: list[str], rows: list[list[str]]) -> str:
-    """A plain-text table with right-aligned columns."""
-    widths = [max(len(str(c)) for c in col) for col in zip(header, *rows)]
-    line = lambda cells: "  ".join(str(c).rjust(w) for c, w in zip(cells, widths))  # noqa: E731
-    return "\n".join([line(header), line(["-" * w for w in widths]), *(line(r) for r in rows)])
-
-
-def fmt(value, spec: str = ".1f", *, missing: str = "—") -> str:
-    """Format a number, or ``missing`` for None/NaN."""
-    if value is None:
-        return missing
-    value = float(value)
-    return missing if not math.isfinite(value) else format(value, spec)

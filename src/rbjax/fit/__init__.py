@@ -1,0 +1,36 @@
+"""Fitting the rubber's properties to measured blocked-force histories.
+
+The pipeline, one module each: :mod:`~rbjax.fit.records` (the conditioned records and the
+features read off them) → :mod:`~rbjax.fit.layout` (model names and the fitted parameter vector,
+from the terms' parameter declarations) → :mod:`~rbjax.fit.program` (prediction through the
+measuring chain, residuals and optimistix Levenberg–Marquardt as one compiled program) →
+:mod:`~rbjax.fit.uncertainty` (covariance, identifiability) → :mod:`~rbjax.fit.result`
+(the frozen result); :mod:`~rbjax.fit.engine` drives them (:func:`fit`, :func:`predict`).
+"""
+
+from .engine import fit, model_histories, predict
+from .engine import parameter_names_of as parameter_names
+from .layout import MODEL_NAMES, STIFFENING_SUFFIX, all_model_names, model_from_name, parse_model_name
+from .program import OPTIMIZERS
+from .records import FitData, load_data, prepare_data, record_features
+from .result import FitResult, ParameterEstimate, Prediction
+
+__all__ = [
+    "MODEL_NAMES",
+    "OPTIMIZERS",
+    "STIFFENING_SUFFIX",
+    "FitData",
+    "FitResult",
+    "ParameterEstimate",
+    "Prediction",
+    "all_model_names",
+    "fit",
+    "load_data",
+    "model_from_name",
+    "model_histories",
+    "parameter_names",
+    "parse_model_name",
+    "predict",
+    "prepare_data",
+    "record_features",
+]

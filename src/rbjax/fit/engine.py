@@ -1,0 +1,679 @@
+"""Fitting the rubber's properties to measured blocked-force histories: the driver.
+
+The paper's elastic model (Eqs. 1–10) with the literature values E = 1.6 MPa, ν = 0.5 (§4)
+is too soft and too symmetric for measured pulses (§5: the measured contact is shorter and
+rises faster than it falls). Here E, ν and the parameters of the model's terms are fitted to
+force histories of several drop heights at once.
+
+What is compared (the measuring chain is modelled, not inverted): for every record k the
+model's floor force is sampled at the record's sample times shifted by an onset time s_k and
+passed through the same causal 4th-order Butterworth low-pass as the data (JIS A 1418-2 / the
+paper's §3 measuring chain: 1250 Hz for the shipped emulated recordings); see
+:mod:`rbjax.fit.program` for the residuals and the compiled optimiser.
+
+Parameters, their units, bounds and transforms come from the terms' declarations
+(:mod:`rbjax.parameters`): E = exp(φ), ν in (−1, 0.5] by a bounded map, damping parameters and
+β = exp(φ) > 0, onset shifts free, optional drop-height errors |Δh_k| < 1 cm.
+
+Identifiability: E and ν enter only through E/√(1−ν²) (see :func:`rbjax.fit.uncertainty.identifiability`);
+this is detected from the Jacobian and said in ``FitResult.identifiability``; ν is then held at
+a stated value (default 0.5, the paper's, §4) or given a prior.
+
+The driver (on the host, between calls of the one compiled program): start values from the
+records, onset alignment, the identifiability check, rounds of Levenberg–Marquardt in
+whitened coordinates until the remaining Gauss–Newton step is below 0.05 σ, then the
+uncertainties, the held-out records' alignment and the per-height table.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from .._progress import progress as say
+from .._validate import check_choice, check_range
+from ..ball import JIS_RUBBER_BALL, Ball
+from ..filters import butter_lowpass_sos
+from ..impact import G_N_PER_KG
+from ..model import GAS_OPTIONS, Model, Solver
+from ..parameters import parameter_names, replace
+from . import uncertainty as unc
+from .layout import CONSTANT_PARAMETERS, FitLayout, fitted_parameter_names, model_from_name, parse_model_name
+from .program import OPTIMIZERS, Structure, run_program
+from .records import FitData, prepare_data, record_features
+from .result import FitResult, ParameterEstimate, Prediction, _plain
+
+SCALES = ("noise", "peak")
+BLOCKED_FORCES = ("paper", "momentum")
+EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
+#: Optimiser steps per compiled call (a static size of the program) and most re-centrings.
+STEPS_PER_ROUND = 40
+MAX_ROUNDS = 8
+
+
+def _fit_solver(solver):
+    if solver is None:
+        return Solver(adjoint="forward")
+    if not isinstance(solver, Solver):
+        raise ValueError(f"solver={solver!r} must be an rbjax.Solver")
+    return solver if solver.adjoint == "forward" else dataclasses.replace(solver, adjoint="forward")
+
+
+class _Problem:
+    """The data, the layout and the compiled program of one fit (runtime masks aside)."""
+
+    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str):
+        self.data = data
+        self.ball = ball
+        self.structure_model = structure_model
+        self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
+        lay = self.layout
+        filtered = data.lowpass_Hz is not None
+        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if filtered else np.zeros((1, 6))
+        import jax
+
+        treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
+        self.structure = Structure(
+            treedef=treedef, physical_positions=lay.physical_positions, constant_positions=lay.constant_positions,
+            specs=lay.specs, n_records=data.n_records, n_samples=data.n_samples, rate_Hz=float(data.rate_Hz),
+            filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
+            solver=solver,
+        )
+        self.measured = record_features(data.force_N, data.rate_Hz)
+        feats = np.stack(
+            [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1
+        )
+        self.arrays = {
+            "heights": np.asarray(data.height_m, dtype=float),
+            "sos": np.asarray(sos, dtype=float),
+            "measured": np.asarray(data.force_N, dtype=float),
+            "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
+        }
+        self.record_weights = 1.0 / (np.maximum(data.noise_rms_N, 1e-12) if scale == "noise" else self.measured["peak_force_N"])
+        self.decimate = int(decimate)
+        # noise correlation from the pre-contact samples (up to 1 ms before each onset)
+        quiet = [data.force_N[k, : max(int((data.onset_s[k] - 1e-3) * data.rate_Hz), 0)] for k in range(data.n_records)]
+        n_quiet = min(len(q) for q in quiet)
+        self.tau_noise = unc.integrated_autocorrelation(np.stack([q[:n_quiet] for q in quiet])[:, :: self.decimate]) if n_quiet >= 16 else 1.0
+
+    @property
+    def n_hist_per_record(self) -> int:
+        return len(range(0, self.data.n_samples, self.decimate))
+
+    def weights(self, fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
+        extra = extra or {}
+        return {
+            "fit_mask": np.asarray(fit_mask, dtype=bool),
+            "record": self.record_weights,
+            "contact_time": float(extra.get("contact_time", 0.0)),
+            "peak_force": float(extra.get("peak_force", 0.0)),
+            "lfe": float(extra.get("lfe", 0.0)),
+            "prior": np.asarray(prior, dtype=float),
+        }
+
+    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
+        lay = self.layout
+        n = len(lay.names)
+        phi_c = lay.to_phi(theta) if phi_c is None else phi_c
+        w = np.eye(n) if w is None else w
+        return run_program(
+            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=theta, constants=constants,
+            data=self.arrays, weights=weights, atol=atol,
+        )
+
+    def history_rows(self, r, fit_mask):
+        """(rows of the fitted records' history residuals) as (n_fit, n_per_record)."""
+        hist = r[: self.data.n_records * self.n_hist_per_record].reshape(self.data.n_records, -1)
+        return hist[np.asarray(fit_mask, dtype=bool)]
+
+    def history_jacobian(self, jac, fit_mask):
+        n = self.data.n_records * self.n_hist_per_record
+        j = jac[:n].reshape(self.data.n_records, self.n_hist_per_record, -1)
+        return j[np.asarray(fit_mask, dtype=bool)].reshape(-1, jac.shape[1])
+
+    def history_rms_N(self, force, mask):
+        if not np.any(mask):
+            return float("nan")
+        return float(np.sqrt(np.mean((force[mask] - self.data.force_N[mask]) ** 2)))
+
+
+def _start_values(problem: _Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
+    """Physically motivated start values from the measured records.
+
+    Stiffness from the contact time of the lowest fitted height (least gas force):
+    t_c ≈ π√(M/k) (a linear spring-mass half period), k → E by Eqs. 1–3; each damping law's
+    own ``start`` rule from the restitution read off the impulse, e = ∫F dt/(M v0) − 1 (Eq. 10).
+    """
+    from ..forces import reissner_stiffness_N_per_m
+
+    d = problem.data
+    meas = problem.measured
+    k_idx = np.flatnonzero(ref_mask)
+    lowest = k_idx[np.argmin(d.height_m[k_idx])]
+    tc = float(meas["contact_time_s"][lowest])
+    mass = float(ball.mass_kg)
+    k_spring = mass * (math.pi / tc) ** 2
+    e_young = k_spring * float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * float(ball.wall_m) ** 2)
+    v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
+    impulse = d.force_N.sum(axis=1) / d.rate_Hz
+    e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
+    values = {"youngs_Pa": e_young, "poisson": nu}
+    k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
+    for law in model.damping:
+        values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
+    if model.stiffening is not None:
+        values["beta"] = 0.05
+    return values
+
+
+def _validate_fix(names, fix):
+    out = {}
+    for k, v in (fix or {}).items():
+        if k not in names:
+            raise ValueError(f"fix: unknown parameter {k!r} for this model; valid: {', '.join(sorted(names))}")
+        try:
+            value = float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"fix: {k}={v!r} is not a number") from None
+        out[k] = value
+    if "poisson" in out and not -1.0 < out["poisson"] <= 0.5:
+        raise ValueError(f"fix: poisson={out['poisson']!r} is outside the valid range (-1, 0.5]")
+    for k, v in out.items():
+        if k != "poisson" and not (math.isfinite(v) and v > 0):
+            raise ValueError(f"fix: {k}={v!r} must be positive and finite (valid range: (0, inf))")
+    return out
+
+
+def _height_mask(data: FitData, heights) -> np.ndarray:
+    if heights is None:
+        return np.ones(data.n_records, dtype=bool)
+    wanted = np.atleast_1d(np.asarray(heights, dtype=float))
+    mask = np.zeros(data.n_records, dtype=bool)
+    for h in wanted:
+        hit = np.isclose(data.height_m, h, atol=5e-4)
+        if not hit.any():
+            raise ValueError(f"fit_heights: no record at height {h:g} m; heights in the data: {', '.join(f'{x:g}' for x in data.heights_m)}")
+        mask |= hit
+    return mask
+
+
+def _realign(problem: _Problem, theta, feats, which, *, rescale_E: bool, fit_mask):
+    """Move the onset shifts of the records ``which`` so that the predicted onset (5 % of the
+    peak, rising edge) meets the measured one; optionally rescale E so that the predicted
+    contact times match on the fitted records (t_c ∝ 1/√k)."""
+    lay = problem.layout
+    theta = theta.copy()
+    shift = theta[lay.shift_slice]
+    shift[which] += (problem.measured["onset_s"] - feats[:, 0])[which]
+    theta[lay.shift_slice] = shift
+    if rescale_E:
+        tc_pred = (feats[:, 1] - feats[:, 0])[fit_mask]
+        ratio = float(np.median(tc_pred / problem.measured["contact_time_s"][fit_mask]))
+        if math.isfinite(ratio) and ratio > 0:
+            theta[lay.index("youngs_Pa")] *= ratio**2
+    return theta
+
+
+def _per_height(problem: _Problem, force, feats, fit_mask) -> list[dict]:
+    d = problem.data
+    meas = problem.measured
+    pred = {
+        "contact_time_s": feats[:, 1] - feats[:, 0],
+        "peak_force_N": feats[:, 2],
+        "lfe_octave_dB": feats[:, 3:],
+    }
+    rows = []
+    for h in d.heights_m:
+        k = np.isclose(d.height_m, h)
+        m = {q: np.mean(meas[q][k], axis=0) for q in pred}
+        f = {q: np.mean(pred[q][k], axis=0) for q in pred}
+        rows.append({
+            "height_m": float(h),
+            "n_drops": int(d.n_drops[k].sum()),
+            "in_fit": bool(fit_mask[k].all()),
+            "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
+            "measured": {q: _plain(v) for q, v in m.items()},
+            "fitted": {q: _plain(v) for q, v in f.items()},
+            "error": {
+                "contact_time_pct": float(100 * (f["contact_time_s"] / m["contact_time_s"] - 1)),
+                "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
+                "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
+            },
+        })
+    return rows
+
+
+def _candidate(model, blocked_force, gas) -> tuple[str, Model]:
+    if isinstance(model, Model):
+        return model.name, model
+    parse_model_name(model)
+    return model, model_from_name(model, gas=gas, blocked_force=blocked_force)
+
+
+def _embed(model: Model, structure: Model | None, ball: Ball) -> Model:
+    """``model``'s values inside ``structure`` (a superset of its terms), or ``model`` itself."""
+    if structure is None:
+        return model
+    if structure.gas != model.gas:
+        raise ValueError(f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}")
+    have = set(parameter_names(1.0, ball, structure))
+    mine = [n for n in parameter_names(1.0, ball, model) if n != "height_m"]
+    missing = [n for n in mine if n not in have]
+    if missing or not {type(d) for d in model.damping} <= {type(d) for d in structure.damping}:
+        raise ValueError(f"superset lacks the terms of model {model.name!r} (parameters {missing})")
+    from ..parameters import parameter_table
+
+    values = {r.name: r.value for r in parameter_table(1.0, ball, model) if r.name in have and r.name != "height_m"}
+    return replace(values, 1.0, ball, structure)[2]
+
+
+def fit(
+    data,
+    model: str | Model = "zener",
+    *,
+    blocked_force: str = "paper",
+    gas: str = "adiabatic",
+    ball: Ball = JIS_RUBBER_BALL,
+    fix: Mapping[str, float] | None = None,
+    start: Mapping[str, float] | FitResult | None = None,
+    hold_poisson: float = 0.5,
+    poisson_prior: tuple[float, float] | None = None,
+    optimizer: str = "lm",
+    fit_heights: Sequence[float] | None = None,
+    height_error: bool = False,
+    scale: str = "noise",
+    decimate: int = 1,
+    extra_weights: Mapping[str, float] | None = None,
+    max_steps: int | None = None,
+    progress: bool = True,
+    solver: Solver | None = None,
+    superset: Model | None = None,
+) -> FitResult:
+    """Fit E, ν and the parameters of ``model``'s terms to force histories of all records.
+
+    Args:
+        data: a :class:`FitData`, Recording objects, or paths/a directory (see
+            :func:`prepare_data`: per-height averages, 30 ms windows, measuring chain low-pass
+            as declared).
+        model: a model name (``paper`` (elastic, §2), ``kelvin-voigt``, ``hunt-crossley``,
+            ``zener``, any registered damping law, each optionally ``+stiffening``) or an
+            ``rbjax.Model``: every parameter of its damping laws and stiffening is fitted, its
+            values are the start (with a name, the start comes from the records).
+        blocked_force, gas: for a model name: ``paper`` (F_B + F_G + F_d) or ``momentum``
+            (adds (M/2R)δ̇² in compression); ``adiabatic`` (Eq. 4, corrected) or ``none``.
+            A ``Model`` brings its own.
+        ball: geometry and mass (R, h, M) and the starting E, ν for nothing else.
+        fix: name → value of parameters held (E, ν, the terms' parameters, or R, h, M).
+        start: name → start value, or a previous :class:`FitResult` of the same model and data
+            (warm start).
+        hold_poisson: value at which ν is held when the Jacobian shows E and ν are not
+            separately identifiable (always, for this model: §2.1 Eqs. 1–3).
+        poisson_prior: (mean, std) of a Gaussian prior on ν instead of holding it.
+        optimizer: ``lm`` (optimistix Levenberg–Marquardt) or ``gauss-newton`` (optimistix).
+        fit_heights: heights (m) whose records enter the fit (default all); the others are
+            predicted (onset-aligned, nothing fitted to them) and reported as held out.
+        height_error: also fit each record's drop-height error, bounded by ±1 cm.
+        scale: residual of record k divided by its noise rms (``noise``) or peak (``peak``).
+        decimate: use every n-th sample in the residual.
+        extra_weights: {"contact_time": w, "peak_force": w, "lfe": w}: extra residual rows
+            w·(relative error) for contact time and peak, w·(ΔL_FE in dB) per octave band.
+        max_steps: optimiser steps in all (default 40 per round, at most 8 rounds; 0 evaluates
+            the start only).
+        progress: print one line per optimiser round to stderr.
+        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``).
+        superset: a model containing every term of ``model`` (e.g.
+            ``rbjax.model.superset_model``): the fit runs in its compiled program with the
+            terms ``model`` lacks held at their values, so fits of different models share one
+            program (model selection does this).
+
+    The information criteria use the history residuals, AIC = N_eff ln(RSS/N) + 2p and
+    BIC = N_eff ln(RSS/N) + p ln N_eff (p: free parameters incl. onsets), with the same
+    N_eff = N/τ_noise for every model fitted to the same data (τ_noise: the integrated
+    autocorrelation of the pre-contact noise), so that they are comparable across models.
+    """
+    check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
+    check_choice("gas", gas, GAS_OPTIONS)
+    check_choice("optimizer", optimizer, OPTIMIZERS)
+    check_choice("scale", scale, SCALES)
+    if not isinstance(ball, Ball):
+        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
+    if not (isinstance(decimate, int) and decimate >= 1):
+        raise ValueError(f"decimate={decimate!r} must be an integer >= 1")
+    if not -1.0 < hold_poisson <= 0.5:
+        raise ValueError(f"hold_poisson={hold_poisson!r} is outside the valid range (-1, 0.5]")
+    if poisson_prior is not None:
+        mean, std = (float(x) for x in poisson_prior)
+        if not (-1.0 < mean < 0.5 and std > 0):
+            raise ValueError(f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0")
+        poisson_prior = (mean, std)
+    for k, w in (extra_weights or {}).items():
+        if k not in EXTRA_TERMS:
+            raise ValueError(f"extra_weights: unknown term {k!r}; valid: {', '.join(EXTRA_TERMS)}")
+        check_range(f"extra_weights[{k!r}]", w, lower=0.0, lower_open=False)
+    if max_steps is None:
+        max_steps = STEPS_PER_ROUND * MAX_ROUNDS
+    elif not (isinstance(max_steps, (int, np.integer)) and not isinstance(max_steps, bool) and max_steps >= 0):
+        raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)")
+    model_name, candidate = _candidate(model, blocked_force, gas)
+    fittable = fitted_parameter_names(candidate)
+    fixed = _validate_fix(set(fittable) | set(CONSTANT_PARAMETERS[:3]), fix)
+    if "poisson" in fixed and poisson_prior is not None:
+        raise ValueError("poisson is both fixed and given a prior; choose one")
+    data = prepare_data(data)
+    ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
+    fit_mask = _height_mask(data, fit_heights)
+    structure = _embed(candidate, superset, ball)
+    problem = _Problem(data, ball, structure, _fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale)
+    lay = problem.layout
+    constants = lay.constant_values(ball, structure)
+
+    warm = start if isinstance(start, FitResult) else None
+    start_map = {} if warm is not None else dict(start or {})
+    for k in start_map:
+        if k not in fittable:
+            raise ValueError(f"start: unknown parameter {k!r} for model {model_name!r}; valid: {', '.join(fittable)}")
+    if poisson_prior is not None and "poisson" not in start_map:
+        # E/√(1−ν²) is all the histories determine, so the optimum has ν at the prior mean:
+        # start there rather than crawl along the curved E–ν valley.
+        start_map["poisson"] = poisson_prior[0]
+    nu0 = fixed.get("poisson", start_map.get("poisson", 0.45))
+    values = {} if isinstance(model, Model) else _start_values(problem, candidate, ball, fit_mask, nu0)
+    if isinstance(model, Model):
+        values["poisson"] = nu0 if ("poisson" in fixed or "poisson" in start_map) else float(ball.poisson)
+    values.update(start_map)
+    values.update({k: v for k, v in fixed.items() if k in fittable})
+    delay = (2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0) + 0.016 * float(np.nanmedian(problem.measured["contact_time_s"]))
+    theta = lay.theta(ball, structure, data.onset_s - delay)
+    for k, v in values.items():
+        theta[lay.index(k)] = v
+    auto_start = warm is None and not isinstance(model, Model) and "youngs_Pa" not in start_map and "youngs_Pa" not in fixed
+    if warm is not None:
+        if warm.model_name != model_name or warm.theta.size != theta.size:
+            raise ValueError(f"start: a FitResult of model {model_name!r} cannot start this {model_name!r} fit")
+        theta = warm.theta.copy()
+        for k, v in fixed.items():
+            if k in fittable:
+                theta[lay.index(k)] = v
+    label = f"fit {model_name}/{candidate.blocked_force}"
+    free_none = np.zeros(len(lay.names), dtype=bool)
+
+    def evaluate(th, mask=fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
+        return problem.run(th, free_none, problem.weights(mask, extra, prior), constants)
+
+    # 1. first evaluation: align the onsets (and rescale E from the contact times)
+    out = evaluate(theta)
+    theta = _realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=auto_start, fit_mask=fit_mask)
+    out = evaluate(theta)
+
+    # 2. identifiability from the Jacobian with ν free
+    physical_free = [n for n in fittable if n not in fixed]
+    ie, inu = lay.index("youngs_Pa"), lay.index("poisson")
+    shift_cols = list(np.arange(len(lay.names))[lay.shift_slice][fit_mask])
+    cols = [lay.index(n) for n in fittable if n in physical_free or n in ("youngs_Pa", "poisson")] + shift_cols
+    jac_hist = problem.history_jacobian(out["jac_theta"], fit_mask)
+    ident_msg, nu_flagged, cos_e_nu = unc.identifiability(jac_hist, ie, inu, cols)
+    prior_held = False
+    notes = []
+    if "poisson" in physical_free and "youngs_Pa" not in physical_free:
+        notes.append("E held as given; ν alone sets the stiffness and is fitted.")
+    elif "poisson" in physical_free and poisson_prior is None:
+        if nu_flagged:
+            physical_free.remove("poisson")
+            theta[inu] = hold_poisson
+            notes.append(
+                f"E and ν are not separately identifiable: their Jacobian columns are parallel "
+                f"(|cos| = {cos_e_nu:.8f}); the data determine only E/√(1−ν²) (Reissner stiffness, "
+                f"Eqs. 1–3; the gas force does not involve E or ν). ν is held at {hold_poisson:g}"
+                + (" (the paper's value, §4; the bound of the model's range)" if hold_poisson == 0.5 else "")
+                + " and effective_modulus_Pa = E/√(1−ν²) is the fitted quantity."
+            )
+        else:
+            notes.append(f"E and ν: |cos| of their Jacobian columns {cos_e_nu:.6f}; both fitted.")
+    elif "poisson" in physical_free:
+        notes.append(
+            f"E and ν are not separately identifiable from the histories (|cos| = {cos_e_nu:.8f}); "
+            f"ν is determined by its prior N({poisson_prior[0]:g}, {poisson_prior[1]:g}²)."
+        )
+        if nu_flagged:
+            # The histories fix only E/√(1−ν²), so the posterior mode has ν at the prior mean
+            # exactly: optimise with ν held there (the curved E–ν valley is a trap for LM) and
+            # fold the prior into the covariance afterwards.
+            prior_held = True
+            physical_free.remove("poisson")
+            theta[inu] = poisson_prior[0]
+    else:
+        notes.append(f"ν held at {theta[inu]:g} as given; E/√(1−ν²) is what the data determine.")
+
+    free_names = physical_free + [lay.names[i] for i in shift_cols]
+    if height_error:
+        free_names += [lay.names[i] for i in np.arange(len(lay.names))[lay.dh_slice][fit_mask]]
+    free_idx = np.array([lay.index(n) for n in free_names], dtype=int)
+    free = np.zeros(len(lay.names), dtype=bool)
+    free[free_idx] = True
+
+    def prior_row(r):
+        # The history rows are not whitened (their scale is 1/peak or 1/noise, and the noise is
+        # correlated), so the prior row is put in their units: one prior σ weighs as much as one
+        # σ̂√τ of the history residuals (σ̂, τ taken at the start of a round).
+        if poisson_prior is None or "poisson" not in physical_free:
+            return (0.0, 1.0, 0.0)
+        hist = problem.history_rows(r, fit_mask)
+        unit = math.sqrt(unc.integrated_autocorrelation(hist) * float(np.sum(hist**2)) / max(hist.size, 1))
+        return (poisson_prior[0], poisson_prior[1], unit)
+
+    # 3. optimise: rounds of LM in the whitened frame of the round's start
+    extra = dict(extra_weights or {})
+    prior = prior_row(out["r"])
+    out = evaluate(theta, extra=extra, prior=prior)
+    steps, rounds, converged, message = 0, 0, False, ""
+    while True:
+        r, jac_theta = out["r"], out["jac_theta"]
+        phi_c = lay.to_phi(theta)
+        slope = lay.from_phi(phi_c)[1]
+        jac_phi = jac_theta[:, free_idx] * slope[free_idx][None, :]
+        hist = problem.history_rows(r, fit_mask)
+        tau = unc.integrated_autocorrelation(hist)
+        remaining = unc.step_in_sigma(r, jac_phi, tau)
+        cost = 0.5 * float(r @ r)
+        shown = ", ".join(f"{n}={theta[lay.index(n)]:.5g}" for n in physical_free)
+        say(f"{label} round {rounds}: cost {cost:.9g}, rms {problem.history_rms_N(out['force'], fit_mask):.3g} N, {shown}", enabled=progress)
+        if not np.all(np.isfinite(r)):
+            converged, message = False, "the model's prediction is not finite at these parameters (a failed solve)"
+            break
+        if remaining < unc.STEP_TOLERANCE_SIGMA:
+            converged, message = True, f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
+            break
+        if steps >= max_steps or rounds >= MAX_ROUNDS:
+            converged = False
+            message = message or f"not converged after {steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+            break
+        w = np.zeros((len(lay.names), len(lay.names)))
+        w[np.ix_(free_idx, free_idx)] = unc.whitening(jac_phi, full=True)
+        sigma_u = math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
+        res = problem.run(theta, free, problem.weights(fit_mask, extra, prior), constants, optimizer=optimizer,
+                          phi_c=phi_c, w=w, atol=unc.STEP_TOLERANCE_SIGMA * sigma_u)
+        rounds += 1
+        steps += int(res["steps"])
+        phi = phi_c + w @ res["u"]
+        new_theta = np.where(free, lay.from_phi(phi)[0], theta)
+        if not np.all(np.isfinite(new_theta)):
+            converged, message = False, "the optimiser produced non-finite parameters"
+            break
+        theta, out = new_theta, res
+        if not res["successful"]:
+            message = f"not converged after {steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
+        prior = prior_row(out["r"])
+
+    # 4. held-out records: align their onsets with the fitted model (nothing else is fitted)
+    if not np.all(fit_mask):
+        theta = _realign(problem, theta, out["features"], ~fit_mask, rescale_E=False, fit_mask=fit_mask)
+        out = evaluate(theta, extra=extra, prior=prior)
+
+    # 5. uncertainties from the history rows at the optimum
+    hist_r = problem.history_rows(out["r"], fit_mask)
+    n_hist = hist_r.size
+    tau = unc.integrated_autocorrelation(hist_r)
+    hist_r = hist_r.reshape(-1)
+    phi_hat = lay.to_phi(theta)
+    dtheta = lay.from_phi(phi_hat)[1]
+    jac_phi_hist = problem.history_jacobian(out["jac_theta"], fit_mask)[:, free_idx] * dtheta[free_idx][None, :]
+    p = free_idx.size
+    prior_index = free_names.index("poisson") if (poisson_prior is not None and "poisson" in physical_free) else None
+    prior_precision = (dtheta[inu] / poisson_prior[1]) ** 2 if prior_index is not None else 0.0
+    cov_phi = unc.covariance(jac_phi_hist, hist_r, tau, prior_index, prior_precision)
+    if prior_held:
+        free_names, physical_free, cov_phi = unc.fold_in_poisson_prior(
+            free_names, physical_free, list(lay.physical), cov_phi, float(theta[inu]), poisson_prior, float(dtheta[inu])
+        )
+    std_phi = np.sqrt(np.clip(np.diag(cov_phi), 0, None))
+
+    parameters = {}
+    phys_idx = [free_names.index(n) for n in physical_free]
+    for n in fittable:
+        i = lay.index(n)
+        spec = lay.specs[i]
+        if n in physical_free:
+            j = free_names.index(n)
+            lo = float(spec.from_unconstrained(phi_hat[i] - 1.96 * std_phi[j]))
+            hi = float(spec.from_unconstrained(phi_hat[i] + 1.96 * std_phi[j]))
+            parameters[n] = ParameterEstimate(float(theta[i]), float(abs(dtheta[i]) * std_phi[j]), (lo, hi), spec.unit)
+        else:
+            parameters[n] = ParameterEstimate(float(theta[i]), 0.0, (float(theta[i]), float(theta[i])), spec.unit, fixed=True)
+    nu = theta[inu]
+    factor = 1.0 / math.sqrt(1.0 - nu**2)
+    e_est = parameters["youngs_Pa"]
+    e_eff = float(theta[ie] * factor)
+    if "poisson" in physical_free:
+        # delta method through E/√(1−ν²) with the (E, ν) covariance block
+        je, jn = free_names.index("youngs_Pa"), free_names.index("poisson")
+        grad = np.array([factor * dtheta[ie], theta[ie] * nu * factor**3 * dtheta[inu]])
+        eff_std = float(math.sqrt(max(grad @ cov_phi[np.ix_([je, jn], [je, jn])] @ grad, 0.0)))
+        eff_ci = (e_eff - 1.96 * eff_std, e_eff + 1.96 * eff_std)
+    else:  # ν held: E/√(1−ν²) is E times a constant
+        eff_std, eff_ci = e_est.std * factor, (e_est.ci95[0] * factor, e_est.ci95[1] * factor)
+    parameters["effective_modulus_Pa"] = ParameterEstimate(e_eff, eff_std, eff_ci, "Pa", fixed=e_est.fixed and "poisson" not in physical_free)
+    d_std = np.sqrt(np.clip(np.diag(cov_phi)[phys_idx], 1e-300, None))
+    corr = np.clip(cov_phi[np.ix_(phys_idx, phys_idx)] / np.outer(d_std, d_std), -1.0, 1.0)
+
+    ident = " ".join(notes) + " " + unc.conditioning_note(jac_phi_hist, free_names, physical_free, corr)
+    if ident_msg:
+        ident += " " + ident_msg
+
+    # 6. per-height summary and information criteria (a common N_eff for every candidate)
+    per_height = _per_height(problem, out["force"], out["features"], fit_mask)
+    n_eff = n_hist / problem.tau_noise
+    rss = float(hist_r @ hist_r)
+    loglik_term = n_eff * math.log(rss / n_hist) if rss > 0 and math.isfinite(rss) else float("nan")
+    aic = loglik_term + 2 * p
+    bic = loglik_term + p * math.log(n_eff)
+
+    values = {n: float(theta[lay.index(n)]) for n in fittable}
+    _, fitted_ball, fitted_model = replace(values, 1.0, ball, candidate)
+    return FitResult(
+        model_name=model_name,
+        blocked_force=candidate.blocked_force,
+        gas=candidate.gas,
+        ball=fitted_ball,
+        model=fitted_model,
+        parameters=parameters,
+        correlations=(tuple(physical_free), corr),
+        identifiability=ident.strip(),
+        per_height=tuple(per_height),
+        residual_rms_N=problem.history_rms_N(out["force"], fit_mask),
+        converged=bool(converged),
+        message=message,
+        iterations=int(steps),
+        optimizer=optimizer,
+        n_eff_factor=float(tau),
+        n_residuals=int(n_hist),
+        n_free=int(p),
+        aic=float(aic),
+        bic=float(bic),
+        time_s=data.time_s,
+        measured_N=data.force_N,
+        predicted_N=out["force"],
+        heights_m=data.height_m,
+        in_fit=fit_mask,
+        onset_shift_s=theta[lay.shift_slice].copy(),
+        theta=theta,
+    )
+
+
+def _aligned(data, ball: Ball, model: Model, solver, superset=None):
+    """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
+    data = prepare_data(data)
+    model = _embed(model, superset, ball)
+    problem = _Problem(data, ball, model, _fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    lay = problem.layout
+    delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
+    theta = lay.theta(ball, model, data.onset_s - delay)
+    constants = lay.constant_values(ball, model)
+    mask = np.zeros(data.n_records, dtype=bool)
+    free = np.zeros(len(lay.names), dtype=bool)
+    out = problem.run(theta, free, problem.weights(mask), constants)
+    theta = _realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=False, fit_mask=mask)
+    out = problem.run(theta, free, problem.weights(np.ones(data.n_records, bool)), constants)
+    return problem, theta, out
+
+
+def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, solver: Solver | None = None, superset: Model | None = None) -> Prediction:
+    """Compare a given (unfitted) model with the records; nothing is fitted.
+
+    The model's floor force goes through the records' measuring chain; each record's onset
+    is aligned with the predicted one (5 % of the peak); contact time, peak and octave-band
+    L_FE are read off both with the same estimator. ``per_height`` rows as in
+    :class:`FitResult` (all held out). ``model``: any ``rbjax.Model`` (default: the paper's
+    elastic model). ``superset``: run in that model's compiled program (see :func:`fit`).
+    """
+    model = Model() if model is None else model
+    problem, _, out = _aligned(data, ball, model, solver, superset)
+    d = problem.data
+    rows = _per_height(problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool))
+    return Prediction(tuple(rows), d.time_s, d.force_N, out["force"], d.height_m)
+
+
+def model_histories(
+    data,
+    model: str | Model,
+    params: Mapping[str, float],
+    onset_shift_s,
+    *,
+    blocked_force: str = "paper",
+    gas: str = "adiabatic",
+    ball: Ball = JIS_RUBBER_BALL,
+    solver: Solver | None = None,
+):
+    """The predicted records of :func:`fit` and their exact Jacobian, for given parameters.
+
+    ``params``: every name of ``rbjax.fit.parameter_names(model)``; ``onset_shift_s``: the
+    contact start of each record in its time axis (s). Returns ``(force_N, jacobian, names)``:
+    the filtered floor force (n_records, n_samples), d force/d parameter
+    (n_records, n_samples, n_parameters) by forward-mode differentiation through the solver,
+    and the parameter names (the physical ones, then ``shift[k]``).
+    """
+    _, candidate = _candidate(model, blocked_force, gas)
+    names = fitted_parameter_names(candidate)
+    missing = [n for n in names if n not in params]
+    if missing:
+        raise ValueError(f"params: missing {missing} for model {model!r}")
+    data = prepare_data(data)
+    _, ball, candidate = replace({n: float(params[n]) for n in names}, 1.0, ball, candidate)
+    problem = _Problem(data, ball, candidate, _fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    lay = problem.layout
+    shifts = np.broadcast_to(np.asarray(onset_shift_s, dtype=float), (data.n_records,))
+    theta = lay.theta(ball, candidate, shifts)
+    weights = problem.weights(np.ones(data.n_records, dtype=bool))
+    weights["record"] = np.ones(data.n_records)
+    out = problem.run(theta, np.zeros(len(lay.names), dtype=bool), weights, lay.constant_values(ball, candidate))
+    n = data.n_records * data.n_samples
+    jac = out["jac_theta"][:n].reshape(data.n_records, data.n_samples, -1)
+    return out["force"], jac, tuple(lay.names)
+
+
+def parameter_names_of(model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic") -> tuple[str, ...]:
+    """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
+    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``."""
+    return fitted_parameter_names(_candidate(model, blocked_force, gas)[1])

@@ -1,0 +1,115 @@
+"""What a fit varies: model names, the fitted parameter vector θ and its transforms.
+
+θ holds, in this order, the physical parameters that a fit may free (those of the ball and
+the model's terms, in the order of :func:`rbjax.parameters.parameter_names`, except the
+geometry R, h, M and the momentum-flux weight, which stay constants), then one onset shift
+per record, then (with ``height_error``) one drop-height error per record. Every entry has a
+:class:`rbjax.parameters.Parameter` declaration, so names, units, bounds and the transforms
+φ ↔ θ come from the terms themselves; a new term's parameters are fitted without any change
+here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..ball import Ball
+from ..damping import DAMPING_MODELS
+from ..forces import CubicStiffening
+from ..model import Model
+from ..parameters import HEIGHT_ERROR, ONSET_SHIFT, declaration, parameter_table, replace, to_vector
+
+#: The fitted models that model selection compares by default (the paper's elastic model and
+#: one damping law each); any registered damping law's name is a model name too. Append
+#: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²).
+MODEL_NAMES = ("paper", "kelvin-voigt", "hunt-crossley", "zener")
+STIFFENING_SUFFIX = "+stiffening"
+#: Parameters that are never fitted: constants of the program (``fix`` may still set them).
+CONSTANT_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "momentum_flux_weight")
+
+
+def all_model_names() -> tuple[str, ...]:
+    base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
+    return base + tuple(m + STIFFENING_SUFFIX for m in base)
+
+
+def parse_model_name(name: str) -> tuple[tuple[type, ...], bool]:
+    """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``."""
+    if not isinstance(name, str):
+        raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")
+    base, stiff = (name[: -len(STIFFENING_SUFFIX)], True) if name.endswith(STIFFENING_SUFFIX) else (name, False)
+    if base != "paper" and base not in DAMPING_MODELS:
+        raise ValueError(f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}")
+    return (() if base == "paper" else (DAMPING_MODELS[base],)), stiff
+
+
+def model_from_name(name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None) -> Model:
+    """The ``Model`` a model name stands for, its parameters from ``values`` (name → value)."""
+    laws, stiff = parse_model_name(name)
+    values = dict(values or {})
+    damping = tuple(law(**{k: values.get(k, 1.0) for k in law.PARAMETERS}) for law in laws)
+    stiffening = CubicStiffening(values.get("beta", 0.05)) if stiff else None
+    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+
+
+def fitted_parameter_names(model: Model) -> tuple[str, ...]:
+    """The physical parameters a fit of ``model`` frees by default: E, ν and every parameter
+    of its damping laws and stiffening."""
+    names = [row.name for row in parameter_table(1.0, Ball(1.0, 0.5, 1.0, 1.0, 0.0), model)]
+    return tuple(n for n in names if n not in CONSTANT_PARAMETERS and n != "height_m")
+
+
+class FitLayout:
+    """Names, declarations and positions of θ for one model structure and data shape."""
+
+    def __init__(self, ball: Ball, model: Model, n_records: int, height_error: bool):
+        table = parameter_table(1.0, ball, model)
+        self.all_names = tuple(r.name for r in table)  # height first, as in to_vector
+        self.physical = tuple(n for n in self.all_names if n != "height_m" and n not in CONSTANT_PARAMETERS)
+        self.constants = tuple(n for n in self.all_names if n in CONSTANT_PARAMETERS)
+        self.n_records = n_records
+        self.height_error = height_error
+        self.names = list(self.physical) + [f"shift[{k}]" for k in range(n_records)]
+        if height_error:
+            self.names += [f"dh[{k}]" for k in range(n_records)]
+        self.specs = tuple(declaration(n, ball, model) for n in self.physical)
+        self.specs += (ONSET_SHIFT,) * n_records + ((HEIGHT_ERROR,) * n_records if height_error else ())
+        self.units = {n: s.unit for n, s in zip(self.physical, self.specs)}
+        p = len(self.physical)
+        self.shift_slice = slice(p, p + n_records)
+        self.dh_slice = slice(p + n_records, p + 2 * n_records) if height_error else None
+        self.physical_positions = tuple(self.all_names.index(n) for n in self.physical)
+        self.constant_positions = tuple(self.all_names.index(n) for n in self.constants)
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise ValueError(f"parameter {name!r} is not in this fit; valid: {', '.join(self.physical)}") from None
+
+    def theta(self, ball: Ball, model: Model, shifts) -> np.ndarray:
+        """θ from a ball, a model (of this layout's structure) and the onset shifts (dh = 0)."""
+        values = np.asarray(to_vector(1.0, ball, model))
+        theta = np.zeros(len(self.names))
+        theta[: len(self.physical)] = values[list(self.physical_positions)]
+        theta[self.shift_slice] = shifts
+        return theta
+
+    def constant_values(self, ball: Ball, model: Model) -> np.ndarray:
+        values = np.asarray(to_vector(1.0, ball, model))
+        return values[list(self.constant_positions)]
+
+    def ball_and_model(self, theta, ball: Ball, model: Model) -> tuple[Ball, Model]:
+        """The ball and model (of this layout's structure) with the physical values of θ."""
+        values = {n: float(theta[i]) for i, n in enumerate(self.physical)}
+        _, ball, model = replace(values, 1.0, ball, model)
+        return ball, model
+
+    def to_phi(self, theta) -> np.ndarray:
+        return np.array([float(s.to_unconstrained(t)) for s, t in zip(self.specs, theta)])
+
+    def from_phi(self, phi) -> tuple[np.ndarray, np.ndarray]:
+        """(θ, dθ/dφ) of φ."""
+        theta = np.array([float(s.from_unconstrained(x)) for s, x in zip(self.specs, phi)])
+        slope = np.array([float(s.slope(x)) for s, x in zip(self.specs, phi)])
+        return theta, slope

@@ -1,0 +1,226 @@
+"""The records a fit compares with: conditioned, stacked on one time grid, and the features
+(contact start and end, peak, octave-band L_FE) read off data and predictions alike."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+#: Level (fraction of the peak) at which contact start and end are read from a history:
+#: the same estimator is applied to measured and predicted (filtered) histories.
+FEATURE_FRACTION = 0.05
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FitData:
+    """Conditioned records ready for fitting: one row per record, all on one time grid.
+
+    Attributes:
+        sources: the file(s) behind each record (several for a per-height average).
+        height_m: nominal drop height of each record, m.
+        force_N: (n_records, n_samples) baseline-free force, onset at ``onset_s``.
+        rate_Hz: sampling rate.
+        onset_s: onset (5 % of the peak on the rising edge) of each record, s.
+        noise_rms_N: noise rms of each record (of the average: per-drop rms / √n_drops).
+        n_drops: drops behind each record.
+        lowpass_Hz: cutoff of the causal 4th-order Butterworth measuring chain the records
+            went through (applied to the predictions too), or None (no filter).
+    """
+
+    sources: tuple
+    height_m: np.ndarray
+    force_N: np.ndarray
+    rate_Hz: float
+    onset_s: np.ndarray
+    noise_rms_N: np.ndarray
+    n_drops: np.ndarray
+    lowpass_Hz: float | None
+
+    @property
+    def n_records(self) -> int:
+        return int(self.force_N.shape[0])
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.force_N.shape[1])
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return np.arange(self.n_samples) / self.rate_Hz
+
+    @property
+    def heights_m(self) -> np.ndarray:
+        """The distinct drop heights, ascending."""
+        return np.unique(self.height_m)
+
+    def replace(self, **changes) -> "FitData":
+        return dataclasses.replace(self, **changes)
+
+
+def load_data(paths_or_dir, *, lowpass_Hz="auto", **load_kwargs):
+    """Read recordings with ``rbjax.data.load``; resolve the measuring chain's low-pass.
+
+    ``lowpass_Hz="auto"``: the cutoff the recordings declare (all equal), else, for the
+    shipped emulated recordings (``rbjax.data.examples_dir()``), their documented 1250 Hz;
+    else none. A number or None overrides.
+    """
+    from .. import data
+
+    items = [paths_or_dir] if isinstance(paths_or_dir, (str, Path)) else list(paths_or_dir)
+    recs = data.load(items, **load_kwargs)
+    if lowpass_Hz == "auto":
+        declared = {r.lowpass_Hz for r in recs}
+        if declared == {None}:
+            examples = data.examples_dir().resolve()
+            files = [Path(p).resolve() for p in items]
+            inside = all(p == examples or examples in p.parents for p in files)
+            if inside:
+                recs = [r.replace(lowpass_Hz=data.EXAMPLES_LOWPASS_HZ) for r in recs]
+        return recs
+    return [r.replace(lowpass_Hz=None if lowpass_Hz is None else float(lowpass_Hz)) for r in recs]
+
+
+def prepare_data(
+    recordings,
+    *,
+    average: bool = True,
+    window_s: float = 0.03,
+    pre_onset_s: float = 0.003,
+    lowpass_Hz="auto",
+) -> FitData:
+    """Condition recordings for fitting (``rbjax.data.condition``) and stack them.
+
+    Each record keeps ``window_s`` seconds starting ``pre_onset_s`` before its onset
+    (baseline removed, sub-sample onset alignment). With ``average=True`` the drops of one
+    height are averaged coherently in the frequency domain (``rbjax.data.average``, the
+    paper's §3 averaging), one record per height; else every drop is a record.
+
+    ``recordings``: Recording objects, or paths/a directory (read by :func:`load_data`).
+    ``lowpass_Hz``: ``"auto"`` (as declared by the recordings), a cutoff in Hz, or None.
+    """
+    from .. import data
+
+    if isinstance(recordings, FitData):
+        return recordings
+    if isinstance(recordings, (str, Path)) or (
+        isinstance(recordings, Sequence) and recordings and isinstance(recordings[0], (str, Path))
+    ):
+        recs = load_data(recordings, lowpass_Hz=lowpass_Hz)
+    else:
+        recs = list(recordings)
+        if lowpass_Hz != "auto":
+            recs = [r.replace(lowpass_Hz=None if lowpass_Hz is None else float(lowpass_Hz)) for r in recs]
+    if not recs:
+        raise data.DataError("no recordings to fit")
+    _check_positive("window_s", window_s)
+    _check_positive("pre_onset_s", pre_onset_s)
+    for r in recs:
+        if r.height_m is None:
+            raise data.DataError(f"{r.source}: unknown drop height; name the file hNNN_... or pass height_m")
+    cutoffs = {r.lowpass_Hz for r in recs}
+    if len(cutoffs) > 1:
+        listing = ", ".join(f"{r.source}: {r.lowpass_Hz}" for r in recs)
+        raise data.DataError(f"recordings declare different measuring-chain low-passes ({listing})")
+    cutoff = cutoffs.pop()
+    noise = {id(r): r.noise_rms_N for r in recs}
+    conditioned = [(data.condition(r, window_s=window_s, pre_onset_s=pre_onset_s), noise[id(r)]) for r in recs]
+    rows = []
+    if average:
+        groups: dict[float, list] = {}
+        for rec, sigma in conditioned:
+            groups.setdefault(round(rec.height_m, 3), []).append((rec, sigma))
+        for h in sorted(groups):
+            members = groups[h]
+            avg = data.average([m[0] for m in members]) if len(members) > 1 else members[0][0]
+            sigma = math.sqrt(np.mean([m[1] ** 2 for m in members]) / len(members))
+            rows.append((tuple(m[0].source for m in members), h, avg, sigma, len(members)))
+    else:
+        for rec, sigma in sorted(conditioned, key=lambda m: (m[0].height_m, m[0].source)):
+            rows.append(((rec.source,), rec.height_m, rec, sigma, 1))
+    n = min(r[2].n_samples for r in rows)
+    return FitData(
+        sources=tuple(r[0] for r in rows),
+        height_m=np.array([r[1] for r in rows], dtype=float),
+        force_N=np.stack([r[2].force_N[:n] for r in rows]),
+        rate_Hz=float(rows[0][2].rate_Hz),
+        onset_s=np.array([r[2].onset_s for r in rows], dtype=float),
+        noise_rms_N=np.array([r[3] for r in rows], dtype=float),
+        n_drops=np.array([r[4] for r in rows], dtype=int),
+        lowpass_Hz=cutoff,
+    )
+
+
+def _check_positive(name, value):
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise ValueError(f"{name}={value!r} must be a positive finite number (valid range: (0, inf))")
+
+
+# ----------------------------------------------------------------------------------------------
+# features measured the same way on data and predictions
+
+
+def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRACTION):
+    """(t_rise, t_fall, peak, L_FE × 6 octave bands) of histories (..., n), differentiable.
+
+    t_rise/t_fall: where the force crosses ``fraction`` × peak on the rising edge (last
+    sample below the level before the peak) and the falling edge (first sample below it
+    after the peak), by linear interpolation (NaN where the record has no such sample); the
+    contact time is t_fall − t_rise. L_FE:
+    paper Eq. 11 in octave bands (``rbjax.spectrum.lfe_octave_dB``) of the record
+    zero-padded to ``n_pad`` samples (1 s, as in the paper's §2.4).
+    """
+    from ..spectrum import lfe_octave_dB
+
+    x = jnp.asarray(force_N)
+    n = x.shape[-1]
+    idx = jnp.arange(n)
+    ip = jnp.argmax(x, axis=-1)[..., None]
+    peak = jnp.max(x, axis=-1)
+    level = fraction * peak[..., None]
+    take = lambda i: jnp.take_along_axis(x, i, axis=-1)  # noqa: E731
+    before = (idx < ip) & (x < level)
+    i = jnp.clip(n - 1 - jnp.argmax(before[..., ::-1], axis=-1)[..., None], 0, n - 2)
+    xi, xi1 = take(i), take(i + 1)
+    t_rise = (i + (level - xi) / (xi1 - xi))[..., 0] / rate_Hz
+    after = (idx > ip) & (x < level)
+    j = jnp.clip(jnp.argmax(after, axis=-1)[..., None], 1, n - 1)
+    xj, xj1 = take(j), take(j - 1)
+    t_fall = (j - 1 + (xj1 - level) / (xj1 - xj))[..., 0] / rate_Hz
+    # no crossing inside the record (pulse cut off at either end): NaN, not a clipped index
+    t_rise = jnp.where(jnp.any(before, axis=-1), t_rise, jnp.nan)
+    t_fall = jnp.where(jnp.any(after, axis=-1), t_fall, jnp.nan)
+    padded = jnp.pad(x, [(0, 0)] * (x.ndim - 1) + [(0, max(0, n_pad - n))])
+    lfe = lfe_octave_dB(padded, rate_Hz)
+    return jnp.concatenate([t_rise[..., None], t_fall[..., None], peak[..., None], lfe], axis=-1)
+
+
+@functools.lru_cache(maxsize=8)
+def _features_jit(rate_Hz: float, n_pad: int):
+    return jax.jit(lambda x: _features(x, rate_Hz, n_pad))
+
+
+def _n_pad(rate_Hz: float) -> int:
+    return int(round(rate_Hz * 1.0))
+
+
+def record_features(force_N, rate_Hz: float) -> dict:
+    """Contact time, peak force and octave-band L_FE of histories (..., n) as measured.
+
+    The estimator of :func:`fit` (5 % of the peak, linear interpolation; L_FE of the record
+    zero-padded to 1 s); returns NumPy arrays ``contact_time_s``, ``peak_force_N``,
+    ``onset_s`` and ``lfe_octave_dB`` (..., 6).
+    """
+    f = np.asarray(_features_jit(float(rate_Hz), _n_pad(rate_Hz))(jnp.asarray(force_N, dtype=jnp.float64)))
+    return {
+        "onset_s": f[..., 0],
+        "contact_time_s": f[..., 1] - f[..., 0],
+        "peak_force_N": f[..., 2],
+        "lfe_octave_dB": f[..., 3:],
+    }

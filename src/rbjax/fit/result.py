@@ -1,0 +1,167 @@
+"""The outcome of a fit: frozen, JSON-ready, with a text summary and figures."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from ..ball import Ball
+from ..model import Model
+from ..spectrum import OCTAVE_BANDS
+
+
+@dataclasses.dataclass(frozen=True)
+class ParameterEstimate:
+    """A fitted (or held) parameter: value, standard deviation, 95 % interval, unit."""
+
+    value: float
+    std: float
+    ci95: tuple[float, float]
+    unit: str
+    fixed: bool = False
+
+    def to_dict(self) -> dict:
+        return {"value": self.value, "std": self.std, "ci95": list(self.ci95), "unit": self.unit, "fixed": self.fixed}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FitResult:
+    """The outcome of :func:`fit` (frozen). ``to_dict()`` is JSON-ready; ``plot(dir)`` draws it.
+
+    Attributes:
+        model_name: ``paper``, ``kelvin-voigt``, ``hunt-crossley``, ``zener`` (+``+stiffening``),
+            or the name of the ``Model`` fitted.
+        ball, model: the fitted ``rbjax.Ball`` and ``rbjax.Model`` (``rbjax.simulate`` them).
+        parameters: name → :class:`ParameterEstimate` (held ones with ``fixed=True``, std 0),
+            plus ``effective_modulus_Pa`` = E/√(1−ν²), the combination the data determine.
+        correlations: (names, matrix) of the free physical parameters.
+        identifiability: plain-language statement of what the data determine.
+        per_height: one dict per drop height: measured and fitted contact time, peak force and
+            octave-band L_FE (same estimator on both, through the measuring chain), residual rms.
+        residual_rms_N: rms of F_pred − F_measured over the fitted records.
+        converged, message, iterations (function evaluations), optimizer.
+        n_eff_factor: τ, the samples per independent residual (N_eff = N/τ).
+        aic, bic: information criteria of the history residuals (see :func:`fit`).
+        time_s, measured_N, predicted_N, heights_m, in_fit: the records, for plots and checks.
+        theta: the full internal parameter vector (natural units; warm starts).
+    """
+
+    model_name: str
+    blocked_force: str
+    gas: str
+    ball: Ball
+    model: Model
+    parameters: dict
+    correlations: tuple
+    identifiability: str
+    per_height: tuple
+    residual_rms_N: float
+    converged: bool
+    message: str
+    iterations: int
+    optimizer: str
+    n_eff_factor: float
+    n_residuals: int
+    n_free: int
+    aic: float
+    bic: float
+    time_s: np.ndarray = dataclasses.field(repr=False)
+    measured_N: np.ndarray = dataclasses.field(repr=False)
+    predicted_N: np.ndarray = dataclasses.field(repr=False)
+    heights_m: np.ndarray = dataclasses.field(repr=False)
+    in_fit: np.ndarray = dataclasses.field(repr=False)
+    onset_shift_s: np.ndarray = dataclasses.field(repr=False)
+    theta: np.ndarray = dataclasses.field(repr=False)
+
+    @property
+    def name(self) -> str:
+        return self.model_name
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict; ``ball``/``model`` in the ``rbjax.serialize`` format
+        (``rbjax simulate --params FIT.json`` reproduces the fitted model)."""
+        from ..serialize import ball_to_dict, model_to_dict
+
+        names, matrix = self.correlations
+        return {
+            "model_name": self.model_name,
+            "blocked_force": self.blocked_force,
+            "gas": self.gas,
+            "ball": ball_to_dict(self.ball),
+            "model": model_to_dict(self.model),
+            "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
+            "correlations": {"names": list(names), "matrix": np.asarray(matrix).tolist()},
+            "identifiability": self.identifiability,
+            "per_height": [_plain(row) for row in self.per_height],
+            "octave_bands_Hz": list(OCTAVE_BANDS),
+            "residual_rms_N": self.residual_rms_N,
+            "converged": bool(self.converged),
+            "message": self.message,
+            "iterations": int(self.iterations),
+            "optimizer": self.optimizer,
+            "n_residuals": int(self.n_residuals),
+            "n_free": int(self.n_free),
+            "n_eff_factor": self.n_eff_factor,
+            "aic": self.aic,
+            "bic": self.bic,
+            "onset_shift_s": self.onset_shift_s.tolist(),
+        }
+
+    def summary(self) -> str:
+        """A short human-readable report (parameters, identifiability, per-height table)."""
+        from ..text import fmt, format_table
+
+        lines = [f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): {self.message}"]
+        for k, p in self.parameters.items():
+            if p.fixed:
+                lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
+            else:
+                lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
+        lines.append("identifiability: " + self.identifiability)
+        bands = OCTAVE_BANDS
+        header = ["h (m)", "fit", "rms (N)", "t_c meas (ms)", "t_c fit (ms)", "peak meas (N)", "peak fit (N)"] + [f"ΔL {b}" for b in bands]
+        rows = []
+        for r in self.per_height:
+            rows.append(
+                [f"{r['height_m']:.2f}", "yes" if r["in_fit"] else "no", fmt(r["residual_rms_N"], ".2f"),
+                 fmt(1e3 * r["measured"]["contact_time_s"], ".2f"), fmt(1e3 * r["fitted"]["contact_time_s"], ".2f"),
+                 fmt(r["measured"]["peak_force_N"], ".0f"), fmt(r["fitted"]["peak_force_N"], ".0f")]
+                + [fmt(x, "+.2f") for x in r["error"]["lfe_octave_dB"]]
+            )
+        lines.append(format_table(header, rows))
+        return "\n".join(lines)
+
+    def plot(self, out_dir) -> list[Path]:
+        """Write ``histories.png`` (measured vs fitted with residuals), ``lfe_bands.png`` and
+        ``correlations.png`` into ``out_dir``; return their paths (``rbjax.plot.plot_fit``)."""
+        from ..plot import plot_fit
+
+        return plot_fit(self, out_dir)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Prediction:
+    """A model's predicted records next to the measured ones (nothing fitted); see :func:`predict`."""
+
+    per_height: tuple
+    time_s: np.ndarray
+    measured_N: np.ndarray
+    predicted_N: np.ndarray
+    heights_m: np.ndarray
+    converged: bool = True
+
+
+def _plain(x):
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in np.asarray(x).tolist()] if isinstance(x, np.ndarray) else [_plain(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
