@@ -93,7 +93,7 @@ def reference(key, s):
         ref["status"] = np.zeros(shape, dtype=int)
         todo = np.ones(shape, dtype=bool)
         youngs = np.full(shape, float(BALL.youngs_Pa))
-        c = np.broadcast_to(np.asarray(model.damping.damping_Ns_per_m), shape)
+        c = np.broadcast_to(np.asarray(model.damping[0].damping_Ns_per_m), shape)
     for i, j in zip(*np.nonzero(todo)):
         if key == "B":
             options = {"damping": ("kv", float(c[i, j]))}

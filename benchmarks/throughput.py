@@ -260,7 +260,7 @@ def jacobian_workload(rows, sizes):
 
     def one_ode(theta, h, solver):
         ball = BALL.replace(youngs_Pa=theta[0], poisson=theta[1])
-        model = eqx.tree_at(lambda m: m.damping.damping_Ns_per_m, model0, theta[2])
+        model = eqx.tree_at(lambda m: m.damping[0].damping_Ns_per_m, model0, theta[2])
         out = _impact(h, ball, model, solver)
         return jnp.stack([out.contact_time_s, out.peak_force_N, out.restitution])
 

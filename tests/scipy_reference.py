@@ -57,6 +57,10 @@ def damping_spec(damping):
 
     Accepts the rbjax damping pytrees (read by field name only) or such tuples.
     """
+    if isinstance(damping, tuple) and all(hasattr(d, "force_N") for d in damping):  # a Model's laws
+        if len(damping) > 1:
+            raise NotImplementedError("the reference has one damping law at a time")
+        damping = damping[0] if damping else None
     if damping is None or isinstance(damping, tuple):
         return damping
     if hasattr(damping, "damping_Ns_per_m"):

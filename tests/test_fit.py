@@ -146,13 +146,13 @@ def test_fitted_ball_and_model_reproduce_the_truth(recovered):
     model, bf, true = CASES["zener"]
     _, res = recovered["zener"]
     assert res.model.name == "zener" and res.model.blocked_force == bf
-    assert float(res.model.damping.stiffness_ratio) == res.parameters["stiffness_ratio"].value
+    assert float(res.model.damping[0].stiffness_ratio) == res.parameters["stiffness_ratio"].value
     assert float(res.ball.youngs_Pa) == res.parameters["youngs_Pa"].value
     d = res.to_dict()
     loaded_ball = rbjax.serialize.ball_from_dict(d["ball"])
     loaded_model = rbjax.serialize.model_from_dict(d["model"])
     assert float(loaded_ball.youngs_Pa) == pytest.approx(true["youngs_Pa"], rel=0.03)
-    assert float(loaded_model.damping.relaxation_time_s) == res.parameters["relaxation_time_s"].value
+    assert float(loaded_model.damping[0].relaxation_time_s) == res.parameters["relaxation_time_s"].value
     json.dumps(d, allow_nan=False)  # strict JSON
 
 
@@ -219,7 +219,7 @@ def test_a_prior_on_nu_makes_it_determined_by_the_prior(recovered):
     assert "prior" in res.identifiability
 
 
-@pytest.mark.parametrize("optimizer", ["gauss-newton", "lbfgs"])
+@pytest.mark.parametrize("optimizer", ["gauss-newton"])
 def test_other_optimizers_reach_the_same_minimum(optimizer, recovered):
     data, lm = recovered["paper"]
     res = fit(data, "paper", optimizer=optimizer, start={"youngs_Pa": 2.5e6}, progress=False, max_steps=60)
@@ -228,12 +228,11 @@ def test_other_optimizers_reach_the_same_minimum(optimizer, recovered):
     assert abs(res.parameters["youngs_Pa"].value - e.value) <= 0.1 * e.std
 
 
-def test_adam_decreases_the_misfit(recovered):
+def test_max_steps_zero_evaluates_the_start_and_says_so(recovered):
     data, lm = recovered["paper"]
-    start = fit(data, "paper", start={"youngs_Pa": 2.5e6}, optimizer="adam", max_steps=0, progress=False)
-    res = fit(data, "paper", start={"youngs_Pa": 2.5e6}, optimizer="adam", max_steps=40, progress=False)
-    assert res.residual_rms_N < 0.5 * start.residual_rms_N
-    assert abs(res.parameters["youngs_Pa"].value - 1.75e6) < abs(2.5e6 - 1.75e6) / 4
+    start = fit(data, "paper", start={"youngs_Pa": 2.5e6}, max_steps=0, progress=False)
+    assert not start.converged and "not converged" in start.message
+    assert start.residual_rms_N > 2 * lm.residual_rms_N
 
 
 def test_held_out_heights_are_predicted_not_fitted(recovered):
@@ -284,11 +283,11 @@ def test_cli_fit_json_and_outputs(tmp_path):
     assert {"measured", "fitted", "error", "residual_rms_N"} <= set(d["per_height"][0])
     assert d["parameters"]["poisson"]["fixed"]
     # progress: a line per evaluation on stderr, nothing but JSON on stdout
-    assert err.count("fit paper/paper eval") >= 2
+    assert err.count("fit paper/paper round") >= 2
     # the written files: the same JSON (loadable as --params) and the plots
     ball, model = rbjax.serialize.load_params(tmp_path / "fit.json")
     assert float(ball.youngs_Pa) == d["parameters"]["youngs_Pa"]["value"]
-    assert model.damping is None and model.blocked_force == "paper"
+    assert model.damping == () and model.blocked_force == "paper"
     for name in ("histories.png", "lfe_bands.png", "correlations.png"):
         assert (tmp_path / name).stat().st_size > 1000
 

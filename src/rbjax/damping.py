@@ -62,8 +62,13 @@ class AbstractDamping(eqx.Module):
 
     @classmethod
     def off(cls) -> AbstractDamping:
-        """The law with parameters that make its force vanish (for a shared superset model)."""
-        raise NotImplementedError(f"{cls.__name__} has no 'off' setting")
+        """The law with parameters that make its force vanish (for a shared superset model):
+        by default every parameter at its lower bound 0; a law for which that is not "off"
+        (or not allowed) overrides this."""
+        specs = cls.PARAMETERS
+        if not all(s.lower == 0.0 and not s.lower_open for s in specs.values()):
+            raise NotImplementedError(f"{cls.__name__} must define off(): not every parameter may be 0")
+        return cls(**{name: 0.0 for name in specs})
 
 
 def damping_ratio(restitution: float) -> float:
@@ -89,9 +94,6 @@ class KelvinVoigt(AbstractDamping):
     def start(cls, stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s):
         return {"damping_Ns_per_m": 2 * damping_ratio(restitution) * math.sqrt(stiffness_N_per_m * mass_kg)}
 
-    @classmethod
-    def off(cls):
-        return cls(0.0)
 
 
 class HuntCrossley(AbstractDamping):
@@ -128,9 +130,6 @@ class HuntCrossley(AbstractDamping):
         # Hunt & Crossley's small-loss estimate α ≈ 3(1 − e)/(2 v0)
         return {"alpha_s_per_m": 3 * (1 - restitution) / (2 * speed_m_per_s)}
 
-    @classmethod
-    def off(cls):
-        return cls(0.0)
 
 
 class Zener(AbstractDamping):

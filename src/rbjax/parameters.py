@@ -250,4 +250,20 @@ def replace(params: Mapping, height_m, ball, model):
             return node
 
         tree = eqx.tree_at(where, tree, value)
+    _recheck(tree[1])
+    _recheck(tree[2])
     return height_m, tree[1], tree[2]
+
+
+def _recheck(node) -> None:
+    """Run the ``__check_init__`` of every term in a pytree (``eqx.tree_at`` skips them);
+    each skips traced values, so this checks concrete replacements only."""
+    if isinstance(node, eqx.Module):
+        check = getattr(type(node), "__check_init__", None)
+        if check is not None:
+            check(node)
+        for field in dataclasses.fields(node):
+            _recheck(getattr(node, field.name))
+    elif isinstance(node, (tuple, list)):
+        for item in node:
+            _recheck(item)

@@ -91,26 +91,33 @@ def register(subparsers) -> None:
     p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening); default: choose by cross-validation")
     p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
-    p.add_argument("--optimizer", choices=("lm", "gauss-newton", "adam", "lbfgs"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")
+    p.add_argument("--optimizer", choices=("lm", "gauss-newton"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")
     p.add_argument("--out", default=None, metavar="DIR", help="write fit.json and plots (histories, L_FE bands, correlations) into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=run)
 
 
-def _check_model_and_fix(model, fix):
-    from ..fit import _FIXED_BALL_FIELDS, _validate_fix
+#: Exit status of a fit that stopped without converging (its result is still written).
+NOT_CONVERGED_EXIT = 3
 
+
+def _check_model_and_fix(model, fix):
+    from ..fit.engine import _validate_fix
+    from ..fit.layout import CONSTANT_PARAMETERS, fitted_parameter_names, model_from_name
+
+    geometry = set(CONSTANT_PARAMETERS[:3])
     if model is not None:
-        _validate_fix(model, fix)  # raises on an unknown model or parameter
+        # raises on an unknown model or parameter
+        _validate_fix(set(fitted_parameter_names(model_from_name(model))) | geometry, fix)
         return
-    common = {"youngs_Pa", "poisson", *_FIXED_BALL_FIELDS}
+    common = {"youngs_Pa", "poisson", *geometry}
     extra = sorted(set(fix) - common)
     if extra:
         raise ValueError(
             f"--fix {', '.join(extra)}: without --model only parameters every candidate has can be fixed "
             f"({', '.join(sorted(common))}); give --model"
         )
-    _validate_fix("paper", fix)
+    _validate_fix(common, fix)
 
 
 def run(args) -> int:
@@ -157,4 +164,7 @@ def run(args) -> int:
             print(selection.table())
             print()
         print(result.summary())
+    if not result.converged:
+        progress(f"the fit did not converge: {result.message}")
+        return NOT_CONVERGED_EXIT
     return 0
