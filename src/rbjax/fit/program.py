@@ -73,13 +73,6 @@ class Structure(eqx.Module):
     poisson_index: int = eqx.field(static=True)
     solver: object = eqx.field(static=True)
 
-    def __hash__(self):
-        return hash((self.treedef, self.physical_positions, self.constant_positions, self.specs, self.n_records,
-                     self.n_samples, self.rate_Hz, self.filtered, self.height_error, self.decimate, self.poisson_index, self.solver))
-
-    def __eq__(self, other):
-        return isinstance(other, Structure) and hash(self) == hash(other)
-
 
 def _unpack(s: Structure, theta, constants):
     n_all = len(s.physical_positions) + len(s.constant_positions) + 1
