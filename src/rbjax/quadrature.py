@@ -261,7 +261,10 @@ _batch = eqx.filter_jit(eqx.filter_vmap(_impact_positional, in_axes=(0, 0, 0, No
 
 def impact_quadrature_batch(height_m, ball: Ball, model: Model, n_nodes: int = DEFAULT_NODES) -> ImpactScalars:
     """``impact_quadrature`` jitted and vmapped over a leading batch axis of height, ball and model
-    array leaves (all of them batched, like ``impact.impact_batch``)."""
+    array leaves (like ``impact.impact_batch``); model leaves given as scalars (e.g. the default
+    ``momentum_flux_weight``) are broadcast to the batch."""
+    n = jnp.shape(height_m)[0]
+    model = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(jnp.asarray(x, dtype=jnp.float64), (n,) + jnp.shape(x)[1:]) if jnp.ndim(x) == 0 else x, model)
     return _batch(height_m, ball, model, n_nodes)
 
 
