@@ -132,8 +132,13 @@ def _ok(sol):
     return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
 
 
-def _phases(height_m, ball, model: Model, solver: Solver, dense: bool):
-    """Solve the phases of one impact; return the diffrax solutions and the phase ends."""
+def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True):
+    """Solve the phases of one impact; return the diffrax solutions and the phase ends.
+
+    With ``peak`` (and a velocity-dependent model) compression stops at the force peak (an
+    event on dF/dt) and goes on to maximum compression in a second solve, so that the peak is
+    exact; without it (histories) compression is one solve and the "peak" is its end.
+    """
     args = (ball, model)
     v0 = impact_velocity_m_per_s(height_m)
     y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), jnp.zeros(model.num_internal_states)])
@@ -152,14 +157,15 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool):
     def force_rate(t, y, args, **kw):
         return _force_rate(y, args) / (force_scale * v0 / ball.wall_m)
 
-    if model.velocity_dependent:
+    split = model.velocity_dependent and peak
+    if split:
         conds, dirs = (force_rate, velocity, singularity), (False, False, True)
     else:
         conds, dirs = (velocity, singularity), (False, True)
     sol1 = _solve(_COMPRESSION, 0.0, y0, args, conds, dirs, solver, dense=dense)
     t_peak, y_peak = sol1.ts[-1], sol1.ys[-1]
 
-    if model.velocity_dependent:
+    if split:
         # From the force peak on to maximum compression (zero length if they coincide).
         t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
         sol2 = _solve(_COMPRESSION, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense)
@@ -244,20 +250,17 @@ class Trajectory(eqx.Module):
 
 
 def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
-    v0, (sol1, sol2, sol3), (t_peak, _), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=True)
+    # compression in one solve: the force peak needs no exact time here
+    v0, (sol1, _, sol3), _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=True, peak=False)
     t_end = sol3.ts[-1]
     args = (ball, model)
-    status = _status((sol1, sol2, sol3), y_max, jnp.stack([t_end, t_max, t_peak, y_max[0]]), ball, model)
+    status = _status((sol1, sol3), y_max, jnp.stack([t_end, t_max, y_max[0]]), ball, model)
     failed = status != 0
 
     def at(t):
         # Each phase's interpolant is evaluated inside its own interval only (clipped), so an
         # unused branch can never feed NaN into values or gradients.
-        y = sol1.evaluate(jnp.clip(t, 0.0, t_peak))
-        if sol2 is not None:
-            length = t_max - t_peak
-            y2 = sol2.evaluate(jnp.clip(t, t_peak, t_max))
-            y = jnp.where((t > t_peak) & (length > 0.0), y2, y)
+        y = sol1.evaluate(jnp.clip(t, 0.0, t_max))
         y3 = sol3.evaluate(jnp.clip(t, t_max, t_end))
         y = jnp.where(t > t_max, y3, y)
         inside = (t >= 0.0) & (t < t_end)

@@ -5,8 +5,8 @@ The program depends only on the model's *structure* (which terms exist) and the 
 everything else is a runtime value: the parameter values, which of them are free (a mask), the
 records in the fit (a mask), the extra residual weights, the ν prior. So every candidate of a
 model selection, embedded in one superset model whose unused terms are held at their off
-values, and every cross-validation fold run through the same compiled program, and JAX's
-persistent compilation cache can keep it (no host callback).
+values, and every cross-validation fold run through the same compiled program, and the
+program can be exported and kept on disk (no host callback; see :mod:`rbjax.program_store`).
 
 Residuals r(θ) (all rows always present; rows of records outside the fit are 0):
 
@@ -29,11 +29,13 @@ import math
 
 import equinox as eqx
 import jax
+import jax.extend
 import jax.numpy as jnp
 import lineax as lx
 import optimistix as optx
 
 from ..filters import sosfilt_jax
+from ..program_store import load_or_export
 from .records import _features
 
 OPTIMIZERS = ("lm", "gauss-newton")
@@ -123,8 +125,7 @@ def _theta_of_phi(s: Structure, phi, free, held):
 def _value_and_jac(s: Structure, u, phi_c, w, free, held, constants, data, weights):
     """r, dr/du and the auxiliary (r, dr/dθ, force, features) at u, by ``jax.jacfwd`` in θ.
 
-    Jitted on its own so that the optimiser's several traces of it (its init, its step) reuse
-    one trace of the model instead of tracing diffrax's phases again each time.
+    Traced once per program (see :func:`compiled`).
     """
     theta, slope = _theta_of_phi(s, phi_c + w @ u, free, held)
 
@@ -138,7 +139,8 @@ def _value_and_jac(s: Structure, u, phi_c, w, free, held, constants, data, weigh
 
 @functools.lru_cache(maxsize=8)
 def compiled(s: Structure, optimizer: str, max_steps: int):
-    """The jitted fit program of a structure (cached; the persistent cache keeps it too).
+    """The jitted fit program of a structure (cached in this process; :func:`run_program` also
+    keeps it on disk through :mod:`rbjax.program_store` where the compilation cache is on).
 
     ``run(phi_c, w, free, held, constants, data, weights, atol)`` → dict with ``u`` (the
     optimum in whitened coordinates), ``result`` (optimistix's code), ``steps``, and at the
@@ -147,8 +149,16 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
     """
 
     def run(phi_c, w, free, held, constants, data, weights, atol):
+        # Trace the model and its Jacobian once, here; the optimiser's init and step replay the
+        # jaxpr (replaying costs no Python, retracing diffrax costs seconds each time).
+        args = (phi_c, w, free, held, constants, data, weights)
+        u0 = jnp.zeros_like(phi_c)
+        closed, out_shape = jax.make_jaxpr(functools.partial(_value_and_jac, s), return_shape=True)(u0, *args)
+        replay = jax.extend.core.jaxpr_as_fun(closed)
+        out_tree = jax.tree_util.tree_structure(out_shape)
+
         def value_and_jac(u):
-            return _value_and_jac(s, u, phi_c, w, free, held, constants, data, weights)
+            return jax.tree_util.tree_unflatten(out_tree, replay(*jax.tree_util.tree_leaves((u, args))))
 
         @jax.custom_jvp
         def fn(u):
@@ -172,7 +182,6 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
             )
         else:  # held parameters give zero Jacobian columns: a least-squares (SVD) step
             solver = optx.GaussNewton(rtol=1e-12, atol=atol, norm=optx.rms_norm, linear_solver=lx.SVD())
-        u0 = jnp.zeros_like(phi_c)
         sol = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
         r, jac, force, feats = sol.aux
         return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
@@ -184,11 +193,12 @@ def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free,
     """Call the compiled program; NumPy in, NumPy out (``successful`` and ``max_steps_reached`` flags added)."""
     import numpy as np
 
-    fn = compiled(s, optimizer, max_steps)
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
-    out = fn(f64(phi_c), f64(w), jnp.asarray(free, dtype=bool), f64(held), f64(constants),
-             jax.tree_util.tree_map(f64, data), {k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v)) for k, v in weights.items()},
-             f64(atol))
+    args = (f64(phi_c), f64(w), jnp.asarray(free, dtype=bool), f64(held), f64(constants),
+            jax.tree_util.tree_map(f64, data), {k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v)) for k, v in weights.items()},
+            f64(atol))
+    fn = load_or_export(("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args)
+    out = fn(*args)
     out = {k: np.asarray(v) for k, v in out.items()}
     code = int(out.pop("result"))
     out["successful"] = code == int(optx.RESULTS.successful._value)
