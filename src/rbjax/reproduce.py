@@ -513,8 +513,8 @@ def _report(runs, heights, comparison, explanations, conformance, files, elapsed
         failed = [f"{i['name']} ({i['value']:.4g} {i['unit']}, limits {i['lower']:g}–{i['upper']:g})" for i in c["items"] if not i["passed"]]
         verdict = "conforms" if c["passed"] else "does not conform: " + "; ".join(failed)
         lines.append(f"- {GAS[g]}: the prediction at 1 m {verdict} ({c['clause']}).")
-    inside = {g: [b for b, v, l, u in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi) if np.isfinite(l) and l <= v <= u] for g in GAS}
-    below = {g: [b for b, v, l in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo) if np.isfinite(l) and v < l] for g in GAS}
+    inside = {g: [b for b, v, lower, upper in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi) if np.isfinite(lower) and lower <= v <= upper] for g in GAS}
+    below = {g: [b for b, v, lower in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo) if np.isfinite(lower) and v < lower] for g in GAS}
     lines += [
         "",
         "Octave bands within the L_FE tolerances at 1 m: "

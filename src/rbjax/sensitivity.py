@@ -26,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp
@@ -34,6 +34,14 @@ import numpy as np
 
 from ._validate import check_range
 from .ball import JIS_RUBBER_BALL, Ball
+from .batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
+from .batch import (
+    assemble,
+    canonical_name,
+    evaluate,
+    lfe_output_names,
+    parameter_names,
+)
 from .model import Model, Solver
 from .parameters import parameter_table
 from .simulate import (
@@ -44,14 +52,6 @@ from .simulate import (
     make_model,
     trajectory,
 )
-from .batch import (
-    assemble,
-    canonical_name,
-    evaluate,
-    lfe_output_names,
-    parameter_names,
-)
-from .batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
 _LN10_OVER_10 = math.log(10.0) / 10.0

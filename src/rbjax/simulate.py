@@ -79,7 +79,7 @@ class ImpactResult(eqx.Module):
         names = np.vectorize(STATUS_NAMES.get, otypes=[object])(codes)
         return str(names) if codes.ndim == 0 else names
 
-    def raise_for_status(self) -> "ImpactResult":
+    def raise_for_status(self) -> ImpactResult:
         """Raise ``RuntimeError`` naming the heights whose solve failed; return self otherwise."""
         codes = np.asarray(self.status).reshape(-1)
         if np.any(codes != 0):

@@ -41,7 +41,13 @@ from ..impact import G_N_PER_KG
 from ..model import GAS_OPTIONS, Model, Solver
 from ..parameters import parameter_names, replace
 from . import uncertainty as unc
-from .layout import CONSTANT_PARAMETERS, FitLayout, fitted_parameter_names, model_from_name, parse_model_name
+from .layout import (
+    CONSTANT_PARAMETERS,
+    FitLayout,
+    fitted_parameter_names,
+    model_from_name,
+    parse_model_name,
+)
 from .program import OPTIMIZERS, Structure, run_program
 from .records import FitData, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction, _plain

@@ -60,7 +60,7 @@ class FitData:
         """The distinct drop heights, ascending."""
         return np.unique(self.height_m)
 
-    def replace(self, **changes) -> "FitData":
+    def replace(self, **changes) -> FitData:
         return dataclasses.replace(self, **changes)
 
 
