@@ -22,7 +22,7 @@ import numpy as np
 
 from . import __version__
 from ._progress import progress as say
-from ._validate import check_range
+from ._validate import as_float, check_range
 from .ball import JIS_RUBBER_BALL
 from .forces import gas_force_N, shell_force_N
 from .simulate import PAPER_RATE_Hz, simulate
@@ -188,9 +188,9 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     ball = JIS_RUBBER_BALL
     on, off = runs["adiabatic"], runs["none"]
     rows = {r["key"]: r for r in comparison}
-    text = {}
+    text: dict[str, str] = {}
     i1 = int(np.flatnonzero(np.isclose(heights, STANDARD_HEIGHT_M))[0])
-    printed_limit = printed_eq4_limit_m(ball.radius_m)
+    printed_limit = printed_eq4_limit_m(as_float(ball.radius_m))
 
     def gas_share(run, i):
         d = float(run["max_deflection_m"][i])
