@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 import rbjax  # noqa: F401  (float64 on before anything else touches JAX)
+
+# isort: split
 import diffrax as dfx
 import jax
 import jax.numpy as jnp

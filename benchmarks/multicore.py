@@ -14,17 +14,24 @@ os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_
 
 import time  # noqa: E402
 
-import numpy as np  # noqa: E402
-
-from _common import finish_machine_info, machine_info, parse_args, quadrature_reference, time_call, write_json  # noqa: E402
-
 import jax  # noqa: E402
-from jax.sharding import Mesh, NamedSharding, PartitionSpec as P  # noqa: E402
+import numpy as np  # noqa: E402
+from jax.sharding import Mesh, NamedSharding  # noqa: E402
+from jax.sharding import PartitionSpec as P  # noqa: E402
 
 import rbjax  # noqa: E402
 from rbjax.impact import _impact  # noqa: E402
 from rbjax.quadrature import impact_quadrature  # noqa: E402
 from rbjax.simulate import _broadcast_inputs, make_model  # noqa: E402
+
+from _common import (  # noqa: E402
+    finish_machine_info,
+    machine_info,
+    parse_args,
+    quadrature_reference,
+    time_call,
+    write_json,
+)
 
 RECOMMENDED = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10)
 

@@ -23,6 +23,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 import rbjax  # noqa: E402
+
 from scipy_reference import reference_impact  # noqa: E402
 
 HEIGHTS_M = np.round(np.arange(1, 17) * 0.1, 1)

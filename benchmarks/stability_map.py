@@ -29,12 +29,20 @@ import warnings
 
 import numpy as np
 
-from _common import RESULTS_DIR, finish_machine_info, machine_info, parse_args, sweep_solver, table, write_json
-
 import rbjax
 from rbjax.impact import SINGULAR_FRACTION, impact_batch
 from rbjax.quadrature import impact_quadrature_batch
 from rbjax.simulate import _broadcast_inputs, make_model
+
+from _common import (
+    RESULTS_DIR,
+    finish_machine_info,
+    machine_info,
+    parse_args,
+    sweep_solver,
+    table,
+    write_json,
+)
 
 BALL = rbjax.JIS_RUBBER_BALL
 TOL = 1e-6

@@ -32,7 +32,16 @@ import subprocess
 import sys
 import time
 
+import equinox as eqx
+import jax
+import jax.numpy as jnp
 import numpy as np
+
+import rbjax
+from rbjax.impact import _COMPRESSION, _impact, impact_batch
+from rbjax.quadrature import impact_quadrature, impact_quadrature_batch
+from rbjax.simulate import _broadcast_inputs, make_model
+from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
 from _common import (
     RESULTS_DIR,
@@ -45,15 +54,6 @@ from _common import (
     time_call,
     write_json,
 )
-
-import equinox as eqx
-import jax
-import jax.numpy as jnp
-import rbjax
-from rbjax.impact import _COMPRESSION, _impact, impact_batch
-from rbjax.quadrature import impact_quadrature, impact_quadrature_batch
-from rbjax.simulate import _broadcast_inputs, make_model
-from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
 RATE_HZ = 44_100.0
 N_RECORD = 44_100  # the paper's 1 s record (§2.4)

@@ -26,7 +26,14 @@ from __future__ import annotations
 import math
 import time
 
+import jax.numpy as jnp
 import numpy as np
+
+import rbjax
+from rbjax.impact import impact_batch, trajectory_batch
+from rbjax.quadrature import force_history_quadrature, impact_quadrature_batch
+from rbjax.simulate import _broadcast_inputs, make_model
+from rbjax.spectrum import lfe_octave_dB
 
 from _common import (
     RESULTS_DIR,
@@ -41,13 +48,6 @@ from _common import (
     time_call,
     write_json,
 )
-
-import jax.numpy as jnp
-import rbjax
-from rbjax.impact import impact_batch, trajectory_batch
-from rbjax.quadrature import force_history_quadrature, impact_quadrature_batch
-from rbjax.simulate import _broadcast_inputs, make_model
-from rbjax.spectrum import lfe_octave_dB
 
 HEIGHTS_M = (0.1, 1.0, 1.6)
 RATE_HZ = 44_100.0

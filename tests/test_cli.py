@@ -19,13 +19,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy_reference import reference_impact
 
 import rbjax
 from rbjax import commands
 from rbjax.cli import build_parser, command_modules, main
 from rbjax.serialize import save_params
 from rbjax.standards import check_conformance
+
+from scipy_reference import reference_impact
 
 HEIGHTS_M = [0.1, 1.0, 1.6]
 ARGS = ["simulate", "--height-m", *map(str, HEIGHTS_M)]

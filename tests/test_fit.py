@@ -20,13 +20,14 @@ import math
 import numpy as np
 import pytest
 import scipy.signal
-from scipy_reference import reference_impact
 
 import rbjax
-from rbjax import HuntCrossley, JIS_RUBBER_BALL, KelvinVoigt, Zener
+from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Zener
 from rbjax.cli import main
 from rbjax.data import Recording, examples_dir
 from rbjax.fit import fit, model_histories, parameter_names, prepare_data
+
+from scipy_reference import reference_impact
 
 RATE_HZ = 44_100.0
 CUTOFF_HZ = 1250.0

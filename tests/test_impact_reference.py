@@ -26,7 +26,7 @@ import pytest
 import rbjax
 from rbjax.simulate import make_model
 
-from scipy_reference import HEIGHTS_M, HISTORY_RATE_Hz, HISTORY_TIMES_S, reference_impact
+from scipy_reference import HEIGHTS_M, HISTORY_TIMES_S, HISTORY_RATE_Hz, reference_impact
 
 RATE_Hz = HISTORY_RATE_Hz
 HISTORY_S = 0.05

@@ -12,13 +12,14 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
-from scipy_reference import reference_impact
-from test_fit import synthetic_data
 
 import rbjax
 from rbjax import JIS_RUBBER_BALL, AbstractDamping, KelvinVoigt, Model, Parameter, Zener
 from rbjax import parameters as params
 from rbjax.model import superset_model
+
+from scipy_reference import reference_impact
+from test_fit import synthetic_data
 
 
 class ToyViscous(AbstractDamping):

@@ -31,9 +31,10 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 from scipy.optimize import brentq
-from scipy_reference import STANDARD_GRAVITY, gas_force, shell_stiffness
 
 import rbjax
+
+from scipy_reference import STANDARD_GRAVITY, gas_force, shell_stiffness
 
 N = 16
 SETTINGS = settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])

@@ -14,11 +14,12 @@ import math
 
 import numpy as np
 import pytest
-from scipy_reference import reference_impact
 
 import rbjax
 from rbjax.cli import main
 from rbjax.reproduce import DEFAULT_HEIGHTS_M, printed_eq4_limit_m, reproduce
+
+from scipy_reference import reference_impact
 
 FIGURES = [
     "fig03_force_components_1m.png",

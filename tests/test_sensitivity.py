@@ -19,7 +19,6 @@ from rbjax.sensitivity import (
     local_sensitivity,
     morris_screening,
     sobol_indices,
-    wilson_interval,
 )
 from rbjax.spectrum import lfe_octave_dB
 from rbjax.standards import RUBBER_BALL_TOLERANCES, check_conformance

@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 import rbjax
+
 from scipy_reference import reference_impact
 
 BALL = rbjax.JIS_RUBBER_BALL

@@ -15,11 +15,12 @@ from importlib import resources
 import jax
 import numpy as np
 import pytest
-import scipy_reference as ref
 
 import rbjax
 from rbjax.cli import main
 from rbjax.sweep import evaluate, load_config, parameter_names, run_sweep, sharded_map
+
+import scipy_reference as ref
 
 
 def _double_plus(batch, shared):

@@ -6,11 +6,17 @@ import math
 
 import jax
 import numpy as np
+from jaxtyping import ArrayLike
 
 
 def is_traced(x) -> bool:
     """True for values that are abstract under jit/grad/vmap (they cannot be checked here)."""
     return any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def as_float(x: ArrayLike) -> float:
+    """``float(x)`` of a concrete scalar: a Python number or a 0-d numpy or JAX array."""
+    return float(np.asarray(x).item())
 
 
 def check_choice(name: str, value, choices) -> None:

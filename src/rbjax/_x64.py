@@ -13,7 +13,8 @@ jax.config.update("jax_enable_x64", True)
 
 def require_x64() -> None:
     """Raise ``RuntimeError`` if float64 has been switched off after importing rbjax."""
-    if not jax.config.jax_enable_x64:
+    # JAX's config options are attributes set at run time; its type stubs do not list them.
+    if not jax.config.jax_enable_x64:  # type: ignore[attr-defined]
         raise RuntimeError(
             "rbjax needs float64: jax_enable_x64 was switched off after importing rbjax; "
             "call jax.config.update('jax_enable_x64', True)"

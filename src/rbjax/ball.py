@@ -45,7 +45,7 @@ class Ball(eqx.Module):
     def __check_init__(self):
         validate_ball(self)
 
-    def replace(self, **changes) -> "Ball":
+    def replace(self, **changes) -> Ball:
         """A copy with some fields changed, e.g. ``ball.replace(youngs_Pa=2e6)``."""
         names = {f.name for f in dataclasses.fields(self)}
         unknown = set(changes) - names
@@ -55,7 +55,7 @@ class Ball(eqx.Module):
             )
         return dataclasses.replace(self, **changes)
 
-    def as_arrays(self) -> "Ball":
+    def as_arrays(self) -> Ball:
         """The same ball with every field a float64 JAX array (what the jitted core takes)."""
         return Ball(*(jnp.asarray(getattr(self, f.name), dtype=jnp.float64) for f in dataclasses.fields(self)))
 

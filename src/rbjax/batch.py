@@ -59,7 +59,7 @@ from __future__ import annotations
 import functools
 import math
 import sys
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp

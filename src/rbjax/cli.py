@@ -66,7 +66,9 @@ def _enable_compile_cache() -> None:
     import jax
 
     path = compile_cache_dir()
-    if path is None or jax.config.jax_compilation_cache_dir:  # off, or the caller chose one
+    # Off, or the caller chose one. (JAX's config options are attributes set at run time;
+    # its type stubs do not list them.)
+    if path is None or jax.config.jax_compilation_cache_dir:  # type: ignore[attr-defined]
         return
     jax.config.update("jax_compilation_cache_dir", path)
 

@@ -23,7 +23,7 @@ from .forces import reissner_stiffness_N_per_m
 from .parameters import NON_NEGATIVE, POSITIVE, Parameter, check_declared
 
 #: name → class of every damping law defined (filled by subclassing).
-DAMPING_MODELS: dict[str, type] = {}
+DAMPING_MODELS: dict[str, type[AbstractDamping]] = {}
 
 
 class AbstractDamping(eqx.Module):

@@ -20,10 +20,13 @@ end of phase 1; the restitution coefficient is the rebound momentum over the imp
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jaxtyping import ArrayLike
 
 from .forces import (
     contact_force_N,
@@ -49,7 +52,7 @@ STATUS_CODES = {v: k for k, v in STATUS_NAMES.items()}
 SINGULAR_FRACTION = 0.999
 
 
-def impact_velocity_m_per_s(height_m):
+def impact_velocity_m_per_s(height_m: ArrayLike) -> jax.Array:
     """v0 = √(2 g h_D), the speed at first contact after a free fall from h_D (Eq. 10)."""
     return jnp.sqrt(2.0 * G_N_PER_KG * height_m)
 
@@ -157,6 +160,8 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
     def force_rate(t, y, args, **kw):
         return _force_rate(y, args) / (force_scale * v0 / ball.wall_m)
 
+    conds: tuple[Callable, ...]
+    dirs: tuple[bool, ...]
     split = model.velocity_dependent and peak
     if split:
         conds, dirs = (force_rate, velocity, singularity), (False, False, True)
@@ -176,6 +181,8 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
     def deflection(t, y, args, **kw):
         return y[0] / ball.wall_m
 
+    conds3: Callable | tuple[Callable, ...]
+    dirs3: bool | tuple[bool, ...]
     if model.velocity_dependent:
 
         def contact(t, y, args, **kw):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import ClassVar
 
 import diffrax as dfx
@@ -10,7 +11,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import ArrayLike
 
-from ._validate import check_choice, check_range, is_traced
+from ._validate import as_float, check_choice, check_range, is_traced
 from .damping import AbstractDamping
 from .forces import CubicStiffening
 from .parameters import Parameter, check_declared
@@ -68,7 +69,7 @@ class Model(eqx.Module):
         self,
         gas: str = "adiabatic",
         blocked_force: str | None = None,
-        damping=None,
+        damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
         stiffening: CubicStiffening | None = None,
         max_deflection_ratio: float = 2.0,
         *,
@@ -107,7 +108,7 @@ class Model(eqx.Module):
         w = self.momentum_flux_weight
         if is_traced(w) or np.ndim(w) != 0:
             return "weighted"
-        w = float(w)
+        w = as_float(w)
         return "paper" if w == 0.0 else "momentum" if w == 1.0 else f"momentum×{w:g}"
 
     @property

@@ -22,13 +22,19 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ._validate import check_range
+
+if TYPE_CHECKING:  # (ball and model import this module)
+    from .ball import Ball
+    from .model import Model
 
 TRANSFORMS = ("log", "interval", "identity")
 
@@ -92,8 +98,8 @@ class Parameter:
         return jnp.ones_like(phi)
 
 
-POSITIVE = dict(lower=0.0, transform="log")
-NON_NEGATIVE = dict(lower=0.0, lower_open=False, transform="log")
+POSITIVE: dict[str, Any] = dict(lower=0.0, transform="log")
+NON_NEGATIVE: dict[str, Any] = dict(lower=0.0, lower_open=False, transform="log")
 
 #: The drop height h_D (Eq. 10).
 HEIGHT = Parameter("m", **POSITIVE, description="drop height h_D; impact speed √(2 g h_D) (Eq. 10)")
@@ -170,13 +176,13 @@ class ParameterInfo:
         return self.spec.unit
 
 
-def parameter_names(height_m=1.0, ball=None, model=None) -> tuple[str, ...]:
+def parameter_names(height_m: ArrayLike = 1.0, ball: Ball | None = None, model: Model | None = None) -> tuple[str, ...]:
     """Names of the continuous parameters of an impact, in vector order."""
     ball, model = _defaults(ball, model)
     return tuple(n for n, _, _ in _leaf_entries(height_m, ball, model))
 
 
-def parameter_table(height_m, ball, model) -> tuple[ParameterInfo, ...]:
+def parameter_table(height_m: ArrayLike, ball: Ball | None, model: Model | None) -> tuple[ParameterInfo, ...]:
     """Name, value and declaration of every parameter of the impact (scalar values)."""
     ball, model = _defaults(ball, model)
     tree = (height_m, ball, model)
@@ -213,8 +219,8 @@ def to_vector(height_m, ball, model) -> jnp.ndarray:
 
 def from_vector(vector, ball, model):
     """(height, ball, model) with the values of ``vector`` (the template gives the structure)."""
-    _, treedef = jax.tree_util.tree_flatten((0.0, ball, model))
-    n = treedef.num_leaves
+    leaves, treedef = jax.tree_util.tree_flatten((0.0, ball, model))
+    n = len(leaves)
     if jnp.shape(vector) != (n,):
         raise ValueError(f"parameter vector has shape {jnp.shape(vector)}; expected ({n},) for {parameter_names(1.0, ball, model)}")
     return jax.tree_util.tree_unflatten(treedef, [vector[i] for i in range(n)])

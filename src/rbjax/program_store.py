@@ -42,7 +42,7 @@ def source_digest() -> str:
 
 def store_dir() -> Path | None:
     """Where exported programs are kept: ``<compilation cache>/rbjax-programs``, or ``None``."""
-    cache = jax.config.jax_compilation_cache_dir
+    cache = jax.config.jax_compilation_cache_dir  # type: ignore[attr-defined]  # options are not in the stubs
     return Path(cache) / "rbjax-programs" if cache else None
 
 

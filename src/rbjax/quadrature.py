@@ -68,7 +68,7 @@ DEFAULT_NODES = 32
 RULE_TOLERANCE = 1e-9
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def gauss_legendre_01(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Legendre nodes and weights on [0, 1] (numpy's ``leggauss``, mapped)."""
     x, w = np.polynomial.legendre.leggauss(n_nodes)

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import __version__
 from ._progress import progress as say
-from ._validate import check_range
+from ._validate import as_float, check_range
 from .ball import JIS_RUBBER_BALL
 from .forces import gas_force_N, shell_force_N
 from .simulate import PAPER_RATE_Hz, simulate
@@ -188,9 +188,9 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     ball = JIS_RUBBER_BALL
     on, off = runs["adiabatic"], runs["none"]
     rows = {r["key"]: r for r in comparison}
-    text = {}
+    text: dict[str, str] = {}
     i1 = int(np.flatnonzero(np.isclose(heights, STANDARD_HEIGHT_M))[0])
-    printed_limit = printed_eq4_limit_m(ball.radius_m)
+    printed_limit = printed_eq4_limit_m(as_float(ball.radius_m))
 
     def gas_share(run, i):
         d = float(run["max_deflection_m"][i])
@@ -513,8 +513,8 @@ def _report(runs, heights, comparison, explanations, conformance, files, elapsed
         failed = [f"{i['name']} ({i['value']:.4g} {i['unit']}, limits {i['lower']:g}–{i['upper']:g})" for i in c["items"] if not i["passed"]]
         verdict = "conforms" if c["passed"] else "does not conform: " + "; ".join(failed)
         lines.append(f"- {GAS[g]}: the prediction at 1 m {verdict} ({c['clause']}).")
-    inside = {g: [b for b, v, l, u in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi) if np.isfinite(l) and l <= v <= u] for g in GAS}
-    below = {g: [b for b, v, l in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo) if np.isfinite(l) and v < l] for g in GAS}
+    inside = {g: [b for b, v, lower, upper in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi) if np.isfinite(lower) and lower <= v <= upper] for g in GAS}
+    below = {g: [b for b, v, lower in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo) if np.isfinite(lower) and v < lower] for g in GAS}
     lines += [
         "",
         "Octave bands within the L_FE tolerances at 1 m: "

@@ -183,8 +183,8 @@ class Selection:
     elapsed_s: float
 
     def table(self) -> str:
-        from .text import fmt, format_table
         from .spectrum import OCTAVE_BANDS
+        from .text import fmt, format_table
 
         header = ["model", "blocked force", "p", "conv", "rms (N)", "CV err (%)", "± SE", "|Δt_c| (%)", "|Δpeak| (%)"]
         header += [f"|ΔL| {b}" for b in OCTAVE_BANDS] + ["AIC", "BIC", ""]
@@ -351,8 +351,8 @@ class HoldOutComparison:
     rows: dict  # label -> tuple[HeldOut]
 
     def table(self) -> str:
-        from .text import fmt, format_table
         from .spectrum import OCTAVE_BANDS
+        from .text import fmt, format_table
 
         header = ["model", "h (m)", "history (%)", "Δt_c (%)", "Δpeak (%)"] + [f"ΔL {b} (dB)" for b in OCTAVE_BANDS]
         rows = []

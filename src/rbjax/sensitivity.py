@@ -26,14 +26,22 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._validate import check_range
+from ._validate import as_float, check_range
 from .ball import JIS_RUBBER_BALL, Ball
+from .batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
+from .batch import (
+    assemble,
+    canonical_name,
+    evaluate,
+    lfe_output_names,
+    parameter_names,
+)
 from .model import Model, Solver
 from .parameters import parameter_table
 from .simulate import (
@@ -44,14 +52,6 @@ from .simulate import (
     make_model,
     trajectory,
 )
-from .batch import (
-    assemble,
-    canonical_name,
-    evaluate,
-    lfe_output_names,
-    parameter_names,
-)
-from .batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
 _LN10_OVER_10 = math.log(10.0) / 10.0
@@ -422,7 +422,7 @@ def sobol_indices(
     samples = {**inputs, **outputs, "block": block}
 
     alpha = 0.5 * (1.0 - confidence)
-    res = {k: {} for k in ("first", "total", "first_ci", "total_ci", "mean", "var", "n_valid")}
+    res: dict[str, dict] = {k: {} for k in ("first", "total", "first_ci", "total_ci", "mean", "var", "n_valid")}
     boot_rng = np.random.default_rng([seed, 1])
     for name, y in outputs.items():
         if y.shape != (n * (d + 2),):
@@ -550,7 +550,7 @@ def morris_screening(func: Callable, ranges: Mapping, n_trajectories: int, *, n_
             moved[t, k], step[t, k] = i, s
     inputs = _scale(points.reshape(-1, d), ranges)
     outputs = _outputs_dict(func(inputs))
-    res = {"mu": {}, "mu_star": {}, "sigma": {}}
+    res: dict[str, dict] = {"mu": {}, "mu_star": {}, "sigma": {}}
     for name, y in outputs.items():
         y = y.reshape(r, d + 1)
         effects = np.full((r, d), np.nan)
@@ -576,14 +576,14 @@ def morris_screening(func: Callable, ranges: Mapping, n_trajectories: int, *, n_
 def _impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
     """Expand ``"lfe"`` to the band names; check the names; say whether L_FE is needed."""
     valid = SWEEP_SCALAR_OUTPUTS + lfe_output_names()
-    expanded = []
+    expanded: list[str] = []
     for o in [outputs] if isinstance(outputs, str) else outputs:
         expanded.extend(lfe_output_names() if o == "lfe" else [o])
     unknown = [o for o in expanded if o not in valid]
     if unknown or not expanded:
         raise ValueError(f"outputs={list(outputs)!r}: unknown {unknown}; valid: 'lfe', {', '.join(valid)}")
-    expanded = tuple(dict.fromkeys(expanded))
-    return expanded, any(_is_lfe(o) for o in expanded)
+    names = tuple(dict.fromkeys(expanded))
+    return names, any(_is_lfe(o) for o in names)
 
 
 def global_sensitivity(
@@ -814,7 +814,7 @@ def conformance_probability(
     out = evaluate(samples, height_m=height_m, ball=ball, model=model, solver=solver, lfe=True, chunk_size=chunk_size, devices=devices, progress=progress)
     n = int(n_samples)
     values = dict(out)
-    values["mass_kg"] = samples.get("mass_kg", np.full(n, float(ball.mass_kg)))
+    values["mass_kg"] = samples.get("mass_kg", np.full(n, as_float(ball.mass_kg)))
     values["height_m"] = samples.get("height_m", np.full(n, float(height_m)))
     valid = out["status"] == 0
     flags = conformance_flags(values)

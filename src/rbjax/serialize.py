@@ -15,9 +15,11 @@ import dataclasses
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from ._validate import as_float
 from .ball import Ball
 from .damping import DAMPING_MODELS
 from .forces import CubicStiffening
@@ -73,10 +75,10 @@ def model_to_dict(model: Model) -> dict:
     laws = [{"name": d.name, **_fields(d)} for d in model.damping]
     damping = None if not laws else laws[0] if len(laws) == 1 else laws
     stiffening = None if model.stiffening is None else _fields(model.stiffening)
-    w = float(model.momentum_flux_weight)
-    out = {"gas": model.gas}
+    w = as_float(model.momentum_flux_weight)
+    out: dict[str, Any] = {"gas": model.gas}
     out.update({"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w})
-    out.update({"max_deflection_ratio": float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
+    out.update({"max_deflection_ratio": as_float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
     return out
 
 

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import ArrayLike
 
 from ._validate import check_range, is_traced
 from ._x64 import require_x64
 from .ball import JIS_RUBBER_BALL, Ball
+from .damping import AbstractDamping
+from .forces import CubicStiffening
 from .impact import STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
 from .model import Model, Solver
 
@@ -79,7 +83,7 @@ class ImpactResult(eqx.Module):
         names = np.vectorize(STATUS_NAMES.get, otypes=[object])(codes)
         return str(names) if codes.ndim == 0 else names
 
-    def raise_for_status(self) -> "ImpactResult":
+    def raise_for_status(self) -> ImpactResult:
         """Raise ``RuntimeError`` naming the heights whose solve failed; return self otherwise."""
         codes = np.asarray(self.status).reshape(-1)
         if np.any(codes != 0):
@@ -132,13 +136,13 @@ def check_inputs(height_m, ball, rate_Hz=None, duration_s=None) -> None:
 
 
 def simulate(
-    height_m,
+    height_m: ArrayLike,
     ball: Ball = JIS_RUBBER_BALL,
     *,
     gas: str = "adiabatic",
     blocked_force: str = "paper",
-    damping=None,
-    stiffening=None,
+    damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
+    stiffening: CubicStiffening | None = None,
     max_deflection_ratio: float = 2.0,
     solver: Solver | None = None,
     rate_Hz: float = PAPER_RATE_Hz,
@@ -180,7 +184,7 @@ def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_
     )
 
 
-def trajectory(height_m, times_s, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
+def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
     """State and floor force at the given times (1-D, shared by all heights); differentiable.
 
     The building block for fitting: ``times_s`` is static in shape, so this jits and goes

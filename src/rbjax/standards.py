@@ -231,7 +231,8 @@ def _scalar(name: str, value) -> float:
     if arr.shape != ():
         raise ValueError(f"{name}={value!r} has shape {arr.shape}; expected a scalar")
     if arr.dtype.kind == "f" and arr.dtype != np.float64:
-        x = float(np.format_float_positional(arr[()], unique=True))
+        # arr[()] of a 0-d array is a numpy scalar; numpy's stubs type it as an ndarray.
+        x = float(np.format_float_positional(arr[()], unique=True))  # type: ignore[arg-type]
     else:
         x = float(arr)
     if not math.isfinite(x):

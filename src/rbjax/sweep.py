@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from . import sensitivity as sens
+from .ball import JIS_RUBBER_BALL
 from .batch import (  # noqa: F401  (re-exported: the sweep's public names)
     BALL_PARAMETERS,
     SCALAR_OUTPUTS,
@@ -57,7 +58,6 @@ from .batch import (  # noqa: F401  (re-exported: the sweep's public names)
     parameter_names,
     sharded_map,
 )
-from .ball import JIS_RUBBER_BALL
 from .model import Solver
 from .serialize import to_json
 

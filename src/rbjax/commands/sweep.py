@@ -53,7 +53,7 @@ def run(args) -> int:
     start = time.perf_counter()
     result = run_sweep(config, progress=not args.no_progress)
     seconds = time.perf_counter() - start
-    evaluations = getattr(result, "n_evaluations", getattr(result, "n_samples", None))
+    evaluations = result.n_evaluations if hasattr(result, "n_evaluations") else result.n_samples
     progress(f"{evaluations} impact evaluations in {seconds:.1f} s ({evaluations / seconds:.0f} per s)")
     if jax.process_index() != 0:
         return 0

@@ -52,9 +52,11 @@ def average(
     recs = list(recordings)
     if not recs:
         raise DataError("average(): no recordings")
+    onsets = []
     for r in recs:
         if r.onset_s is None:
             raise DataError(f"{r.source}: no onset_s; condition() the recording first")
+        onsets.append(r.onset_s)
     _require_same_rate(recs)
     if domain not in ("frequency", "time"):
         raise ValueError(f"domain={domain!r}: use 'frequency' or 'time'")
@@ -72,8 +74,8 @@ def average(
     m = min(r.n_samples for r in recs)
     if any(r.n_samples != m for r in recs):
         notes.append(f"records cut to the shortest length, {m} samples")
-    ref = recs[0].onset_s if onset_s is None else float(onset_s)
-    shifts = [(r.onset_s - ref) * rate for r in recs]  # samples to advance each record
+    ref = onsets[0] if onset_s is None else float(onset_s)
+    shifts = [(o - ref) * rate for o in onsets]  # samples to advance each record
 
     if domain == "frequency":
         N = next_fast_len(m + int(math.ceil(max(abs(d) for d in shifts))) + 64, real=True)

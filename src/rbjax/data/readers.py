@@ -90,10 +90,10 @@ def _infer_rate(t: np.ndarray, quantum_s: float, source: str) -> tuple[float, fl
     """Uniform-sampling check of a time column; returns (rate_Hz, t0_s, notes)."""
     dt_steps = np.diff(t)
     if np.any(dt_steps <= 0):
-        i = int(np.argmax(dt_steps <= 0))
+        k = int(np.argmax(dt_steps <= 0))
         raise DataError(
-            f"{source}: time column is not strictly increasing (sample {i + 1}: "
-            f"{t[i + 1]!r} s after {t[i]!r} s)"
+            f"{source}: time column is not strictly increasing (sample {k + 1}: "
+            f"{t[k + 1]!r} s after {t[k]!r} s)"
         )
     n = t.size
     i = np.arange(n, dtype=np.float64)
@@ -251,7 +251,8 @@ def read_csv(
     notes = []
     if t is not None:
         dec = [_decimals(s) for s in t_txt[: min(len(t_txt), 1000)]]
-        quantum = 0.0 if any(d is None for d in dec) else 10.0 ** (-max(dec)) * t_scale
+        known = [d for d in dec if d is not None]
+        quantum = 0.0 if len(known) < len(dec) else 10.0 ** (-max(known)) * t_scale
         rate_t, t0, more = _infer_rate(t, quantum, source)
         notes += more
         if t0 != 0 and abs(t0) > 0.5 / rate_t:

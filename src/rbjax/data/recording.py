@@ -102,7 +102,7 @@ class Recording:
         """Robust rms of the noise, N (see :func:`estimate_noise_rms_N`)."""
         return estimate_noise_rms_N(self.force_N)
 
-    def replace(self, **changes) -> "Recording":
+    def replace(self, **changes) -> Recording:
         """A copy with the given fields changed (``dataclasses.replace``)."""
         return dataclasses.replace(self, **changes)
 
@@ -126,7 +126,7 @@ class Recording:
         u = _solve_crossing(x, j, -level, sign=-1.0)
         return start / self.rate_Hz, (j - 1 + u) / self.rate_Hz
 
-    def aligned(self, onset_s: float, *, method: str = "fourier") -> "Recording":
+    def aligned(self, onset_s: float, *, method: str = "fourier") -> Recording:
         """The record shifted in time so that its onset lands at ``onset_s`` (same length).
 
         Sub-sample shift by :func:`fractional_shift` (``"fourier"``: band-limited,

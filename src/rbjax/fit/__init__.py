@@ -10,7 +10,13 @@ measuring chain, residuals and optimistix Levenberg–Marquardt as one compiled 
 
 from .engine import fit, model_histories, predict
 from .engine import parameter_names_of as parameter_names
-from .layout import MODEL_NAMES, STIFFENING_SUFFIX, all_model_names, model_from_name, parse_model_name
+from .layout import (
+    MODEL_NAMES,
+    STIFFENING_SUFFIX,
+    all_model_names,
+    model_from_name,
+    parse_model_name,
+)
 from .program import OPTIMIZERS
 from .records import FitData, load_data, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction

@@ -34,14 +34,20 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import check_choice, check_range
+from .._validate import as_float, check_choice, check_range
 from ..ball import JIS_RUBBER_BALL, Ball
 from ..filters import butter_lowpass_sos
 from ..impact import G_N_PER_KG
 from ..model import GAS_OPTIONS, Model, Solver
 from ..parameters import parameter_names, replace
 from . import uncertainty as unc
-from .layout import CONSTANT_PARAMETERS, FitLayout, fitted_parameter_names, model_from_name, parse_model_name
+from .layout import (
+    CONSTANT_PARAMETERS,
+    FitLayout,
+    fitted_parameter_names,
+    model_from_name,
+    parse_model_name,
+)
 from .program import OPTIMIZERS, Structure, run_program
 from .records import FitData, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction, _plain
@@ -72,7 +78,7 @@ class _Problem:
         self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
         lay = self.layout
         filtered = data.lowpass_Hz is not None
-        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if filtered else np.zeros((1, 6))
+        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if data.lowpass_Hz is not None else np.zeros((1, 6))
         import jax
 
         treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
@@ -154,9 +160,9 @@ def _start_values(problem: _Problem, model: Model, ball: Ball, ref_mask, nu: flo
     k_idx = np.flatnonzero(ref_mask)
     lowest = k_idx[np.argmin(d.height_m[k_idx])]
     tc = float(meas["contact_time_s"][lowest])
-    mass = float(ball.mass_kg)
+    mass = as_float(ball.mass_kg)
     k_spring = mass * (math.pi / tc) ** 2
-    e_young = k_spring * float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * float(ball.wall_m) ** 2)
+    e_young = k_spring * as_float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * as_float(ball.wall_m) ** 2)
     v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
     impulse = d.force_N.sum(axis=1) / d.rate_Hz
     e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
@@ -349,10 +355,10 @@ def fit(
         if not (-1.0 < mean < 0.5 and std > 0):
             raise ValueError(f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0")
         poisson_prior = (mean, std)
-    for k, w in (extra_weights or {}).items():
+    for k, weight in (extra_weights or {}).items():
         if k not in EXTRA_TERMS:
             raise ValueError(f"extra_weights: unknown term {k!r}; valid: {', '.join(EXTRA_TERMS)}")
-        check_range(f"extra_weights[{k!r}]", w, lower=0.0, lower_open=False)
+        check_range(f"extra_weights[{k!r}]", weight, lower=0.0, lower_open=False)
     if max_steps is None:
         max_steps = STEPS_PER_ROUND * MAX_ROUNDS
     elif not (isinstance(max_steps, (int, np.integer)) and not isinstance(max_steps, bool) and max_steps >= 0):
@@ -371,7 +377,7 @@ def fit(
     constants = lay.constant_values(ball, structure)
 
     warm = start if isinstance(start, FitResult) else None
-    start_map = {} if warm is not None else dict(start or {})
+    start_map = {} if isinstance(start, FitResult) else dict(start or {})
     for k in start_map:
         if k not in fittable:
             raise ValueError(f"start: unknown parameter {k!r} for model {model_name!r}; valid: {', '.join(fittable)}")
@@ -382,7 +388,7 @@ def fit(
     nu0 = fixed.get("poisson", start_map.get("poisson", 0.45))
     values = {} if isinstance(model, Model) else _start_values(problem, candidate, ball, fit_mask, nu0)
     if isinstance(model, Model):
-        values["poisson"] = nu0 if ("poisson" in fixed or "poisson" in start_map) else float(ball.poisson)
+        values["poisson"] = nu0 if ("poisson" in fixed or "poisson" in start_map) else as_float(ball.poisson)
     values.update(start_map)
     values.update({k: v for k, v in fixed.items() if k in fittable})
     delay = (2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0) + 0.016 * float(np.nanmedian(problem.measured["contact_time_s"]))
@@ -432,7 +438,7 @@ def fit(
             )
         else:
             notes.append(f"E and ν: |cos| of their Jacobian columns {cos_e_nu:.6f}; both fitted.")
-    elif "poisson" in physical_free:
+    elif "poisson" in physical_free and poisson_prior is not None:
         notes.append(
             f"E and ν are not separately identifiable from the histories (|cos| = {cos_e_nu:.8f}); "
             f"ν is determined by its prior N({poisson_prior[0]:g}, {poisson_prior[1]:g}²)."
@@ -522,7 +528,7 @@ def fit(
     jac_phi_hist = problem.history_jacobian(out["jac_theta"], fit_mask)[:, free_idx] * dtheta[free_idx][None, :]
     p = free_idx.size
     prior_index = free_names.index("poisson") if (poisson_prior is not None and "poisson" in physical_free) else None
-    prior_precision = (dtheta[inu] / poisson_prior[1]) ** 2 if prior_index is not None else 0.0
+    prior_precision = (dtheta[inu] / poisson_prior[1]) ** 2 if (poisson_prior is not None and prior_index is not None) else 0.0
     cov_phi = unc.covariance(jac_phi_hist, hist_r, tau, prior_index, prior_precision)
     if prior_held:
         free_names, physical_free, cov_phi = unc.fold_in_poisson_prior(

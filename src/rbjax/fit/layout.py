@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..ball import Ball
-from ..damping import DAMPING_MODELS
+from ..damping import DAMPING_MODELS, AbstractDamping
 from ..forces import CubicStiffening
 from ..model import Model
 from ..parameters import HEIGHT_ERROR, ONSET_SHIFT, declaration, parameter_table, replace, to_vector
@@ -33,7 +33,7 @@ def all_model_names() -> tuple[str, ...]:
     return base + tuple(m + STIFFENING_SUFFIX for m in base)
 
 
-def parse_model_name(name: str) -> tuple[tuple[type, ...], bool]:
+def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
     """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``."""
     if not isinstance(name, str):
         raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")

@@ -182,7 +182,7 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
             )
         else:  # held parameters give zero Jacobian columns: a least-squares (SVD) step
             solver = optx.GaussNewton(rtol=1e-12, atol=atol, norm=optx.rms_norm, linear_solver=lx.SVD())
-        sol = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
+        sol: optx.Solution = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
         r, jac, force, feats = sol.aux
         return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
 
@@ -201,6 +201,8 @@ def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free,
     out = fn(*args)
     out = {k: np.asarray(v) for k, v in out.items()}
     code = int(out.pop("result"))
-    out["successful"] = code == int(optx.RESULTS.successful._value)
+    # optimistix declares RESULTS.successful as a str; at run time it is an enumeration item
+    # whose _value is the integer code.
+    out["successful"] = code == int(optx.RESULTS.successful._value)  # type: ignore[attr-defined]
     out["max_steps_reached"] = code == int(optx.RESULTS.max_steps_reached._value)
     return out

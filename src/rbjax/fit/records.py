@@ -60,7 +60,7 @@ class FitData:
         """The distinct drop heights, ascending."""
         return np.unique(self.height_m)
 
-    def replace(self, **changes) -> "FitData":
+    def replace(self, **changes) -> FitData:
         return dataclasses.replace(self, **changes)
 
 
@@ -135,6 +135,7 @@ def prepare_data(
     if average:
         groups: dict[float, list] = {}
         for rec, sigma in conditioned:
+            assert rec.height_m is not None  # every record's height was checked above
             groups.setdefault(round(rec.height_m, 3), []).append((rec, sigma))
         for h in sorted(groups):
             members = groups[h]
@@ -143,6 +144,7 @@ def prepare_data(
             rows.append((tuple(m[0].source for m in members), h, avg, sigma, len(members)))
     else:
         for rec, sigma in sorted(conditioned, key=lambda m: (m[0].height_m, m[0].source)):
+            assert rec.height_m is not None  # every record's height was checked above
             rows.append(((rec.source,), rec.height_m, rec, sigma, 1))
     n = min(r[2].n_samples for r in rows)
     return FitData(
