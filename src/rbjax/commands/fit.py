@@ -102,13 +102,13 @@ NOT_CONVERGED_EXIT = 3
 
 
 def _check_model_and_fix(model, fix):
-    from ..fit.engine import _validate_fix
+    from ..fit.engine import validate_fix
     from ..fit.layout import CONSTANT_PARAMETERS, fitted_parameter_names, model_from_name
 
     geometry = set(CONSTANT_PARAMETERS[:3])
     if model is not None:
         # raises on an unknown model or parameter
-        _validate_fix(set(fitted_parameter_names(model_from_name(model))) | geometry, fix)
+        validate_fix(set(fitted_parameter_names(model_from_name(model))) | geometry, fix)
         return
     common = {"youngs_Pa", "poisson", *geometry}
     extra = sorted(set(fix) - common)
@@ -117,7 +117,7 @@ def _check_model_and_fix(model, fix):
             f"--fix {', '.join(extra)}: without --model only parameters every candidate has can be fixed "
             f"({', '.join(sorted(common))}); give --model"
         )
-    _validate_fix(common, fix)
+    validate_fix(common, fix)
 
 
 def run(args) -> int:

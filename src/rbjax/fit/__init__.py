@@ -5,11 +5,12 @@ features read off them) → :mod:`~rbjax.fit.layout` (model names and the fitted
 from the terms' parameter declarations) → :mod:`~rbjax.fit.program` (prediction through the
 measuring chain, residuals and optimistix Levenberg–Marquardt as one compiled program) →
 :mod:`~rbjax.fit.uncertainty` (covariance, identifiability) → :mod:`~rbjax.fit.result`
-(the frozen result); :mod:`~rbjax.fit.engine` drives them (:func:`fit`, :func:`predict`).
+(the frozen result); :mod:`~rbjax.fit.problem` holds one problem (records, layout, program,
+onset alignment), :mod:`~rbjax.fit.engine` drives it (:func:`fit`) and
+:mod:`~rbjax.fit.prediction` compares given models (:func:`predict`, :func:`model_histories`).
 """
 
-from .engine import fit, model_histories, predict
-from .engine import parameter_names_of as parameter_names
+from .engine import fit
 from .layout import (
     MODEL_NAMES,
     STIFFENING_SUFFIX,
@@ -17,6 +18,8 @@ from .layout import (
     model_from_name,
     parse_model_name,
 )
+from .prediction import model_histories, predict
+from .prediction import parameter_names_of as parameter_names
 from .program import OPTIMIZERS
 from .records import FitData, load_data, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction

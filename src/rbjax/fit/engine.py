@@ -19,7 +19,8 @@ Identifiability: E and ν enter only through E/√(1−ν²) (see :func:`rbjax.f
 this is detected from the Jacobian and said in ``FitResult.identifiability``; ν is then held at
 a stated value (default 0.5, the paper's, §4) or given a prior.
 
-The driver (on the host, between calls of the one compiled program): start values from the
+The driver (on the host, between calls of the one compiled program of a
+:class:`~rbjax.fit.problem.Problem`): start values from the
 records, onset alignment, the identifiability check, rounds of Levenberg–Marquardt in
 whitened coordinates until the remaining Gauss–Newton step is below 0.05 σ, then the
 uncertainties, the held-out records' alignment and the per-height table.
@@ -27,7 +28,6 @@ uncertainties, the held-out records' alignment and the per-height table.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 
@@ -36,117 +36,32 @@ import numpy as np
 from .._progress import progress as say
 from .._validate import as_float, check_choice, check_range
 from ..ball import JIS_RUBBER_BALL, Ball
-from ..filters import butter_lowpass_sos
 from ..impact import G_N_PER_KG
 from ..model import GAS_OPTIONS, Model, Solver
-from ..parameters import parameter_names, replace
+from ..parameters import replace
 from . import uncertainty as unc
-from .layout import (
-    CONSTANT_PARAMETERS,
-    FitLayout,
-    fitted_parameter_names,
-    model_from_name,
-    parse_model_name,
+from .layout import CONSTANT_PARAMETERS, fitted_parameter_names
+from .problem import (
+    STEPS_PER_ROUND,
+    Problem,
+    candidate_model,
+    embed,
+    fit_solver,
+    per_height_rows,
+    realign,
 )
-from .program import OPTIMIZERS, Structure, run_program
-from .records import FitData, prepare_data, record_features
-from .result import FitResult, ParameterEstimate, Prediction, _plain
+from .program import OPTIMIZERS
+from .records import FitData, prepare_data
+from .result import FitResult, ParameterEstimate
 
 SCALES = ("noise", "peak")
 BLOCKED_FORCES = ("paper", "momentum")
 EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
-#: Optimiser steps per compiled call (a static size of the program) and most re-centrings.
-STEPS_PER_ROUND = 40
+#: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
 
 
-def _fit_solver(solver):
-    if solver is None:
-        return Solver(adjoint="forward")
-    if not isinstance(solver, Solver):
-        raise ValueError(f"solver={solver!r} must be an rbjax.Solver")
-    return solver if solver.adjoint == "forward" else dataclasses.replace(solver, adjoint="forward")
-
-
-class _Problem:
-    """The data, the layout and the compiled program of one fit (runtime masks aside)."""
-
-    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str):
-        self.data = data
-        self.ball = ball
-        self.structure_model = structure_model
-        self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
-        lay = self.layout
-        filtered = data.lowpass_Hz is not None
-        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if data.lowpass_Hz is not None else np.zeros((1, 6))
-        import jax
-
-        treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
-        self.structure = Structure(
-            treedef=treedef, physical_positions=lay.physical_positions, constant_positions=lay.constant_positions,
-            specs=lay.specs, n_records=data.n_records, n_samples=data.n_samples, rate_Hz=float(data.rate_Hz),
-            filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
-            solver=solver,
-        )
-        self.measured = record_features(data.force_N, data.rate_Hz)
-        feats = np.stack(
-            [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1
-        )
-        self.arrays = {
-            "heights": np.asarray(data.height_m, dtype=float),
-            "sos": np.asarray(sos, dtype=float),
-            "measured": np.asarray(data.force_N, dtype=float),
-            "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
-        }
-        self.record_weights = 1.0 / (np.maximum(data.noise_rms_N, 1e-12) if scale == "noise" else self.measured["peak_force_N"])
-        self.decimate = int(decimate)
-        # noise correlation from the pre-contact samples (up to 1 ms before each onset)
-        quiet = [data.force_N[k, : max(int((data.onset_s[k] - 1e-3) * data.rate_Hz), 0)] for k in range(data.n_records)]
-        n_quiet = min(len(q) for q in quiet)
-        self.tau_noise = unc.integrated_autocorrelation(np.stack([q[:n_quiet] for q in quiet])[:, :: self.decimate]) if n_quiet >= 16 else 1.0
-
-    @property
-    def n_hist_per_record(self) -> int:
-        return len(range(0, self.data.n_samples, self.decimate))
-
-    def weights(self, fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
-        extra = extra or {}
-        return {
-            "fit_mask": np.asarray(fit_mask, dtype=bool),
-            "record": self.record_weights,
-            "contact_time": float(extra.get("contact_time", 0.0)),
-            "peak_force": float(extra.get("peak_force", 0.0)),
-            "lfe": float(extra.get("lfe", 0.0)),
-            "prior": np.asarray(prior, dtype=float),
-        }
-
-    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
-        lay = self.layout
-        n = len(lay.names)
-        phi_c = lay.to_phi(theta) if phi_c is None else phi_c
-        w = np.eye(n) if w is None else w
-        return run_program(
-            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=theta, constants=constants,
-            data=self.arrays, weights=weights, atol=atol,
-        )
-
-    def history_rows(self, r, fit_mask):
-        """(rows of the fitted records' history residuals) as (n_fit, n_per_record)."""
-        hist = r[: self.data.n_records * self.n_hist_per_record].reshape(self.data.n_records, -1)
-        return hist[np.asarray(fit_mask, dtype=bool)]
-
-    def history_jacobian(self, jac, fit_mask):
-        n = self.data.n_records * self.n_hist_per_record
-        j = jac[:n].reshape(self.data.n_records, self.n_hist_per_record, -1)
-        return j[np.asarray(fit_mask, dtype=bool)].reshape(-1, jac.shape[1])
-
-    def history_rms_N(self, force, mask):
-        if not np.any(mask):
-            return float("nan")
-        return float(np.sqrt(np.mean((force[mask] - self.data.force_N[mask]) ** 2)))
-
-
-def _start_values(problem: _Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
+def _start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
     """Physically motivated start values from the measured records.
 
     Stiffness from the contact time of the lowest fitted height (least gas force):
@@ -175,7 +90,7 @@ def _start_values(problem: _Problem, model: Model, ball: Ball, ref_mask, nu: flo
     return values
 
 
-def _validate_fix(names, fix):
+def validate_fix(names, fix):
     out = {}
     for k, v in (fix or {}).items():
         if k not in names:
@@ -204,76 +119,6 @@ def _height_mask(data: FitData, heights) -> np.ndarray:
             raise ValueError(f"fit_heights: no record at height {h:g} m; heights in the data: {', '.join(f'{x:g}' for x in data.heights_m)}")
         mask |= hit
     return mask
-
-
-def _realign(problem: _Problem, theta, feats, which, *, rescale_E: bool, fit_mask):
-    """Move the onset shifts of the records ``which`` so that the predicted onset (5 % of the
-    peak, rising edge) meets the measured one; optionally rescale E so that the predicted
-    contact times match on the fitted records (t_c ∝ 1/√k)."""
-    lay = problem.layout
-    theta = theta.copy()
-    shift = theta[lay.shift_slice]
-    shift[which] += (problem.measured["onset_s"] - feats[:, 0])[which]
-    theta[lay.shift_slice] = shift
-    if rescale_E:
-        tc_pred = (feats[:, 1] - feats[:, 0])[fit_mask]
-        ratio = float(np.median(tc_pred / problem.measured["contact_time_s"][fit_mask]))
-        if math.isfinite(ratio) and ratio > 0:
-            theta[lay.index("youngs_Pa")] *= ratio**2
-    return theta
-
-
-def _per_height(problem: _Problem, force, feats, fit_mask) -> list[dict]:
-    d = problem.data
-    meas = problem.measured
-    pred = {
-        "contact_time_s": feats[:, 1] - feats[:, 0],
-        "peak_force_N": feats[:, 2],
-        "lfe_octave_dB": feats[:, 3:],
-    }
-    rows = []
-    for h in d.heights_m:
-        k = np.isclose(d.height_m, h)
-        m = {q: np.mean(meas[q][k], axis=0) for q in pred}
-        f = {q: np.mean(pred[q][k], axis=0) for q in pred}
-        rows.append({
-            "height_m": float(h),
-            "n_drops": int(d.n_drops[k].sum()),
-            "in_fit": bool(fit_mask[k].all()),
-            "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
-            "measured": {q: _plain(v) for q, v in m.items()},
-            "fitted": {q: _plain(v) for q, v in f.items()},
-            "error": {
-                "contact_time_pct": float(100 * (f["contact_time_s"] / m["contact_time_s"] - 1)),
-                "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
-                "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
-            },
-        })
-    return rows
-
-
-def _candidate(model, blocked_force, gas) -> tuple[str, Model]:
-    if isinstance(model, Model):
-        return model.name, model
-    parse_model_name(model)
-    return model, model_from_name(model, gas=gas, blocked_force=blocked_force)
-
-
-def _embed(model: Model, structure: Model | None, ball: Ball) -> Model:
-    """``model``'s values inside ``structure`` (a superset of its terms), or ``model`` itself."""
-    if structure is None:
-        return model
-    if structure.gas != model.gas:
-        raise ValueError(f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}")
-    have = set(parameter_names(1.0, ball, structure))
-    mine = [n for n in parameter_names(1.0, ball, model) if n != "height_m"]
-    missing = [n for n in mine if n not in have]
-    if missing or not {type(d) for d in model.damping} <= {type(d) for d in structure.damping}:
-        raise ValueError(f"superset lacks the terms of model {model.name!r} (parameters {missing})")
-    from ..parameters import parameter_table
-
-    values = {r.name: r.value for r in parameter_table(1.0, ball, model) if r.name in have and r.name != "height_m"}
-    return replace(values, 1.0, ball, structure)[2]
 
 
 def fit(
@@ -363,16 +208,16 @@ def fit(
         max_steps = STEPS_PER_ROUND * MAX_ROUNDS
     elif not (isinstance(max_steps, (int, np.integer)) and not isinstance(max_steps, bool) and max_steps >= 0):
         raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)")
-    model_name, candidate = _candidate(model, blocked_force, gas)
+    model_name, candidate = candidate_model(model, blocked_force, gas)
     fittable = fitted_parameter_names(candidate)
-    fixed = _validate_fix(set(fittable) | set(CONSTANT_PARAMETERS[:3]), fix)
+    fixed = validate_fix(set(fittable) | set(CONSTANT_PARAMETERS[:3]), fix)
     if "poisson" in fixed and poisson_prior is not None:
         raise ValueError("poisson is both fixed and given a prior; choose one")
     data = prepare_data(data)
     ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
     fit_mask = _height_mask(data, fit_heights)
-    structure = _embed(candidate, superset, ball)
-    problem = _Problem(data, ball, structure, _fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale)
+    structure = embed(candidate, superset, ball)
+    problem = Problem(data, ball, structure, fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale)
     lay = problem.layout
     constants = lay.constant_values(ball, structure)
 
@@ -411,7 +256,7 @@ def fit(
 
     # 1. first evaluation: align the onsets (and rescale E from the contact times)
     out = evaluate(theta)
-    theta = _realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=auto_start, fit_mask=fit_mask)
+    theta = realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=auto_start, fit_mask=fit_mask)
     out = evaluate(theta)
 
     # 2. identifiability from the Jacobian with ν free
@@ -515,7 +360,7 @@ def fit(
 
     # 4. held-out records: align their onsets with the fitted model (nothing else is fitted)
     if not np.all(fit_mask):
-        theta = _realign(problem, theta, out["features"], ~fit_mask, rescale_E=False, fit_mask=fit_mask)
+        theta = realign(problem, theta, out["features"], ~fit_mask, rescale_E=False, fit_mask=fit_mask)
         out = evaluate(theta, extra=extra, prior=prior)
 
     # 5. uncertainties from the history rows at the optimum
@@ -569,7 +414,7 @@ def fit(
         ident += " " + ident_msg
 
     # 6. per-height summary and information criteria (a common N_eff for every candidate)
-    per_height = _per_height(problem, out["force"], out["features"], fit_mask)
+    per_height = per_height_rows(problem, out["force"], out["features"], fit_mask)
     n_eff = n_hist / problem.tau_noise
     rss = float(hist_r @ hist_r)
     loglik_term = n_eff * math.log(rss / n_hist) if rss > 0 and math.isfinite(rss) else float("nan")
@@ -606,80 +451,3 @@ def fit(
         onset_shift_s=theta[lay.shift_slice].copy(),
         theta=theta,
     )
-
-
-def _aligned(data, ball: Ball, model: Model, solver, superset=None):
-    """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
-    data = prepare_data(data)
-    model = _embed(model, superset, ball)
-    problem = _Problem(data, ball, model, _fit_solver(solver), height_error=False, decimate=1, scale="noise")
-    lay = problem.layout
-    delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
-    theta = lay.theta(ball, model, data.onset_s - delay)
-    constants = lay.constant_values(ball, model)
-    mask = np.zeros(data.n_records, dtype=bool)
-    free = np.zeros(len(lay.names), dtype=bool)
-    out = problem.run(theta, free, problem.weights(mask), constants)
-    theta = _realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=False, fit_mask=mask)
-    out = problem.run(theta, free, problem.weights(np.ones(data.n_records, bool)), constants)
-    return problem, theta, out
-
-
-def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, solver: Solver | None = None, superset: Model | None = None) -> Prediction:
-    """Compare a given (unfitted) model with the records; nothing is fitted.
-
-    The model's floor force goes through the records' measuring chain; each record's onset
-    is aligned with the predicted one (5 % of the peak); contact time, peak and octave-band
-    L_FE are read off both with the same estimator. ``per_height`` rows as in
-    :class:`FitResult` (all held out). ``model``: any ``rbjax.Model`` (default: the paper's
-    elastic model). ``superset``: run in that model's compiled program (see :func:`fit`).
-    """
-    model = Model() if model is None else model
-    problem, _, out = _aligned(data, ball, model, solver, superset)
-    d = problem.data
-    rows = _per_height(problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool))
-    return Prediction(tuple(rows), d.time_s, d.force_N, out["force"], d.height_m)
-
-
-def model_histories(
-    data,
-    model: str | Model,
-    params: Mapping[str, float],
-    onset_shift_s,
-    *,
-    blocked_force: str = "paper",
-    gas: str = "adiabatic",
-    ball: Ball = JIS_RUBBER_BALL,
-    solver: Solver | None = None,
-):
-    """The predicted records of :func:`fit` and their exact Jacobian, for given parameters.
-
-    ``params``: every name of ``rbjax.fit.parameter_names(model)``; ``onset_shift_s``: the
-    contact start of each record in its time axis (s). Returns ``(force_N, jacobian, names)``:
-    the filtered floor force (n_records, n_samples), d force/d parameter
-    (n_records, n_samples, n_parameters) by forward-mode differentiation through the solver,
-    and the parameter names (the physical ones, then ``shift[k]``).
-    """
-    _, candidate = _candidate(model, blocked_force, gas)
-    names = fitted_parameter_names(candidate)
-    missing = [n for n in names if n not in params]
-    if missing:
-        raise ValueError(f"params: missing {missing} for model {model!r}")
-    data = prepare_data(data)
-    _, ball, candidate = replace({n: float(params[n]) for n in names}, 1.0, ball, candidate)
-    problem = _Problem(data, ball, candidate, _fit_solver(solver), height_error=False, decimate=1, scale="noise")
-    lay = problem.layout
-    shifts = np.broadcast_to(np.asarray(onset_shift_s, dtype=float), (data.n_records,))
-    theta = lay.theta(ball, candidate, shifts)
-    weights = problem.weights(np.ones(data.n_records, dtype=bool))
-    weights["record"] = np.ones(data.n_records)
-    out = problem.run(theta, np.zeros(len(lay.names), dtype=bool), weights, lay.constant_values(ball, candidate))
-    n = data.n_records * data.n_samples
-    jac = out["jac_theta"][:n].reshape(data.n_records, data.n_samples, -1)
-    return out["force"], jac, tuple(lay.names)
-
-
-def parameter_names_of(model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic") -> tuple[str, ...]:
-    """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
-    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``."""
-    return fitted_parameter_names(_candidate(model, blocked_force, gas)[1])

@@ -1,0 +1,75 @@
+"""Predictions of given (unfitted) models against the records, and their exact Jacobians."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..ball import JIS_RUBBER_BALL, Ball
+from ..model import Model, Solver
+from ..parameters import replace
+from .layout import fitted_parameter_names
+from .problem import Problem, aligned, candidate_model, fit_solver, per_height_rows
+from .records import prepare_data
+from .result import Prediction
+
+
+def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, solver: Solver | None = None, superset: Model | None = None) -> Prediction:
+    """Compare a given (unfitted) model with the records; nothing is fitted.
+
+    The model's floor force goes through the records' measuring chain; each record's onset
+    is aligned with the predicted one (5 % of the peak); contact time, peak and octave-band
+    L_FE are read off both with the same estimator. ``per_height`` rows as in
+    :class:`FitResult` (all held out). ``model``: any ``rbjax.Model`` (default: the paper's
+    elastic model). ``superset``: run in that model's compiled program (see :func:`fit`).
+    """
+    model = Model() if model is None else model
+    problem, _, out = aligned(data, ball, model, solver, superset)
+    d = problem.data
+    rows = per_height_rows(problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool))
+    return Prediction(tuple(rows), d.time_s, d.force_N, out["force"], d.height_m)
+
+
+def model_histories(
+    data,
+    model: str | Model,
+    params: Mapping[str, float],
+    onset_shift_s,
+    *,
+    blocked_force: str = "paper",
+    gas: str = "adiabatic",
+    ball: Ball = JIS_RUBBER_BALL,
+    solver: Solver | None = None,
+):
+    """The predicted records of :func:`fit` and their exact Jacobian, for given parameters.
+
+    ``params``: every name of ``rbjax.fit.parameter_names(model)``; ``onset_shift_s``: the
+    contact start of each record in its time axis (s). Returns ``(force_N, jacobian, names)``:
+    the filtered floor force (n_records, n_samples), d force/d parameter
+    (n_records, n_samples, n_parameters) by forward-mode differentiation through the solver,
+    and the parameter names (the physical ones, then ``shift[k]``).
+    """
+    _, candidate = candidate_model(model, blocked_force, gas)
+    names = fitted_parameter_names(candidate)
+    missing = [n for n in names if n not in params]
+    if missing:
+        raise ValueError(f"params: missing {missing} for model {model!r}")
+    data = prepare_data(data)
+    _, ball, candidate = replace({n: float(params[n]) for n in names}, 1.0, ball, candidate)
+    problem = Problem(data, ball, candidate, fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    lay = problem.layout
+    shifts = np.broadcast_to(np.asarray(onset_shift_s, dtype=float), (data.n_records,))
+    theta = lay.theta(ball, candidate, shifts)
+    weights = problem.weights(np.ones(data.n_records, dtype=bool))
+    weights["record"] = np.ones(data.n_records)
+    out = problem.run(theta, np.zeros(len(lay.names), dtype=bool), weights, lay.constant_values(ball, candidate))
+    n = data.n_records * data.n_samples
+    jac = out["jac_theta"][:n].reshape(data.n_records, data.n_samples, -1)
+    return out["force"], jac, tuple(lay.names)
+
+
+def parameter_names_of(model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic") -> tuple[str, ...]:
+    """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
+    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``."""
+    return fitted_parameter_names(candidate_model(model, blocked_force, gas)[1])

@@ -1,0 +1,196 @@
+"""One fit problem: the records, the parameter layout and the compiled program, and the steps
+every fit and prediction shares (onset alignment, the per-height table, embedding a model in a
+superset of its terms).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..ball import Ball
+from ..filters import butter_lowpass_sos
+from ..model import Model, Solver
+from ..parameters import parameter_names, parameter_table, replace
+from . import uncertainty as unc
+from .layout import FitLayout, model_from_name, parse_model_name
+from .program import Structure, run_program
+from .records import FitData, prepare_data, record_features
+from .result import _plain
+
+#: Optimiser steps per compiled call (a static size of the program).
+STEPS_PER_ROUND = 40
+
+
+def fit_solver(solver):
+    if solver is None:
+        return Solver(adjoint="forward")
+    if not isinstance(solver, Solver):
+        raise ValueError(f"solver={solver!r} must be an rbjax.Solver")
+    return solver if solver.adjoint == "forward" else dataclasses.replace(solver, adjoint="forward")
+
+
+class Problem:
+    """The data, the layout and the compiled program of one fit (runtime masks aside)."""
+
+    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str):
+        self.data = data
+        self.ball = ball
+        self.structure_model = structure_model
+        self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
+        lay = self.layout
+        filtered = data.lowpass_Hz is not None
+        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if data.lowpass_Hz is not None else np.zeros((1, 6))
+        import jax
+
+        treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
+        self.structure = Structure(
+            treedef=treedef, physical_positions=lay.physical_positions, constant_positions=lay.constant_positions,
+            specs=lay.specs, n_records=data.n_records, n_samples=data.n_samples, rate_Hz=float(data.rate_Hz),
+            filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
+            solver=solver,
+        )
+        self.measured = record_features(data.force_N, data.rate_Hz)
+        feats = np.stack(
+            [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1
+        )
+        self.arrays = {
+            "heights": np.asarray(data.height_m, dtype=float),
+            "sos": np.asarray(sos, dtype=float),
+            "measured": np.asarray(data.force_N, dtype=float),
+            "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
+        }
+        self.record_weights = 1.0 / (np.maximum(data.noise_rms_N, 1e-12) if scale == "noise" else self.measured["peak_force_N"])
+        self.decimate = int(decimate)
+        # noise correlation from the pre-contact samples (up to 1 ms before each onset)
+        quiet = [data.force_N[k, : max(int((data.onset_s[k] - 1e-3) * data.rate_Hz), 0)] for k in range(data.n_records)]
+        n_quiet = min(len(q) for q in quiet)
+        self.tau_noise = unc.integrated_autocorrelation(np.stack([q[:n_quiet] for q in quiet])[:, :: self.decimate]) if n_quiet >= 16 else 1.0
+
+    @property
+    def n_hist_per_record(self) -> int:
+        return len(range(0, self.data.n_samples, self.decimate))
+
+    def weights(self, fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
+        extra = extra or {}
+        return {
+            "fit_mask": np.asarray(fit_mask, dtype=bool),
+            "record": self.record_weights,
+            "contact_time": float(extra.get("contact_time", 0.0)),
+            "peak_force": float(extra.get("peak_force", 0.0)),
+            "lfe": float(extra.get("lfe", 0.0)),
+            "prior": np.asarray(prior, dtype=float),
+        }
+
+    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
+        lay = self.layout
+        n = len(lay.names)
+        phi_c = lay.to_phi(theta) if phi_c is None else phi_c
+        w = np.eye(n) if w is None else w
+        return run_program(
+            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=theta, constants=constants,
+            data=self.arrays, weights=weights, atol=atol,
+        )
+
+    def history_rows(self, r, fit_mask):
+        """(rows of the fitted records' history residuals) as (n_fit, n_per_record)."""
+        hist = r[: self.data.n_records * self.n_hist_per_record].reshape(self.data.n_records, -1)
+        return hist[np.asarray(fit_mask, dtype=bool)]
+
+    def history_jacobian(self, jac, fit_mask):
+        n = self.data.n_records * self.n_hist_per_record
+        j = jac[:n].reshape(self.data.n_records, self.n_hist_per_record, -1)
+        return j[np.asarray(fit_mask, dtype=bool)].reshape(-1, jac.shape[1])
+
+    def history_rms_N(self, force, mask):
+        if not np.any(mask):
+            return float("nan")
+        return float(np.sqrt(np.mean((force[mask] - self.data.force_N[mask]) ** 2)))
+
+
+def realign(problem: Problem, theta, feats, which, *, rescale_E: bool, fit_mask):
+    """Move the onset shifts of the records ``which`` so that the predicted onset (5 % of the
+    peak, rising edge) meets the measured one; optionally rescale E so that the predicted
+    contact times match on the fitted records (t_c ∝ 1/√k)."""
+    lay = problem.layout
+    theta = theta.copy()
+    shift = theta[lay.shift_slice]
+    shift[which] += (problem.measured["onset_s"] - feats[:, 0])[which]
+    theta[lay.shift_slice] = shift
+    if rescale_E:
+        tc_pred = (feats[:, 1] - feats[:, 0])[fit_mask]
+        ratio = float(np.median(tc_pred / problem.measured["contact_time_s"][fit_mask]))
+        if math.isfinite(ratio) and ratio > 0:
+            theta[lay.index("youngs_Pa")] *= ratio**2
+    return theta
+
+
+def per_height_rows(problem: Problem, force, feats, fit_mask) -> list[dict]:
+    d = problem.data
+    meas = problem.measured
+    pred = {
+        "contact_time_s": feats[:, 1] - feats[:, 0],
+        "peak_force_N": feats[:, 2],
+        "lfe_octave_dB": feats[:, 3:],
+    }
+    rows = []
+    for h in d.heights_m:
+        k = np.isclose(d.height_m, h)
+        m = {q: np.mean(meas[q][k], axis=0) for q in pred}
+        f = {q: np.mean(pred[q][k], axis=0) for q in pred}
+        rows.append({
+            "height_m": float(h),
+            "n_drops": int(d.n_drops[k].sum()),
+            "in_fit": bool(fit_mask[k].all()),
+            "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
+            "measured": {q: _plain(v) for q, v in m.items()},
+            "fitted": {q: _plain(v) for q, v in f.items()},
+            "error": {
+                "contact_time_pct": float(100 * (f["contact_time_s"] / m["contact_time_s"] - 1)),
+                "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
+                "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
+            },
+        })
+    return rows
+
+
+def candidate_model(model, blocked_force, gas) -> tuple[str, Model]:
+    if isinstance(model, Model):
+        return model.name, model
+    parse_model_name(model)
+    return model, model_from_name(model, gas=gas, blocked_force=blocked_force)
+
+
+def embed(model: Model, structure: Model | None, ball: Ball) -> Model:
+    """``model``'s values inside ``structure`` (a superset of its terms), or ``model`` itself."""
+    if structure is None:
+        return model
+    if structure.gas != model.gas:
+        raise ValueError(f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}")
+    have = set(parameter_names(1.0, ball, structure))
+    mine = [n for n in parameter_names(1.0, ball, model) if n != "height_m"]
+    missing = [n for n in mine if n not in have]
+    if missing or not {type(d) for d in model.damping} <= {type(d) for d in structure.damping}:
+        raise ValueError(f"superset lacks the terms of model {model.name!r} (parameters {missing})")
+
+    values = {r.name: r.value for r in parameter_table(1.0, ball, model) if r.name in have and r.name != "height_m"}
+    return replace(values, 1.0, ball, structure)[2]
+
+
+def aligned(data, ball: Ball, model: Model, solver, superset=None):
+    """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
+    data = prepare_data(data)
+    model = embed(model, superset, ball)
+    problem = Problem(data, ball, model, fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    lay = problem.layout
+    delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
+    theta = lay.theta(ball, model, data.onset_s - delay)
+    constants = lay.constant_values(ball, model)
+    mask = np.zeros(data.n_records, dtype=bool)
+    free = np.zeros(len(lay.names), dtype=bool)
+    out = problem.run(theta, free, problem.weights(mask), constants)
+    theta = realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=False, fit_mask=mask)
+    out = problem.run(theta, free, problem.weights(np.ones(data.n_records, bool)), constants)
+    return problem, theta, out
