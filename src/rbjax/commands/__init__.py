@@ -64,3 +64,13 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 def emit_json(obj, file=None) -> None:
     """Write ``obj`` as strict JSON (no NaN tokens) to stdout."""
     print(to_json(obj), file=file or sys.stdout)
+
+
+def write_json_file(folder, name: str, obj):
+    """Write ``obj`` as strict JSON to ``folder/name`` (the folder is made); return the path."""
+    from pathlib import Path
+
+    path = Path(folder) / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(to_json(obj))
+    return path

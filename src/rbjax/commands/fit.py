@@ -6,7 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
-from . import add_command, emit_json, progress
+from . import add_command, emit_json, progress, write_json_file
 
 DESCRIPTION = """\
 Fit Young's modulus E (with ν held at 0.5: only E/√(1−ν²) is identifiable, paper Eqs. 1–3)
@@ -149,14 +149,10 @@ def run(args) -> int:
     if selection is not None:
         out["selection"] = selection.to_dict()
     if args.out is not None:
-        folder = Path(args.out)
-        folder.mkdir(parents=True, exist_ok=True)
-        from . import to_json
-
-        (folder / "fit.json").write_text(to_json(out))
-        for path in result.plot(folder):
+        written = write_json_file(args.out, "fit.json", out)
+        for path in result.plot(Path(args.out)):
             progress(f"wrote {path}")
-        progress(f"wrote {folder / 'fit.json'}")
+        progress(f"wrote {written}")
     if args.json:
         emit_json(out)
     else:

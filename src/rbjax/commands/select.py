@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from . import add_command, emit_json, progress
+from . import add_command, emit_json, progress, write_json_file
 from .fit import add_data_options, load_fit_data
 
 DESCRIPTION = """\
@@ -87,12 +85,7 @@ def run(args) -> int:
     if comparison is not None:
         out["held_out"] = comparison.to_dict()
     if args.out is not None:
-        from . import to_json
-
-        folder = Path(args.out)
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / "selection.json").write_text(to_json(out))
-        progress(f"wrote {folder / 'selection.json'}")
+        progress(f"wrote {write_json_file(args.out, 'selection.json', out)}")
     if args.json:
         emit_json(out)
     else:
