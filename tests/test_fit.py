@@ -273,9 +273,34 @@ def run_cli(argv):
     return code, out.getvalue(), err.getvalue()
 
 
-def test_cli_fit_json_and_outputs(tmp_path):
+@pytest.fixture
+def program_cache(tmp_path, monkeypatch):
+    """The command line's caches in a temporary folder (restored afterwards)."""
+    import jax
+
+    from rbjax import program_store
+
+    before = jax.config.jax_compilation_cache_dir
+    monkeypatch.setenv("RBJAX_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(program_store, "_LOADED", {})
+    yield tmp_path / "cache"
+    jax.config.update("jax_compilation_cache_dir", before)
+
+
+def test_cli_fit_json_and_outputs(tmp_path, program_cache, monkeypatch):
     code, out, err = run_cli(["fit", str(examples_dir()), "--model", "paper", "--json", "--out", str(tmp_path)])
     assert code == 0, err
+    # the fit's program was exported beside the compilation cache; a new process reads it back
+    # instead of tracing the model again, and gets the same fit
+    assert len(list((program_cache / "rbjax-programs").glob("*.jaxexport"))) == 1
+    from rbjax import program_store
+    from rbjax.fit import program
+
+    monkeypatch.setattr(program_store, "_LOADED", {})
+    monkeypatch.setattr(program, "compiled", lambda *a: pytest.fail("traced again despite the stored program"))
+    code2, out2, err2 = run_cli(["fit", str(examples_dir()), "--model", "paper", "--json"])
+    assert code2 == 0, err2
+    assert json.loads(out2)["parameters"] == json.loads(out)["parameters"]
     d = json.loads(out)
     for key in ("model_name", "ball", "model", "parameters", "per_height", "converged", "message"):
         assert key in d
