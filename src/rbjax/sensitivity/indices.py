@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Mapping
+from typing import ClassVar
 
 import numpy as np
 
@@ -51,7 +52,56 @@ def _scale(unit: np.ndarray, ranges: dict) -> dict[str, np.ndarray]:
 
 
 @dataclasses.dataclass(frozen=True)
-class SobolResult:
+class _IndexResult:
+    """What ``SobolResult`` and ``MorrisResult`` share: the first fields (parameter and output
+    names, the uniform ranges), per-output, per-parameter indices of which one (``_RANKING``:
+    S_Ti, μ*) ranks the parameters, and their JSON summary and text table."""
+
+    _RANKING: ClassVar[str]
+    parameters: tuple[str, ...]
+    outputs: tuple[str, ...]
+    ranges: dict
+
+    def driver(self, output: str) -> str:
+        """The parameter with the largest ranking index of ``output``: the largest total-order
+        index (Sobol), what drives the output's spread; the largest μ* (Morris), the most
+        influential one."""
+        return self.parameters[int(np.nanargmax(getattr(self, self._RANKING)[output]))]
+
+    def _driver_or(self, output: str, default):
+        """``driver(output)``, or ``default`` when no index of the output is finite."""
+        return self.driver(output) if np.any(np.isfinite(getattr(self, self._RANKING)[output])) else default
+
+    def _summary(self, head: dict, design: dict, scalars: Callable[[str], dict], indices: tuple[str, ...]) -> dict:
+        """``to_dict``: ``head``, the parameters and ranges, ``design``, then per output its driver,
+        ``scalars(output)`` and each index attribute in ``indices`` as parameter → value."""
+        return {
+            **head,
+            "parameters": list(self.parameters),
+            "ranges": {k: list(v) for k, v in self.ranges.items()},
+            **design,
+            "outputs": {
+                o: {
+                    "driver": self._driver_or(o, None),
+                    **scalars(o),
+                    **{k: dict(zip(self.parameters, getattr(self, k)[o].tolist())) for k in indices},
+                }
+                for o in self.outputs
+            },
+        }
+
+    def _table(self, title: str, note: Callable[[str], str], row: Callable[[str, int], str]) -> str:
+        """``table``: ``title``, then per output a line naming its driver (and ``note(output)``)
+        and a line ``row(output, j)`` per parameter j."""
+        lines = [title]
+        for o in self.outputs:
+            lines.append(f"{o}  (driver: {self._driver_or(o, '—')}{note(o)})")
+            lines.extend(f"  {p:<20} {row(o, j)}" for j, p in enumerate(self.parameters))
+        return "\n".join(lines)
+
+
+@dataclasses.dataclass(frozen=True)
+class SobolResult(_IndexResult):
     """Sobol indices of each output (see ``sobol_indices``).
 
     Attributes:
@@ -68,9 +118,6 @@ class SobolResult:
             2 + i for A_B^(i).
     """
 
-    parameters: tuple[str, ...]
-    outputs: tuple[str, ...]
-    ranges: dict
     n_base: int
     n_evaluations: int
     first_order: dict
@@ -83,43 +130,24 @@ class SobolResult:
     n_valid: dict
     samples: dict = dataclasses.field(repr=False)
 
-    def driver(self, output: str) -> str:
-        """The parameter with the largest total-order index: what drives the output's spread."""
-        return self.parameters[int(np.nanargmax(self.total_order[output]))]
+    _RANKING = "total_order"
 
     def to_dict(self) -> dict:
-        return {
-            "method": "sobol",
-            "estimators": "first order: Saltelli et al. 2010; total order: Jansen 1999; percentile bootstrap",
-            "parameters": list(self.parameters),
-            "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "n_base": self.n_base,
-            "n_evaluations": self.n_evaluations,
-            "confidence": self.confidence,
-            "outputs": {
-                o: {
-                    "driver": self.driver(o) if np.any(np.isfinite(self.total_order[o])) else None,
-                    "mean": self.mean[o],
-                    "variance": self.variance[o],
-                    "n_valid": self.n_valid[o],
-                    "first_order": dict(zip(self.parameters, self.first_order[o].tolist())),
-                    "total_order": dict(zip(self.parameters, self.total_order[o].tolist())),
-                    "first_order_ci": dict(zip(self.parameters, self.first_order_ci[o].tolist())),
-                    "total_order_ci": dict(zip(self.parameters, self.total_order_ci[o].tolist())),
-                }
-                for o in self.outputs
-            },
-        }
+        return self._summary(
+            {"method": "sobol", "estimators": "first order: Saltelli et al. 2010; total order: Jansen 1999; percentile bootstrap"},
+            {"n_base": self.n_base, "n_evaluations": self.n_evaluations, "confidence": self.confidence},
+            lambda o: {"mean": self.mean[o], "variance": self.variance[o], "n_valid": self.n_valid[o]},
+            ("first_order", "total_order", "first_order_ci", "total_order_ci"),
+        )
 
     def table(self) -> str:
-        lines = [f"Sobol indices, {self.n_evaluations} evaluations (n = {self.n_base}), {self.confidence:.0%} bootstrap CI"]
-        for o in self.outputs:
-            lines.append(f"{o}  (driver: {self.driver(o) if np.any(np.isfinite(self.total_order[o])) else '—'}, valid rows {self.n_valid[o]})")
-            for j, p in enumerate(self.parameters):
-                s, (slo, shi) = self.first_order[o][j], self.first_order_ci[o][j]
-                t, (tlo, thi) = self.total_order[o][j], self.total_order_ci[o][j]
-                lines.append(f"  {p:<20} S {s:7.3f} [{slo:6.3f}, {shi:6.3f}]   S_T {t:7.3f} [{tlo:6.3f}, {thi:6.3f}]")
-        return "\n".join(lines)
+        def row(o: str, j: int) -> str:
+            s, (slo, shi) = self.first_order[o][j], self.first_order_ci[o][j]
+            t, (tlo, thi) = self.total_order[o][j], self.total_order_ci[o][j]
+            return f"S {s:7.3f} [{slo:6.3f}, {shi:6.3f}]   S_T {t:7.3f} [{tlo:6.3f}, {thi:6.3f}]"
+
+        title = f"Sobol indices, {self.n_evaluations} evaluations (n = {self.n_base}), {self.confidence:.0%} bootstrap CI"
+        return self._table(title, lambda o: f", valid rows {self.n_valid[o]}", row)
 
 
 def _sobol_estimates(ya, yb, yab):
@@ -217,7 +245,7 @@ def sobol_indices(
 
 
 @dataclasses.dataclass(frozen=True)
-class MorrisResult:
+class MorrisResult(_IndexResult):
     """Morris elementary-effect screening (see ``morris_screening``).
 
     Attributes:
@@ -227,9 +255,6 @@ class MorrisResult:
         n_trajectories, n_levels, n_evaluations = n_trajectories (d + 1).
     """
 
-    parameters: tuple[str, ...]
-    outputs: tuple[str, ...]
-    ranges: dict
     n_trajectories: int
     n_levels: int
     n_evaluations: int
@@ -238,36 +263,22 @@ class MorrisResult:
     sigma: dict
     samples: dict = dataclasses.field(repr=False)
 
-    def driver(self, output: str) -> str:
-        """The parameter with the largest μ*: the most influential one."""
-        return self.parameters[int(np.nanargmax(self.mu_star[output]))]
+    _RANKING = "mu_star"
 
     def to_dict(self) -> dict:
-        return {
-            "method": "morris",
-            "parameters": list(self.parameters),
-            "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "n_trajectories": self.n_trajectories,
-            "n_levels": self.n_levels,
-            "n_evaluations": self.n_evaluations,
-            "outputs": {
-                o: {
-                    "driver": self.driver(o) if np.any(np.isfinite(self.mu_star[o])) else None,
-                    "mu": dict(zip(self.parameters, self.mu[o].tolist())),
-                    "mu_star": dict(zip(self.parameters, self.mu_star[o].tolist())),
-                    "sigma": dict(zip(self.parameters, self.sigma[o].tolist())),
-                }
-                for o in self.outputs
-            },
-        }
+        return self._summary(
+            {"method": "morris"},
+            {"n_trajectories": self.n_trajectories, "n_levels": self.n_levels, "n_evaluations": self.n_evaluations},
+            lambda o: {},
+            ("mu", "mu_star", "sigma"),
+        )
 
     def table(self) -> str:
-        lines = [f"Morris screening, {self.n_evaluations} evaluations ({self.n_trajectories} trajectories, {self.n_levels} levels)"]
-        for o in self.outputs:
-            lines.append(f"{o}  (driver: {self.driver(o) if np.any(np.isfinite(self.mu_star[o])) else '—'})")
-            for j, p in enumerate(self.parameters):
-                lines.append(f"  {p:<20} mu* {self.mu_star[o][j]:11.4g}  mu {self.mu[o][j]:11.4g}  sigma {self.sigma[o][j]:11.4g}")
-        return "\n".join(lines)
+        def row(o: str, j: int) -> str:
+            return f"mu* {self.mu_star[o][j]:11.4g}  mu {self.mu[o][j]:11.4g}  sigma {self.sigma[o][j]:11.4g}"
+
+        title = f"Morris screening, {self.n_evaluations} evaluations ({self.n_trajectories} trajectories, {self.n_levels} levels)"
+        return self._table(title, lambda o: "", row)
 
 
 def morris_screening(func: Callable, ranges: Mapping, n_trajectories: int, *, n_levels: int = 4, seed: int = 0) -> MorrisResult:
