@@ -49,6 +49,18 @@ def _colours(n: int):
     return [cmap(x) for x in np.linspace(0.0, 0.9, max(n, 1))]
 
 
+def _finish(fig, ax, xlabel: str, ylabel: str, title=None, *, legend=None, grid=None):
+    """Label the axes, draw a light grid (``grid``: more ``ax.grid`` arguments) and a legend in
+    small type (``legend``: more ``ax.legend`` arguments), set the title if any; return ``fig``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3, **(grid or {}))
+    ax.legend(**{"fontsize": "small", **(legend or {})})
+    if title:
+        ax.set_title(title)
+    return fig
+
+
 def _contact_window(t_ms, values, contact_time_s, margin=1.1):
     """Only the samples up to ``margin`` × the longest contact (the rest of a 1 s record is zeros)."""
     if contact_time_s is None or not np.any(np.isfinite(contact_time_s)):
@@ -68,17 +80,9 @@ def plot_force_histories(time_s, force_N, heights_m, ax=None, *, contact_time_s=
         ax.plot(t_ms, f, color=c, lw=1.2, label=f"{h * 100:.0f} cm")
     if contact_time_s is not None and np.any(np.isfinite(contact_time_s)):
         ax.set_xlim(0.0, 1.05e3 * float(np.nanmax(contact_time_s)))
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("blocked force (N)")
-    ax.grid(alpha=0.3)
     ax.set_ylim(bottom=0.0)
-    if len(heights) > 6:
-        ax.legend(title="drop height", fontsize="small", loc="center left", bbox_to_anchor=(1.01, 0.5))
-    else:
-        ax.legend(title="drop height", fontsize="small", loc="upper right")
-    if title:
-        ax.set_title(title)
-    return fig
+    where = {"loc": "center left", "bbox_to_anchor": (1.01, 0.5)} if len(heights) > 6 else {"loc": "upper right"}
+    return _finish(fig, ax, "time (ms)", "blocked force (N)", title, legend={"title": "drop height", **where})
 
 
 def plot_histories(result, ax=None, rate_Hz=None):
@@ -104,13 +108,7 @@ def plot_force_components(time_s, forces: Mapping[str, np.ndarray], ax=None, *, 
         ax.plot(t, f, label=name, **styles.get(name, {}))
     if contact_time_s is not None:
         ax.set_xlim(0.0, 1.05e3 * float(contact_time_s))
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("force (N)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, "time (ms)", "force (N)", title)
 
 
 def _band_values(lfe, bands):
@@ -177,13 +175,7 @@ def plot_vs_height(heights_m, series: Mapping[str, np.ndarray], ax=None, *, ylab
     markers = iter("sD^v<>")
     for name, (hs, vs) in (references or {}).items():
         ax.plot(np.asarray(hs, dtype=float) * 100, np.asarray(vs, dtype=float) * scale, ls="none", marker=next(markers), ms=7, mfc="none", mew=1.5, label=name)
-    ax.set_xlabel("drop height (cm)")
-    ax.set_ylabel(ylabel)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, "drop height (cm)", ylabel, title)
 
 
 def plot_relative_difference(entries: Sequence[Mapping], ax=None, *, title=None):
@@ -208,14 +200,8 @@ def plot_relative_difference(entries: Sequence[Mapping], ax=None, *, title=None)
     handles += [Line2D([], [], color="k", marker=markers[v], ls="none", mfc="k" if v == variants[0] else "none", label=v) for v in variants]
     ax.axhline(0.0, color="k", lw=0.8)
     ax.axhspan(-10, 10, color="0.93", zorder=0)
-    ax.set_xlabel("drop height (cm)")
-    ax.set_ylabel("rbjax − paper (% of paper value)")
     ax.set_xlim(0, 170)
-    ax.grid(alpha=0.3)
-    ax.legend(handles=handles, fontsize="small", loc="best")
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, "drop height (cm)", "rbjax − paper (% of paper value)", title, legend={"handles": handles, "loc": "best"})
 
 
 def plot_band_differences(bands, differences: Mapping[str, np.ndarray], ax=None, *, ylabel, title=None):
@@ -225,13 +211,8 @@ def plot_band_differences(bands, differences: Mapping[str, np.ndarray], ax=None,
     for (name, values), c in zip(differences.items(), _colours(len(differences))):
         ax.plot(x, np.asarray(values, dtype=float), marker="o", color=c, label=name)
     ax.set_xticks(x, list(bands))
-    ax.set_xlabel("octave band centre frequency (Hz)")
-    ax.set_ylabel(ylabel)
-    ax.grid(alpha=0.3)
-    ax.legend(title="drop height", fontsize="small", loc="center left", bbox_to_anchor=(1.01, 0.5))
-    if title:
-        ax.set_title(title)
-    return fig
+    legend = {"title": "drop height", "loc": "center left", "bbox_to_anchor": (1.01, 0.5)}
+    return _finish(fig, ax, "octave band centre frequency (Hz)", ylabel, title, legend=legend)
 
 
 def plot_lfe_increase(height_ratio, increase_dB, bands, ax=None, *, slopes_dB=None, title=None):
@@ -248,13 +229,8 @@ def plot_lfe_increase(height_ratio, increase_dB, bands, ax=None, *, slopes_dB=No
         if slopes_dB is not None:
             ax.plot(ratio, slopes_dB[j] * np.log2(ratio), ls="--", lw=0.8, color=line.get_color())
     ax.set_xscale("log", base=2)
-    ax.set_xlabel("drop height / 1 m")
-    ax.set_ylabel("L_FE increase re 1 m (dB)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize="small", ncol=2, title="octave band (dashed: linear fit)")
-    if title:
-        ax.set_title(title)
-    return fig
+    legend = {"ncol": 2, "title": "octave band (dashed: linear fit)"}
+    return _finish(fig, ax, "drop height / 1 m", "L_FE increase re 1 m (dB)", title, legend=legend, grid={"which": "both"})
 
 
 def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None, *, paper=None, title=None):
@@ -269,13 +245,7 @@ def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None,
     if paper is not None:
         ax.plot(x, np.asarray(paper, dtype=float), ls="none", marker="s", ms=9, mfc="none", color="k", label="paper (≈, §4.2)")
     ax.set_xticks(x, list(bands))
-    ax.set_xlabel("octave band centre frequency (Hz)")
-    ax.set_ylabel("L_FE increase per doubling of height (dB)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, "octave band centre frequency (Hz)", "L_FE increase per doubling of height (dB)", title)
 
 
 def plot_narrowband(freq_Hz, spectra_dB: Mapping[str, np.ndarray], ax=None, *, resonances_Hz=None, references_Hz=None, fmax_Hz=500.0, title=None):
@@ -298,14 +268,8 @@ def plot_narrowband(freq_Hz, spectra_dB: Mapping[str, np.ndarray], ax=None, *, r
             ax.annotate(f"{fr:.0f} Hz", (fr, y), textcoords="offset points", xytext=(6, -14), color=line.get_color(), fontsize="small")
     for i, fr in enumerate((references_Hz or {}).values()):  # one legend entry for all of them
         ax.axvline(fr, color="0.4", ls="--", lw=0.9, label="; ".join(references_Hz) if i == 0 else None)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("|F(f)| (dB re 1 N·s)")
     ax.set_xlim(0, fmax_Hz)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, "frequency (Hz)", "|F(f)| (dB re 1 N·s)", title)
 
 
 def plot_fit(result, out_dir) -> list[Path]:
