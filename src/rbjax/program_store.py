@@ -75,11 +75,16 @@ def _errors_as_nan():
     if before is None:  # a future equinox: leave it alone, export will say if it cannot
         yield
         return
+    # Jitted library functions (lineax's linear_solve, equinox's check) cache their traces:
+    # drop them before, so that no trace with a host callback is reused, and after, so that no
+    # trace with NaN semantics leaks into later plain calls (an export happens once per program).
+    jax.clear_caches()
     _errors.EQX_ON_ERROR = "nan"
     try:
         yield
     finally:
         _errors.EQX_ON_ERROR = before
+        jax.clear_caches()
 
 
 def _export(fn, args):
