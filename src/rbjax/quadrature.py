@@ -25,7 +25,7 @@ is integrated in δ instead of t. With u = δ̇² and δ̈ = ½ du/dδ (the ener
   These integrands are analytic and nearly constant (exactly constant for a linear spring of
   constant mass); Gauss–Legendre rules in φ converge exponentially.
 
-The scalar outputs (``impact_quadrature``) take n + 7 force evaluations and no loop over the
+The scalar outputs (``impact_quadrature``) take n + 4 force evaluations and no loop over the
 force: F is sampled at ``BRACKET_NODES`` Chebyshev–Lobatto points on [0, d0], d0 an upper bound
 of δ_max in closed form, and the root of the interpolant's antiderivative gives d1 ≈ δ_max
 (a few digits); F is sampled again at n points on [0, d1]. Every quantity above is a linear
@@ -85,8 +85,10 @@ BRACKET_NEWTON_STEPS = 6
 UPPER_BOUND_NEWTON_STEPS = 6
 #: Newton steps on the refined root's polynomial in ε (then one differentiable step).
 REFINE_NEWTON_STEPS = 2
-#: Terms of the Taylor series in ε = δ_max/d1 − 1.
-TAYLOR_TERMS = 6
+#: Terms of the Taylor series in ε = δ_max/d1 − 1: of the antiderivative (the root, the rebound
+#: velocity, the peak force) and of the sub-interval averages (the phase times).
+ROOT_TERMS = 6
+SUB_TERMS = 3
 #: Highest Chebyshev coefficients of the interpolant kept for its error estimate.
 TAIL_COEFFICIENTS = 4
 #: Largest |ε| accepted (the bracketing root must be this close; else ``solver_failed``).
@@ -163,46 +165,64 @@ def _bracket_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return _lobatto_01(n), to_coef, integrate @ to_coef
 
 
-@functools.cache
-def _refine_rules(n: int, terms: int = TAYLOR_TERMS) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lobatto points t on [0, 1], the φ rule (sin φ_i, weights) and one matrix whose rows are
-    linear functionals of the values p(t_j) of a degree-(n − 1) polynomial p:
+def time_nodes(n_nodes: int) -> int:
+    """Gauss–Legendre points of the φ rule for ``n_nodes`` interpolation points (as many: the
+    integrands' left singularity, near δ = −δ_max, moves in with the gas force's asymmetry)."""
+    return n_nodes
 
-    * row 0: ∫₀¹ p dt; rows 1..terms: p^(q)(1)/q! for q = 0..terms − 1 (the Taylor series of
-      ∫₀^λ p dt about λ = 1 has coefficients p^(q)(1)/(q + 1)!);
-    * rows for (q, i), q = 0..terms − 1, i = 0..n − 1: (1/q!)(1/μ_i) ∫_{1−μ_i}^1 t^q p^(q)(t) dt,
-      μ_i = 1 − sin φ_i (the Taylor coefficients in λ − 1 of the average of p(λt) over
-      [1 − μ_i, 1]);
+
+@functools.cache
+def _legendre_tail(m: int) -> np.ndarray:
+    """Rows giving the two highest Legendre coefficients a_{m−2}, a_{m−1} and a_0 of the degree-(m − 1)
+    interpolant of values at the m Gauss–Legendre points (the discrete projection)."""
+    x, w = np.polynomial.legendre.leggauss(m)
+    rows = [(2 * k + 1) / 2.0 * w * np.polynomial.legendre.legval(x, np.eye(m)[k]) for k in (0, m - 2, m - 1)]
+    return np.stack(rows)
+
+
+@functools.cache
+def _refine_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Lobatto points t_1..t_{n−1} on (0, 1] (t_0 = 0 is left out: F(0) = 0), the φ rule (sin φ_i,
+    weights; ``time_nodes(n)`` points) and one matrix whose rows are linear functionals of the
+    values p(t_1..t_{n−1}) of a degree-(n − 1) polynomial p with p(0) = 0:
+
+    * row 0: ∫₀¹ p dt; rows 1..ROOT_TERMS: p^(q)(1)/q! for q = 0..ROOT_TERMS − 1 (the Taylor
+      series of ∫₀^λ p dt about λ = 1 has coefficients p^(q)(1)/(q + 1)!, and of p(λ) these);
+    * rows (q, i), q = 0..SUB_TERMS − 1, i over the φ points: (1/q!)(1/μ_i) ∫_{1−μ_i}^1 t^q p^(q)(t) dt,
+      μ_i = 1 − sin φ_i (the Taylor coefficients in λ − 1 of the average of p(λt) over [1 − μ_i, 1]);
     * the last TAIL_COEFFICIENTS rows: the highest Chebyshev coefficients (the interpolant's tail).
     """
     to_coef = _values_to_coefficients(n)
-    x, w = np.polynomial.legendre.leggauss(n)
+    m = time_nodes(n)
+    x, w = np.polynomial.legendre.leggauss(m)
     phi, w_phi = np.pi / 4.0 * (x + 1.0), np.pi / 4.0 * w
     mu = 1.0 - np.sin(phi)
     lower = 2.0 * (1.0 - mu) - 1.0  # 1 − μ_i in x = 2t − 1
-    end = np.zeros((terms + 1, n))
-    sub = np.zeros((terms, n, n))
+    end = np.zeros((ROOT_TERMS + 1, n))
+    sub = np.zeros((SUB_TERMS, m, n))
     t_power = [np.array([1.0])]
-    for _ in range(terms):
+    for _ in range(SUB_TERMS):
         t_power.append(chebyshev.chebmul(t_power[-1], np.array([0.5, 0.5])))  # t = (x + 1)/2
     for j in range(n):
         coef = to_coef[:, j]
         end[0, j] = chebyshev.chebval(1.0, chebyshev.chebint(coef, lbnd=-1.0, scl=0.5))
-        for q in range(terms):
+        for q in range(ROOT_TERMS):
             deriv = chebyshev.chebder(coef, q, scl=2.0) if q else coef
             end[q + 1, j] = chebyshev.chebval(1.0, deriv) / math.factorial(q)
-            anti = chebyshev.chebint(chebyshev.chebmul(t_power[q], deriv), lbnd=-1.0, scl=0.5)
-            sub[q, :, j] = (chebyshev.chebval(1.0, anti) - chebyshev.chebval(lower, anti)) / mu / math.factorial(q)
-    rows = np.concatenate([end, sub.reshape(terms * n, n), to_coef[-TAIL_COEFFICIENTS:]], axis=0)
-    return _lobatto_01(n), np.sin(phi), w_phi, rows
+            if q < SUB_TERMS:
+                anti = chebyshev.chebint(chebyshev.chebmul(t_power[q], deriv), lbnd=-1.0, scl=0.5)
+                sub[q, :, j] = (chebyshev.chebval(1.0, anti) - chebyshev.chebval(lower, anti)) / mu / math.factorial(q)
+    rows = np.concatenate([end, sub.reshape(SUB_TERMS * m, n), to_coef[-TAIL_COEFFICIENTS:]], axis=0)
+    return _lobatto_01(n)[1:], np.sin(phi), w_phi, rows[:, 1:]
 
 
 @functools.cache
 def _row_norms(n: int) -> np.ndarray:
-    """Largest absolute row sum of ``_refine_rules(n)`` per Taylor order (its round-off scale)."""
-    rows = _refine_rules(n)[3]
-    sub = rows[TAYLOR_TERMS + 1 : TAYLOR_TERMS + 1 + TAYLOR_TERMS * n].reshape(TAYLOR_TERMS, n, n)
-    return np.array([max(np.abs(sub[q]).sum(axis=1).max(), np.abs(rows[q + 1]).sum()) for q in range(TAYLOR_TERMS)])
+    """Largest absolute row sum of ``_refine_rules(n)`` per Taylor order (their round-off scale)."""
+    rows, m = _refine_rules(n)[3], time_nodes(n)
+    sub = rows[ROOT_TERMS + 1 : ROOT_TERMS + 1 + SUB_TERMS * m].reshape(SUB_TERMS, m, -1)
+    end = np.abs(rows[1 : ROOT_TERMS + 1]).sum(axis=1)
+    return np.array([max(end[q], np.abs(sub[q]).sum(axis=1).max() if q < SUB_TERMS else 0.0) for q in range(ROOT_TERMS)])
 
 
 def _clenshaw(coef, x):
@@ -254,8 +274,8 @@ def _bracket(v0, ball, model, target, d_limit):
     """d1 ≈ δ_max from an interpolant of g on BRACKET_NODES points of [0, d0] (no derivatives)."""
     t, to_coef, to_anti = (jnp.asarray(a) for a in _bracket_rules(BRACKET_NODES))
     d0 = jnp.minimum(_upper_bound(v0, ball, model, target), d_limit)
-    s = d0 * t
-    g = _force(s, ball, model) / (2.0 * ball.radius_m - s)
+    s = d0 * t[1:]  # g(0) = 0: not evaluated
+    g = jnp.concatenate([jnp.zeros(1), _force(s, ball, model) / (2.0 * ball.radius_m - s)])
     coef, anti = g @ to_coef.T, g @ to_anti.T  # row-vector form: one GEMM under vmap
 
     def step(_, d):
@@ -268,7 +288,7 @@ def _bracket(v0, ball, model, target, d_limit):
 
 def _tail_estimate(tail):
     """The size of the first omitted Chebyshev coefficient, extrapolated geometrically from the
-    last four kept ones (rows: c_{n−4} … c_{n−1}): the error of the interpolant's integrals."""
+    last four kept ones (``tail``: c_{n−4} … c_{n−1}): the error of the interpolant's integrals."""
     last = jnp.abs(tail[-1]) + jnp.abs(tail[-2])
     before = jnp.abs(tail[-3]) + jnp.abs(tail[-4])
     return last * jnp.minimum(1.0, last / jnp.maximum(before, 1e-300))
@@ -292,13 +312,14 @@ class _Scalars(eqx.Module):
     t_compression: jax.Array
     t_restitution: jax.Array
     v_out: jax.Array
+    peak_force: jax.Array
     error_estimate: jax.Array
     status: jax.Array
 
 
 def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
     t, sin_phi, w_phi, rows = (jnp.asarray(a) for a in _refine_rules(n_nodes))
-    terms = TAYLOR_TERMS
+    m_phi = time_nodes(n_nodes)
     height = jnp.asarray(height_m, dtype=jnp.float64)
     v0 = impact_velocity_m_per_s(height)
     r, m = ball.radius_m, ball.mass_kg
@@ -310,67 +331,79 @@ def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
     consts = jax.lax.stop_gradient((v0, ball, model, target, d_limit))
     d1 = jax.lax.stop_gradient(_bracket(*consts))
 
-    # n samples on [0, d1] (fixed points; the samples carry the derivatives)
+    # n − 1 samples on (0, d1] (fixed points; the samples carry the derivatives)
     s = d1 * t
     f = _force(s, ball, model)
     gap = two_r - s
-    # every functional at once, (2, n) @ (n, rows): a row vector on the left keeps the batch a free
-    # dimension under vmap (one GEMM, ~5× faster than rows @ samples)
-    z = jnp.stack([f / gap, f * gap]) @ rows.T
-    end = z[:, : terms + 1].T  # (terms + 1, 2)
-    sub = z[:, terms + 1 : terms + 1 + terms * n_nodes].reshape(2, terms, n_nodes).transpose(1, 2, 0)  # (terms, n, 2)
-    tail = z[:, -TAIL_COEFFICIENTS:].T
-    scaled = end.at[1:].divide(jnp.arange(1, terms + 1, dtype=end.dtype)[:, None])  # ∫₀^λ p: coefficient of ε^q
+    # every functional at once, (n,) @ (n, rows): a row vector on the left keeps the batch a free
+    # dimension under vmap (one GEMM, ~5× faster than rows @ samples); two products, not one of
+    # the stacked samples: XLA would fuse F into the stack and evaluate it (its pow) twice
+    z_g, z_r = (f / gap) @ rows.T, (f * gap) @ rows.T
+    k_root, k_sub = ROOT_TERMS, SUB_TERMS
+    sub_g = z_g[k_root + 1 : k_root + 1 + k_sub * m_phi].reshape(k_sub, m_phi)
+    sub_r = z_r[k_root + 1 : k_root + 1 + k_sub * m_phi].reshape(k_sub, m_phi)
+    orders = jnp.arange(1, k_root + 1, dtype=z_g.dtype)
 
-    def antiderivative(e, col, e_coef):  # d1·∫₀^{1+ε} p(t) dt
-        return d1 * (e_coef[0, col] + e * _horner(e_coef[1:, col], e))
+    def antiderivative(e, z):  # d1·∫₀^{1+ε} p(t) dt
+        return d1 * (z[0] + e * _horner(z[1 : k_root + 1] / orders, e))
 
-    def slope(e, e_coef):  # d/dε of the above for g: d1·Σ p^(q)(1)/q! ε^q
-        return d1 * _horner(e_coef[1:, 0], e)
+    def slope(e, z):  # d/dε of the above: d1·p(1 + ε)
+        return d1 * _horner(z[1 : k_root + 1], e)
 
-    end_c, scaled_c = jax.lax.stop_gradient((end, scaled))
+    z_c = jax.lax.stop_gradient(z_g)
 
     def step(_, e):
-        return e - (antiderivative(e, 0, scaled_c) - consts[3]) / slope(e, end_c)
+        return e - (antiderivative(e, z_c) - consts[3]) / slope(e, z_c)
 
     e = jax.lax.stop_gradient(jax.lax.fori_loop(0, REFINE_NEWTON_STEPS, step, jnp.zeros_like(d1)))
-    e = e - (antiderivative(e, 0, scaled) - target) / slope(e, end_c)
+    e = e - (antiderivative(e, z_g) - target) / slope(e, z_c)
     d_max = d1 * (1.0 + e)
 
-    averages = _horner(sub, e)  # (n, 2): ḡ(φ_i) and r̄(φ_i)
-    rate = jnp.sqrt(d_max * (1.0 + sin_phi) / (4.0 * r / m * averages.T))  # (2, n)
-    t_compression = jnp.sum(w_phi * rate[0])
-    t_restitution = jnp.sum(w_phi * (two_r - d_max * sin_phi) * rate[1])
-    v_out = jnp.sqrt(antiderivative(e, 1, scaled) / (m * r))
+    scale = jnp.sqrt(d_max * (1.0 + sin_phi) / (4.0 * r / m))
+    rate_c = scale / jnp.sqrt(_horner(sub_g, e))  # dt/dφ with ḡ(φ_i)
+    rate_r = (two_r - d_max * sin_phi) * scale / jnp.sqrt(_horner(sub_r, e))  # and r̄(φ_i)
+    t_compression, t_restitution = jnp.sum(w_phi * rate_c), jnp.sum(w_phi * rate_r)
+    v_out = jnp.sqrt(antiderivative(e, z_r) / (m * r))
+    peak = _horner(z_g[1 : k_root + 1], e) * (two_r - d_max)  # F(δ_max) = g(δ_max)(2R − δ_max)
 
-    residual = jnp.abs(antiderivative(e, 0, scaled_c) - consts[3]) / consts[3]
+    residual = jnp.abs(antiderivative(e, z_c) - consts[3]) / consts[3]
     d_max_c = jax.lax.stop_gradient(d_max)
-    tail_estimate = jnp.max(_tail_estimate(jax.lax.stop_gradient(tail)) / jnp.abs(end_c[0]))
-    # the Taylor remainder in ε, and round-off in the rows of the higher Taylor terms (large for large n)
+    # (elementwise maxima, not reductions over small stacked axes: those run ~10× slower on CPU)
+    z_r_c = jax.lax.stop_gradient(z_r)
+    tail_estimate = jnp.maximum(_tail_estimate(z_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_c[0]), _tail_estimate(z_r_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_r_c[0]))
+    # the Taylor remainders in ε, and round-off in the rows of the higher Taylor terms (large for large n)
     e_c = jnp.abs(jax.lax.stop_gradient(e))
-    shift_estimate = (e_c * d1 / jnp.maximum(consts[1].radius_m * 2.0 - d1, 1e-300)) ** terms
+    shift_estimate = (e_c * d1 / jnp.maximum(consts[1].radius_m * 2.0 - d1, 1e-300)) ** k_sub
     shift_estimate = shift_estimate + np.finfo(np.float64).eps * _horner(jnp.asarray(_row_norms(n_nodes)), e_c)
-    error = jnp.maximum(jnp.maximum(tail_estimate, shift_estimate), _phi_rule_error(d_max_c, jax.lax.stop_gradient(two_r), n_nodes))
+    # the φ rule: a priori from the nearest singularities, a posteriori from the integrands'
+    # Legendre tail (the rule's error falls as the square of the interpolant's)
+    legendre_rows = jnp.asarray(_legendre_tail(m_phi)).T
+    phi_estimate = _phi_rule_error(d_max_c, jax.lax.stop_gradient(two_r), m_phi)
+    for rate in (rate_c, rate_r):
+        a = jax.lax.stop_gradient(rate) @ legendre_rows
+        phi_estimate = jnp.maximum(phi_estimate, ((jnp.abs(a[1]) + jnp.abs(a[2])) / jnp.abs(a[0])) ** 2)
+    error = jnp.maximum(jnp.maximum(tail_estimate, shift_estimate), phi_estimate)
 
     # δ_max beyond the deflection bound: the root lies past d1 = d_limit (G(d_limit) < M v0²/4R)
     # or past d_limit; trusted only where the interpolant is accurate (else solver_failed).
     at_limit = d1 >= consts[4] * (1.0 - 1e-12)
     shift_ok = jnp.abs(e) <= MAX_SHIFT
-    beyond = (tail_estimate <= RULE_TOLERANCE) & ((at_limit & (end_c[0, 0] * d1 < consts[3])) | (shift_ok & (d_max_c > consts[4])))
+    beyond = (tail_estimate <= RULE_TOLERANCE) & ((at_limit & (z_c[0] * d1 < consts[3])) | (shift_ok & (d_max_c > consts[4])))
     singular = beyond & (consts[4] >= jax.lax.stop_gradient(d_singular) * (1.0 - 1e-12))
-    finite = jnp.all(jnp.isfinite(jnp.stack([d_max, t_compression, t_restitution, v_out])))
+    finite = functools.reduce(jnp.logical_and, [jnp.isfinite(x) for x in (d_max, t_compression, t_restitution, v_out, peak)])
     failed = ~finite | (residual > RESIDUAL_TOLERANCE) | ~shift_ok | ~(error <= RULE_TOLERANCE)
     status = jnp.select(
         [singular, beyond, failed],
         [STATUS_CODES["mass_singularity"], STATUS_CODES["deflection_limit"], STATUS_CODES["solver_failed"]],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
-    return _Scalars(v0, d_max, t_compression, t_restitution, v_out, error, status)
+    return _Scalars(v0, d_max, t_compression, t_restitution, v_out, peak, error, status)
 
 
 def _num_force_evaluations(n: int) -> int:
-    """Force evaluations of one impact: the bracketing interpolant, the n samples, the peak."""
-    return BRACKET_NODES + n + 1
+    """Force evaluations of one impact: the bracketing interpolant and the refined one (F(0) = 0
+    is not evaluated); the peak force comes from the refined interpolant."""
+    return BRACKET_NODES + n - 2
 
 
 def quadrature_error_estimate(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFAULT_NODES) -> jax.Array:
@@ -518,7 +551,7 @@ def impact_quadrature(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFA
     """
     _check(height_m, ball, model, n_nodes, lowest=4, highest=128)
     sol = _solve_scalars(height_m, ball, model, n_nodes)
-    peak = _force(sol.d_max, ball, model)
+    peak = sol.peak_force
     first = model.momentum_flux_weight * ball.mass_kg / (2.0 * ball.radius_m) * sol.v0**2
     ok = sol.status == 0
     nan = jnp.nan
