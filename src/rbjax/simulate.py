@@ -218,14 +218,14 @@ def simulate(
 
 
 def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, method="ode", fallback=False) -> ImpactResult:
-    shape, height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
     if method == "quadrature":
-        out, method = _quadrature_scalars(height, flat_ball, flat_model, solver, fallback)
+        height, out, method = _quadrature_scalars(height_m, ball, model, solver, fallback)
     else:
-        out = impact_batch(height, flat_ball, flat_model, solver)
-    out = jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+        shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
+        out = jax.tree_util.tree_map(lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver))
+        height = flat_height.reshape(shape)
     return ImpactResult(
-        height_m=height.reshape(shape),
+        height_m=height,
         contact_time_s=out.contact_time_s,
         peak_force_N=out.peak_force_N,
         peak_time_s=out.peak_time_s,
@@ -242,24 +242,46 @@ def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_
     )
 
 
-def _quadrature_scalars(height, ball, model, solver, fallback: bool):
-    """The quadrature over the flat batch; with ``fallback`` (and concrete values) the impacts it
-    flags ``solver_failed`` are solved again by the ODE (the batch padded to a power of two, so
-    that few shapes compile)."""
-    from .quadrature import impact_quadrature_batch
+def _as_float64(x):
+    if isinstance(x, (jax.Array, jax.core.Tracer)):
+        return x if x.dtype == jnp.float64 else jnp.asarray(x, dtype=jnp.float64)
+    return np.asarray(x, dtype=np.float64)
 
-    out = impact_quadrature_batch(height, ball, model)
+
+@eqx.filter_jit
+def _quadrature_program(height_m, ball, model):
+    """Broadcast, vmapped quadrature and reshape as ONE compiled program (one dispatch)."""
+    from .quadrature import impact_quadrature
+
+    shape, height, ball, model = _broadcast_inputs(height_m, ball, model)
+    out = jax.vmap(impact_quadrature)(height, ball, model)
+    return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+
+
+def _quadrature_scalars(height_m, ball, model, solver, fallback: bool):
+    """The quadrature (broadcast height, outputs, path); with ``fallback`` (and concrete values)
+    the impacts it flags ``solver_failed`` are solved again by the ODE (the batch padded to a
+    power of two, so that few shapes compile)."""
+    from .quadrature import _check
+
+    _check(height_m, ball, model, 12)
+    # every value an array, so that new values reuse the compiled program (NumPy for concrete
+    # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
+    arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
+    arrays = jax.tree_util.tree_map(_as_float64, arrays)
+    height, out = _quadrature_program(*eqx.combine(arrays, static))
     if not fallback or is_traced(out.status):
-        return out, "quadrature"
-    failed = np.flatnonzero(np.asarray(out.status) == STATUS_CODES["solver_failed"])
+        return height, out, "quadrature"
+    failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
     if failed.size == 0:
-        return out, "quadrature"
+        return height, out, "quadrature"
+    shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
     padded = np.concatenate([failed, np.full((1 << int(failed.size - 1).bit_length()) - failed.size, failed[0])])
     pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
-    redo = impact_batch(*jax.tree_util.tree_map(pick, (height, ball, model)), solver)
+    redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
     index = jnp.asarray(failed)
-    out = jax.tree_util.tree_map(lambda a, b: a.at[index].set(b[: failed.size]), out, redo)
-    return out, "quadrature+ode"
+    out = jax.tree_util.tree_map(lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo)
+    return height, out, "quadrature+ode"
 
 
 def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
