@@ -78,16 +78,16 @@ from .model import Model
 #: over 0.1–1.6 m; 8 gives ≤ 1e-9 (see ``benchmarks/forward_speed.py``).
 DEFAULT_NODES = 12
 #: Chebyshev–Lobatto points of the first, bracketing interpolant on [0, d0].
-BRACKET_NODES = 6
+BRACKET_NODES = 5
 #: Newton steps on the bracketing interpolant (from d0, right of the root).
-BRACKET_NEWTON_STEPS = 6
+BRACKET_NEWTON_STEPS = 4
 #: Newton steps of the closed-form upper bound d0 (convex, from the right).
 UPPER_BOUND_NEWTON_STEPS = 6
 #: Newton steps on the refined root's polynomial in ε (then one differentiable step).
 REFINE_NEWTON_STEPS = 2
 #: Terms of the Taylor series in ε = δ_max/d1 − 1: of the antiderivative (the root, the rebound
 #: velocity, the peak force) and of the sub-interval averages (the phase times).
-ROOT_TERMS = 6
+ROOT_TERMS = 4
 SUB_TERMS = 3
 #: Highest Chebyshev coefficients of the interpolant kept for its error estimate.
 TAIL_COEFFICIENTS = 4
