@@ -121,10 +121,11 @@ def test_installed_entry_point_help():
 
 def test_json_has_the_documented_keys(json_rows):
     assert len(json_rows) == len(HEIGHTS_M)
-    keys = {"height_m", "contact_time_s", "peak_force_N", "restitution", "lfe_total_dB", "lfe_octave_dB", "lfe_third_octave_dB", "conformance", "status"}
+    keys = {"height_m", "contact_time_s", "peak_force_N", "restitution", "lfe_total_dB", "lfe_octave_dB", "lfe_third_octave_dB", "conformance", "status", "method"}
     for row, h in zip(json_rows, HEIGHTS_M):
         assert set(row) == keys
         assert row["height_m"] == h and row["status"] == "ok"
+        assert row["method"] == "quadrature"  # the default --method auto, elastic model
         assert tuple(row["lfe_octave_dB"]) == OCTAVES
         assert tuple(row["lfe_third_octave_dB"]) == THIRDS
         assert {"passed", "clause", "items"} <= set(row["conformance"])
@@ -138,6 +139,17 @@ def test_json_agrees_with_simulate(json_rows, direct):
     i = HEIGHTS_M.index(1.0)
     expected = check_conformance(octave[i], contact_time_s=json_rows[i]["contact_time_s"], restitution=json_rows[i]["restitution"], mass_kg=2.5, height_m=1.0)
     assert json_rows[i]["conformance"] == json.loads(json.dumps(expected.to_dict()))
+
+
+def test_method_option_runs_the_ode_and_agrees(json_rows):
+    code, out, err = run_cli([*ARGS, "--json", "--method", "ode"])
+    assert code == 0, err
+    rows = json.loads(out)
+    assert [r["method"] for r in rows] == ["ode"] * len(HEIGHTS_M)
+    for name in ("contact_time_s", "peak_force_N", "restitution"):
+        np.testing.assert_allclose([r[name] for r in rows], [r[name] for r in json_rows], rtol=1e-8)
+    code, out, err = run_cli(["simulate", "--help"])
+    assert code == 0 and "--method {auto,ode,quadrature}" in out
 
 
 def test_json_agrees_with_the_scipy_reference(json_rows):

@@ -11,13 +11,17 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from ._validate import check_range, is_traced
+from ._validate import check_choice, check_range, is_traced
 from ._x64 import require_x64
 from .ball import JIS_RUBBER_BALL, Ball
 from .damping import AbstractDamping
 from .forces import CubicStiffening
-from .impact import STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
+from .impact import STATUS_CODES, STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
 from .model import Model, Solver
+
+#: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
+#: ``quadrature_unsupported``) and no ``Solver`` was given, ``ode`` otherwise.
+METHODS = ("auto", "ode", "quadrature")
 
 #: The paper's output grid (§2.4): 44.1 kHz over 1 s.
 PAPER_RATE_Hz = 44_100.0
@@ -50,12 +54,49 @@ def _broadcast_inputs(height_m, ball: Ball, model: Model):
     return shape, height, ball, model
 
 
+def quadrature_unsupported(model: Model) -> str | None:
+    """Why the quadrature path (``rbjax.quadrature``) cannot solve ``model``; None if it can.
+
+    It solves Eq. 7 for a contact force F(δ) of the deflection alone: the shell (with or
+    without ``CubicStiffening``), the gas force or none, either blocked-force convention, any
+    ``max_deflection_ratio``. A damping law makes the force depend on δ̇ or on internal states.
+    """
+    if model.damping:
+        names = ", ".join(d.name for d in model.damping)
+        return f"the damping ({names}) makes the contact force depend on the velocity or on internal states, not on δ alone"
+    return None
+
+
+def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
+    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"`` or ``"ode"``.
+
+    ``auto`` is the quadrature where ``quadrature_unsupported(model)`` is None and no ``solver``
+    is given (a ``Solver`` describes an ODE integration: passing one asks for it), the ODE
+    otherwise. ``"quadrature"`` on a model it cannot solve raises ``ValueError`` saying why.
+    """
+    check_choice("method", method, METHODS)
+    reason = quadrature_unsupported(model)
+    if method == "quadrature":
+        if reason is not None:
+            raise ValueError(f"method='quadrature' cannot solve this model: {reason}; valid: method='ode' or method='auto'")
+        return "quadrature"
+    if method == "ode":
+        return "ode"
+    return "quadrature" if reason is None and solver is None else "ode"
+
+
 class ImpactResult(eqx.Module):
     """Scalar outputs of ``simulate`` per drop height; the force history is computed on request.
 
     Every scalar field has the broadcast shape of the inputs. Where ``status != 0`` the scalar
     outputs are NaN and ``status_name`` says why (``step_limit``, ``mass_singularity``,
     ``deflection_limit``, ``solver_failed``).
+
+    ``method`` records the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` =
+    solver steps), ``"quadrature"`` (``rbjax.quadrature``, ``num_steps`` = force evaluations) or
+    ``"quadrature+ode"`` (the quadrature, with the ODE for the impacts it flagged
+    ``solver_failed``). Histories (``force_N``, ``history()``) always integrate the ODE with
+    ``solver``.
     """
 
     height_m: jax.Array
@@ -71,6 +112,7 @@ class ImpactResult(eqx.Module):
     solver: Solver = eqx.field(static=True)
     rate_Hz: float = eqx.field(static=True, default=PAPER_RATE_Hz)
     duration_s: float = eqx.field(static=True, default=PAPER_DURATION_S)
+    method: str = eqx.field(static=True, default="ode")
 
     @property
     def ok(self):
@@ -145,6 +187,7 @@ def simulate(
     stiffening: CubicStiffening | None = None,
     max_deflection_ratio: float = 2.0,
     solver: Solver | None = None,
+    method: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
 ) -> ImpactResult:
@@ -152,23 +195,37 @@ def simulate(
 
     ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
     may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
-    ``jax.grad`` (``jax.jacfwd`` with ``Solver(adjoint="forward")``).
+    ``jax.grad``; ``jax.jacfwd`` works on the quadrature path, and on the ODE path with
+    ``Solver(adjoint="forward")``.
+
+    ``method`` picks the path of the scalar outputs (``result.method`` records it):
+
+    * ``"auto"`` (default): the quadrature (``rbjax.quadrature``: Eq. 7 integrated in δ, exact to
+      ~1e-12, no time stepping) for models without damping when no ``solver`` is given, the
+      diffrax ODE otherwise. Impacts the quadrature flags ``solver_failed`` (δ_max very close to
+      2R) are solved again by the ODE when the inputs are concrete (``"quadrature+ode"``).
+    * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
+    * ``"quadrature"``: the quadrature only (``ValueError`` for damped models).
 
     Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
-    ``.force_N`` / ``.history()`` integrate the histories on request.
+    ``.force_N`` / ``.history()`` integrate the histories (ODE) on request.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
-    solver = Solver() if solver is None else solver
     model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, max_deflection_ratio=max_deflection_ratio)
-    return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s)
+    path = resolve_method(method, model, solver)
+    solver = Solver() if solver is None else solver
+    return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s, method=path, fallback=method == "auto")
 
 
-def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S) -> ImpactResult:
-    shape, height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
-    out = impact_batch(height, flat_ball, flat_model, solver)
-    out = jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, method="ode", fallback=False) -> ImpactResult:
+    if method == "quadrature":
+        height, out, method = _quadrature_scalars(height_m, ball, model, solver, fallback)
+    else:
+        shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
+        out = jax.tree_util.tree_map(lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver))
+        height = flat_height.reshape(shape)
     return ImpactResult(
-        height_m=height.reshape(shape),
+        height_m=height,
         contact_time_s=out.contact_time_s,
         peak_force_N=out.peak_force_N,
         peak_time_s=out.peak_time_s,
@@ -181,7 +238,50 @@ def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_
         solver=solver,
         rate_Hz=float(rate_Hz),
         duration_s=float(duration_s),
+        method=method,
     )
+
+
+def _as_float64(x):
+    if isinstance(x, (jax.Array, jax.core.Tracer)):
+        return x if x.dtype == jnp.float64 else jnp.asarray(x, dtype=jnp.float64)
+    return np.asarray(x, dtype=np.float64)
+
+
+@eqx.filter_jit
+def _quadrature_program(height_m, ball, model):
+    """Broadcast, vmapped quadrature and reshape as ONE compiled program (one dispatch)."""
+    from .quadrature import impact_quadrature
+
+    shape, height, ball, model = _broadcast_inputs(height_m, ball, model)
+    out = jax.vmap(impact_quadrature)(height, ball, model)
+    return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+
+
+def _quadrature_scalars(height_m, ball, model, solver, fallback: bool):
+    """The quadrature (broadcast height, outputs, path); with ``fallback`` (and concrete values)
+    the impacts it flags ``solver_failed`` are solved again by the ODE (the batch padded to a
+    power of two, so that few shapes compile)."""
+    from .quadrature import _check
+
+    _check(height_m, ball, model, 12)
+    # every value an array, so that new values reuse the compiled program (NumPy for concrete
+    # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
+    arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
+    arrays = jax.tree_util.tree_map(_as_float64, arrays)
+    height, out = _quadrature_program(*eqx.combine(arrays, static))
+    if not fallback or is_traced(out.status):
+        return height, out, "quadrature"
+    failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
+    if failed.size == 0:
+        return height, out, "quadrature"
+    shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
+    padded = np.concatenate([failed, np.full((1 << int(failed.size - 1).bit_length()) - failed.size, failed[0])])
+    pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
+    redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
+    index = jnp.asarray(failed)
+    out = jax.tree_util.tree_map(lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo)
+    return height, out, "quadrature+ode"
 
 
 def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
@@ -211,7 +311,8 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
     _check_record(rate_Hz, duration_s)  # heights and ball: checked by trajectory() below
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
-        contact_time_s = _simulate(height_m, ball, model, solver).contact_time_s
+        path = resolve_method("auto", model)
+        contact_time_s = _simulate(height_m, ball, model, solver, method=path, fallback=True).contact_time_s
     if is_traced(contact_time_s):
         n_contact = n_total
     else:
@@ -220,6 +321,11 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
         n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
     times = jnp.arange(n_contact) / rate_Hz
     traj = trajectory(height_m, times, ball, model, solver)
+    if n_contact < n_total and not is_traced(traj.in_contact) and np.any(np.asarray(traj.in_contact)[..., -1]):
+        # a contact outlasts the window (its contact time was not known: a failed scalar solve
+        # whose trajectory succeeds): integrate the whole record instead of truncating it
+        n_contact = n_total
+        traj = trajectory(height_m, jnp.arange(n_total) / rate_Hz, ball, model, solver)
     pad = n_total - n_contact
     failed = (traj.status != 0)[..., None]
 

@@ -19,6 +19,7 @@ examples:
   rbjax simulate --height-m 1.0
   rbjax simulate --height-m 0.1 1.0 1.6 --gas none --json
   rbjax simulate --height-m 1.0 --params fit.json --youngs-pa 1.8e6
+  rbjax simulate --height-m 1.0 --method ode
 """
 
 
@@ -35,6 +36,14 @@ def register(subparsers) -> None:
     p.add_argument("--youngs-pa", type=float, default=None, metavar="E", help="Young's modulus of the rubber in Pa (default: from --params, else 1.6e6)")
     p.add_argument("--poisson", type=float, default=None, metavar="NU", help="Poisson's ratio, -1 < ν <= 0.5 (default: from --params, else 0.5)")
     p.add_argument("--params", default=None, metavar="FIT.json", help="ball and model from a params/fit JSON file (options above override it)")
+    p.add_argument(
+        "--method",
+        choices=("auto", "ode", "quadrature"),
+        default="auto",
+        help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models only, "
+        "fastest), 'ode' runs the diffrax ODE, 'auto' (default) picks the quadrature where the model "
+        "allows it; the JSON rows record the path that ran",
+    )
     p.set_defaults(func=run)
 
 
@@ -72,8 +81,9 @@ def load_ball_and_model(args):
     return ball, model
 
 
-def simulate_rows(heights_m, ball, model) -> list[dict]:
-    """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok)."""
+def simulate_rows(heights_m, ball, model, method: str = "auto") -> list[dict]:
+    """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
+    ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran."""
     from .. import simulate
     from ..simulate import PAPER_RATE_Hz
     from ..spectrum import (
@@ -94,6 +104,7 @@ def simulate_rows(heights_m, ball, model) -> list[dict]:
         damping=model.damping,
         stiffening=model.stiffening,
         max_deflection_ratio=model.max_deflection_ratio,
+        method=method,
     )
     n = heights.size
     total, octave, third = np.full(n, np.nan), np.full((n, len(OCTAVE_BANDS)), np.nan), np.full((n, len(THIRD_OCTAVE_BANDS)), np.nan)
@@ -117,6 +128,7 @@ def simulate_rows(heights_m, ball, model) -> list[dict]:
             "lfe_third_octave_dB": {b: (float(third[i, j]) if ok else nan) for j, b in enumerate(THIRD_OCTAVE_BANDS)},
             "conformance": None,
             "status": str(names[i]),
+            "method": result.method,
         }
         if ok:
             row["conformance"] = check_conformance(
@@ -184,7 +196,7 @@ def run(args) -> int:
             raise ValueError(f"height_m={h!r} (--height-m value {i + 1}) is outside the valid range (0, inf) and finite")
     ball, model = load_ball_and_model(args)
     progress(f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}")
-    rows = simulate_rows(args.height_m, ball, model)
+    rows = simulate_rows(args.height_m, ball, model, method=args.method)
     if args.json:
         emit_json(rows)
     else:
