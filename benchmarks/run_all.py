@@ -4,7 +4,7 @@
     .venv/bin/python benchmarks/run_all.py --quick    # smoke run (writes *_quick.json / .png)
     .venv/bin/python benchmarks/run_all.py --render   # only re-render RESULTS.md from the JSON
 
-Runs work_precision.py, throughput.py and stability_map.py one after the other (each in its own
+Runs work_precision.py, throughput.py, stability_map.py, multicore.py and forward_speed.py one after the other (each in its own
 process, so compile caches do not leak between them), then replaces the text between the
 ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` markers of RESULTS.md (the prose
 around them is written by hand and states the conclusions).
@@ -22,7 +22,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-SCRIPTS = ("work_precision.py", "throughput.py", "stability_map.py", "multicore.py")
+SCRIPTS = ("work_precision.py", "throughput.py", "stability_map.py", "multicore.py", "forward_speed.py")
 
 
 def run(quick: bool, only=None) -> dict:
@@ -197,6 +197,11 @@ def render(quick: bool):
         parts["stability"] = render_stability(sm)
     if mc:
         parts["multicore"] = render_multicore(mc)
+    fs = read_json("forward_speed" + suffix)
+    if fs:
+        from forward_speed import render as render_forward_speed
+
+        parts["forward_speed"] = render_forward_speed(fs)
     for name, body in parts.items():
         pattern = re.compile(rf"(<!-- generated:{name} -->\n).*?(<!-- /generated:{name} -->)", re.S)
         text, n = pattern.subn(lambda m: m.group(1) + body + "\n" + m.group(2), text)

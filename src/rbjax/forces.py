@@ -10,9 +10,11 @@ when the caller passes one ("model no more than a scene needs").
 
 from __future__ import annotations
 
+import functools
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
@@ -70,8 +72,22 @@ def gas_force_N(deflection_m, ball, *, ambient_Pa=AMBIENT_PRESSURE_Pa, gamma=GAM
     r = ball.radius_m
     d = deflection_m
     volume_ratio = 1.0 - (3.0 - d / r) * (d / (2.0 * r)) ** 2
-    overpressure = ambient_Pa * (volume_ratio ** (-gamma) - 1.0)
+    overpressure = ambient_Pa * (_power(volume_ratio, -gamma) - 1.0)
     return overpressure * contact_area_m2(d, r)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(1,))
+def _power(x, a: float):
+    """x**a (constant a) whose derivative reuses the value, a·x^a/x: JAX's own rule evaluates
+    x^(a − 1), a second pow, in every tangent (forward-mode Jacobians, the ODE's adjoint)."""
+    return x**a
+
+
+@_power.defjvp
+def _power_jvp(a, primals, tangents):
+    (x,), (dx,) = primals, tangents
+    y = x**a
+    return y, a * y / x * dx
 
 
 def dynamic_mass_kg(deflection_m, ball):

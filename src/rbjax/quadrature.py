@@ -25,11 +25,11 @@ is integrated in δ instead of t. With u = δ̇² and δ̈ = ½ du/dδ (the ener
   These integrands are analytic and nearly constant (exactly constant for a linear spring of
   constant mass); Gauss–Legendre rules in φ converge exponentially.
 
-The scalar outputs (``impact_quadrature``) take n + 4 force evaluations and no loop over the
-force: F is sampled at ``BRACKET_NODES`` Chebyshev–Lobatto points on [0, d0], d0 an upper bound
-of δ_max in closed form, and the root of the interpolant's antiderivative gives d1 ≈ δ_max
-(a few digits); F is sampled again at n points on [0, d1]. Every quantity above is a linear
-functional of these n samples (integrals and sub-interval averages of the degree-(n − 1)
+The scalar outputs (``impact_quadrature``) take n + 3 force evaluations and no loop over the
+force: F is sampled at ``BRACKET_NODES`` Chebyshev–Lobatto points on [0, d0] (F(0) = 0 is not
+evaluated), d0 an upper bound of δ_max in closed form, and the root of the interpolant's
+antiderivative gives d1 ≈ δ_max (a few digits); F is sampled again at n points on [0, d1]. Every
+quantity above is a linear functional of these n samples (integrals and sub-interval averages of the degree-(n − 1)
 interpolant of g and of F(2R − s)), expanded in a short Taylor series in ε = δ_max/d1 − 1, so
 one precomputed matrix product gives them all; δ_max = d1(1 + ε) is the root of a polynomial in
 ε. Accuracy: the interpolant's Chebyshev tail, the φ rule's analyticity ellipse and the Taylor
@@ -74,8 +74,8 @@ from .model import Model
 
 # --- scalar outputs (impact_quadrature) ---------------------------------------------------------
 #: Chebyshev–Lobatto points of the interpolant on [0, δ_max] and Gauss–Legendre points of the
-#: φ rule for the phase times (one n for both). 12 gives ≤ 1e-13 in every output of the JIS ball
-#: over 0.1–1.6 m; 8 gives ≤ 1e-9 (see ``benchmarks/forward_speed.py``).
+#: φ rule for the phase times (one n for both). 12 gives ≤ 1e-12 in every output of the JIS ball
+#: over 0.1–1.6 m (tests/test_simulate_method.py); with fewer the error estimate flags more.
 DEFAULT_NODES = 12
 #: Chebyshev–Lobatto points of the first, bracketing interpolant on [0, d0].
 BRACKET_NODES = 5
