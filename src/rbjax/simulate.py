@@ -262,9 +262,9 @@ def _quadrature_scalars(height_m, ball, model, solver, fallback: bool):
     """The quadrature (broadcast height, outputs, path); with ``fallback`` (and concrete values)
     the impacts it flags ``solver_failed`` are solved again by the ODE (the batch padded to a
     power of two, so that few shapes compile)."""
-    from .quadrature import _check
+    from .quadrature import DEFAULT_NODES, _check
 
-    _check(height_m, ball, model, 12)
+    _check(height_m, ball, model, DEFAULT_NODES)
     # every value an array, so that new values reuse the compiled program (NumPy for concrete
     # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
     arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
