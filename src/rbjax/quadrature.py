@@ -300,6 +300,14 @@ def _tail_estimate(tail):
     return last * jnp.minimum(1.0, last / jnp.maximum(before, 1e-300))
 
 
+def _bernstein_decay(a, n):
+    """ρ^(−2n), ρ = a + √(a² − 1): the error decay of an n-point rule for a function analytic
+    inside the Bernstein ellipse whose semi-major axis is a (in units of the half interval)."""
+    rho = a + jnp.sqrt(jnp.maximum(a**2 - 1.0, 0.0))
+    return jnp.exp(-2.0 * n * jnp.log(jnp.maximum(rho, 1.0 + 1e-16)))
+
+
+
 def _phi_rule_error(d_max, two_r, n: int):
     """ρ^(−2n) for the n-point Gauss rule in φ on [0, π/2]: the integrands are analytic inside the
     ellipse through their nearest singularity, the pole s = 2R at φ = π/2 ± i·acosh(2R/δ_max), or on
@@ -307,9 +315,7 @@ def _phi_rule_error(d_max, two_r, n: int):
     b = 4.0 / jnp.pi * jnp.arccosh(jnp.maximum(two_r / jnp.maximum(d_max, 1e-300), 1.0))
     alpha_right = 0.5 * (b + jnp.sqrt(4.0 + b**2))
     alpha_left = 1.0 + 4.0 / jnp.pi * jnp.arcsin(jnp.clip(0.5 * two_r / jnp.maximum(d_max, 1e-300), 0.0, 1.0))
-    alpha = jnp.minimum(alpha_right, alpha_left)
-    rho = alpha + jnp.sqrt(jnp.maximum(alpha**2 - 1.0, 0.0))
-    return jnp.exp(-2.0 * n * jnp.log(jnp.maximum(rho, 1.0 + 1e-16)))
+    return _bernstein_decay(jnp.minimum(alpha_right, alpha_left), n)
 
 
 class _Scalars(eqx.Module):
@@ -482,9 +488,7 @@ def rule_error_estimate(d_max, two_r, n_nodes: int):
     [−1, 1]'s axis). Near the mass singularity ρ → 1 and no fixed rule converges: at
     δ_max = 0.998·2R, 32 nodes miss the contact time by 6e-4 (estimate 3e-3), 128 by 1e-10.
     """
-    a = 2.0 * two_r / jnp.maximum(d_max, 1e-300) - 1.0
-    rho = a + jnp.sqrt(jnp.maximum(a**2 - 1.0, 0.0))
-    return jnp.exp(-2.0 * n_nodes * jnp.log(jnp.maximum(rho, 1.0 + 1e-16)))
+    return _bernstein_decay(2.0 * two_r / jnp.maximum(d_max, 1e-300) - 1.0, n_nodes)
 
 
 class _Solution(eqx.Module):
