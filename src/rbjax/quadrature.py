@@ -307,7 +307,6 @@ def _bernstein_decay(a, n):
     return jnp.exp(-2.0 * n * jnp.log(jnp.maximum(rho, 1.0 + 1e-16)))
 
 
-
 def _phi_rule_error(d_max, two_r, n: int):
     """ρ^(−2n) for the n-point Gauss rule in φ on [0, π/2]: the integrands are analytic inside the
     ellipse through their nearest singularity, the pole s = 2R at φ = π/2 ± i·acosh(2R/δ_max), or on
