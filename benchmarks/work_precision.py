@@ -31,7 +31,8 @@ import numpy as np
 
 import rbjax
 from rbjax.impact import impact_batch, trajectory_batch
-from rbjax.quadrature import force_history_quadrature, impact_quadrature_batch
+from rbjax.quadrature import impact_quadrature_batch
+from rbjax.quadrature_history import force_history_quadrature
 from rbjax.simulate import _broadcast_inputs, make_model
 from rbjax.spectrum import lfe_octave_dB
 

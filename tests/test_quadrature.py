@@ -16,10 +16,10 @@ from scipy.integrate import solve_ivp
 import rbjax
 from rbjax.quadrature import (
     _solve_scalars,
-    force_history_quadrature,
     impact_quadrature,
     impact_quadrature_batch,
 )
+from rbjax.quadrature_history import force_history_quadrature
 
 BALL = rbjax.JIS_RUBBER_BALL
 HEIGHTS = np.array([0.01, 0.1, 1.0, 1.6])
