@@ -5,7 +5,10 @@ Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x6
 
 from . import _x64  # noqa: F401  (float64 before anything else touches JAX)
 from .ball import JIS_RUBBER_BALL, Ball
+from .ball_mode import BallMode
 from .damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
+from .energy import EnergyBalance, energy_balance
+from .floor import Dashpot, InfinitePlate, ModalFloor, Rigid, plate_impedance_Ns_per_m
 from .forces import (
     CubicStiffening,
     contact_area_m2,
@@ -38,6 +41,14 @@ __all__ = [
     "HuntCrossley",
     "KelvinVoigt",
     "Zener",
+    "BallMode",
+    "Rigid",
+    "Dashpot",
+    "InfinitePlate",
+    "ModalFloor",
+    "plate_impedance_Ns_per_m",
+    "EnergyBalance",
+    "energy_balance",
     "Model",
     "Solver",
     "ImpactResult",

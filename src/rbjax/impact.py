@@ -80,29 +80,101 @@ def _contact_force(y, ball, model):
 
 
 def floor_force_N(y, ball, model):
-    """The blocked force on the floor for state y: the contact force plus the share
-    ``model.momentum_flux_weight`` of the momentum flux during compression."""
+    """The force on the floor for state y: the contact force plus the share
+    ``model.momentum_flux_weight`` of the momentum flux during compression (the blocked force
+    on the rigid floor)."""
     v = y[1]
     flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
     return _contact_force(y, ball, model) + model.momentum_flux_weight * flux
 
 
-def _vector_field(flux_on: bool):
+def floor_velocity_m_per_s(y, ball, model):
+    """u̇, the velocity of the floor's surface under the ball (0 on the rigid floor)."""
+    if model.floor.rigid:
+        return jnp.zeros_like(y[1])
+    return model.floor.velocity_m_per_s(model.floor_states(y[2:]), floor_force_N(y, ball, model))
+
+
+def body_velocity_m_per_s(y, ball, model):
+    """Ẋ = δ̇ + u̇ − ẇ, the velocity of the ball's moving part (δ̇ on the rigid floor)."""
+    v = y[1] + floor_velocity_m_per_s(y, ball, model)
+    if model.ball_mode is not None:
+        v = v - model.ball_mode_states(y[2:])[1]
+    return v
+
+
+def _vector_field(flux_on: bool, energy: bool = False):
+    """dy/dt. The ball's moving part, mass M − M_c (Eq. 6), feels the contact force F_c and,
+    while mass leaves the cap (δ̇ < 0, restitution), the thrust (M/2R)δ̇² (Eq. 7):
+
+        (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
+
+    with w the ball mode (``rbjax.ball_mode``) and u the floor's surface (``rbjax.floor``); on
+    the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A massless floor (u̇ = F/Z) has
+    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; it is solved for δ̈ in closed form.
+    With ``energy`` four accumulators follow the state (see ``energy_balance``).
+    """
+
     def rhs(t, y, args):
         ball, model = args
         d, v, z = _split(y)
         force = _contact_force(y, ball, model)
-        if flux_on:
-            force = force - momentum_flux_N(v, ball)
-        accel = -force / dynamic_mass_kg(d, ball)
-        rates = internal_rates(d, v, z, ball, model)
-        return jnp.concatenate([jnp.stack([v, accel]), rates])
+        thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
+        accel = (thrust - force) / dynamic_mass_kg(d, ball)
+        parts = [internal_rates(d, v, z, ball, model)]
+        if model.ball_mode is not None:
+            mode_rates = model.ball_mode.rates(model.ball_mode_states(z), force, ball)
+            accel = accel + mode_rates[1]
+            parts.append(mode_rates)
+        floor = model.floor
+        if not floor.rigid:
+            states = model.floor_states(z)
+            ff = floor_force_N(y, ball, model)
+            parts.append(floor.rates(states, ff))
+            accel = accel - floor.acceleration_m_per_s2(states, ff)
+            if floor.massless:
+                # dF/dt = G + H δ̈ (F depends on δ, δ̇ and the damping states only)
+                nd = model.num_damping_states
+                ydot = jnp.concatenate([jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)])
+                force_of = lambda yy: floor_force_N(yy, ball, model)  # noqa: E731
+                _, g = jax.jvp(force_of, (y,), (ydot,))
+                _, h = jax.jvp(force_of, (y,), (jnp.zeros_like(y).at[1].set(1.0),))
+                b = floor.admittance_m_per_Ns
+                accel = (accel - b * g) / (1.0 + b * h)
+        rates = jnp.concatenate([jnp.stack([v, accel]), *parts])
+        if energy:
+            rates = jnp.concatenate([rates, _energy_rates(y, ball, model)])
+        return rates
 
     return rhs
 
 
+#: Energy accumulators (``energy_balance``): floor work ∫F u̇ dt, flux loss ∫½(M/2R)|δ̇|³ dt,
+#: contact work ∫F_c δ̇ dt, and the work the quasi-static cap and the share 1 − w of the flux
+#: leave out, ∫[½(M/2R)δ̇ u̇² + (1 − w)(M/2R)δ̇² H(δ̇) u̇] dt.
+NUM_ENERGY_STATES = 4
+
+
+def _energy_rates(y, ball, model):
+    _, v, _ = _split(y)
+    ff = floor_force_N(y, ball, model)
+    u_dot = floor_velocity_m_per_s(y, ball, model)
+    flux = momentum_flux_N(v, ball)
+    per_speed = ball.mass_kg / (2.0 * ball.radius_m)
+    cap = 0.5 * per_speed * v * u_dot**2 + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
+    return jnp.stack([ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap])
+
+
+def _split_energy(y, model):
+    """The state without the energy accumulators, and the accumulators."""
+    n = 2 + model.num_internal_states
+    return y[:n], y[n:]
+
+
 _COMPRESSION = _vector_field(flux_on=False)
 _RESTITUTION = _vector_field(flux_on=True)
+_COMPRESSION_ENERGY = _vector_field(flux_on=False, energy=True)
+_RESTITUTION_ENERGY = _vector_field(flux_on=True, energy=True)
 
 
 def _force_rate(y, args):
@@ -135,7 +207,27 @@ def _ok(sol):
     return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
 
 
-def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True):
+def _initial_state(v0, ball, model: Model, energy: bool = False):
+    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0). On a massless floor
+    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term): δ̇ + F(0, δ̇)/Z = v0 is solved by
+    Newton's method (a contraction: ∂F/∂δ̇ / Z ≪ 1 for any floor stiffer than the ball)."""
+    zeros = jnp.zeros(model.num_internal_states + (NUM_ENERGY_STATES if energy else 0))
+    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), zeros])
+    if not model.floor.massless:
+        return y0
+    b = model.floor.admittance_m_per_Ns
+
+    def residual(v):
+        return v + b * floor_force_N(y0.at[1].set(v), ball, model) - v0
+
+    v = v0
+    for _ in range(8):
+        r, dr = jax.jvp(residual, (v,), (jnp.ones_like(v),))
+        v = v - r / dr
+    return y0.at[1].set(v)
+
+
+def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False):
     """Solve the phases of one impact; return the diffrax solutions and the phase ends.
 
     With ``peak`` (and a velocity-dependent model) compression stops at the force peak (an
@@ -144,7 +236,8 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
     """
     args = (ball, model)
     v0 = impact_velocity_m_per_s(height_m)
-    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), jnp.zeros(model.num_internal_states)])
+    y0 = _initial_state(v0, ball, model, energy)
+    compression, restitution = (_COMPRESSION_ENERGY, _RESTITUTION_ENERGY) if energy else (_COMPRESSION, _RESTITUTION)
     singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
 
     # Event functions are scaled to O(1) so that the root finder's tolerances (which also
@@ -167,13 +260,13 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
         conds, dirs = (force_rate, velocity, singularity), (False, False, True)
     else:
         conds, dirs = (velocity, singularity), (False, True)
-    sol1 = _solve(_COMPRESSION, 0.0, y0, args, conds, dirs, solver, dense=dense)
+    sol1 = _solve(compression, 0.0, y0, args, conds, dirs, solver, dense=dense)
     t_peak, y_peak = sol1.ts[-1], sol1.ys[-1]
 
     if split:
         # From the force peak on to maximum compression (zero length if they coincide).
         t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
-        sol2 = _solve(_COMPRESSION, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense)
+        sol2 = _solve(compression, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense)
         t_max, y_max = sol2.ts[-1], sol2.ys[-1]
     else:
         sol2, t_max, y_max = None, t_peak, y_peak
@@ -193,7 +286,7 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
         conds3, dirs3 = deflection, False
     # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
     y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
-    sol3 = _solve(_RESTITUTION, t_max, y_start, args, conds3, dirs3, solver, dense=dense)
+    sol3 = _solve(restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense)
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 
 
@@ -219,10 +312,10 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     args = (ball, model)
 
     peak = floor_force_N(y_peak, *args)
-    first = floor_force_N(jnp.concatenate([jnp.stack([0.0, v0]), jnp.zeros(model.num_internal_states)]), *args)
+    first = floor_force_N(_initial_state(v0, ball, model), *args)
     peak_force = jnp.maximum(peak, first)
     peak_time = jnp.where(peak >= first, t_peak, 0.0)
-    momentum_out = -dynamic_mass_kg(y_end[0], ball) * y_end[1]
+    momentum_out = -dynamic_mass_kg(y_end[0], ball) * body_velocity_m_per_s(y_end, *args)
     restitution = momentum_out / (ball.mass_kg * v0)
 
     solved = [s for s in sols if s is not None]

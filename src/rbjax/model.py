@@ -12,7 +12,9 @@ import optimistix as optx
 from jaxtyping import ArrayLike
 
 from ._validate import as_float, check_choice, check_range, is_traced
+from .ball_mode import BallMode
 from .damping import AbstractDamping
+from .floor import AbstractFloor, Rigid
 from .forces import CubicStiffening
 from .parameters import Parameter, check_declared
 
@@ -49,6 +51,10 @@ class Model(eqx.Module):
         max_deflection_ratio: largest valid δ_max/h; beyond it the small-deflection shell
             model (§2.1: δ_max < δ_c, buckling from δ_c/h ≈ 2 for thin shells) is not valid
             and the result is flagged ``deflection_limit``.
+        ball_mode: ``None`` or a ``BallMode``: the ball's own vibration in series with the
+            shell (``rbjax.ball_mode``; two states).
+        floor: an ``rbjax.floor.AbstractFloor``; ``Rigid()`` (the default) is the paper's
+            immobile floor, others move under the force (``rbjax.floor``).
 
     ``Model(blocked_force="momentum")`` sets ``momentum_flux_weight=1``.
     """
@@ -58,6 +64,8 @@ class Model(eqx.Module):
     stiffening: CubicStiffening | None
     momentum_flux_weight: ArrayLike
     max_deflection_ratio: float = eqx.field(static=True)
+    ball_mode: BallMode | None
+    floor: AbstractFloor
     PARAMETERS: ClassVar = {
         "momentum_flux_weight": Parameter(
             "1", lower=0.0, upper=1.0, lower_open=False, upper_open=False, transform="interval",
@@ -74,6 +82,8 @@ class Model(eqx.Module):
         max_deflection_ratio: float = 2.0,
         *,
         momentum_flux_weight=None,
+        ball_mode: BallMode | None = None,
+        floor: AbstractFloor | None = None,
     ):
         if blocked_force is not None and momentum_flux_weight is not None:
             raise ValueError("give blocked_force or momentum_flux_weight, not both")
@@ -86,6 +96,8 @@ class Model(eqx.Module):
         self.stiffening = stiffening
         self.momentum_flux_weight = momentum_flux_weight
         self.max_deflection_ratio = max_deflection_ratio
+        self.ball_mode = ball_mode
+        self.floor = Rigid() if floor is None else floor
 
     def __check_init__(self):
         check_choice("gas", self.gas, GAS_OPTIONS)
@@ -100,6 +112,10 @@ class Model(eqx.Module):
             raise ValueError(f"damping: each law may appear once; got {names}")
         if self.stiffening is not None and not isinstance(self.stiffening, CubicStiffening):
             raise ValueError(f"stiffening={self.stiffening!r} must be None or a CubicStiffening")
+        if self.ball_mode is not None and not isinstance(self.ball_mode, BallMode):
+            raise ValueError(f"ball_mode={self.ball_mode!r} must be None or an rbjax.BallMode")
+        if not isinstance(self.floor, AbstractFloor):
+            raise ValueError(f"floor={self.floor!r} is not a floor; valid: an rbjax.floor.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)")
         check_range("max_deflection_ratio", self.max_deflection_ratio, lower=0.0, upper=float("inf"), upper_open=False)
 
     @property
@@ -115,11 +131,26 @@ class Model(eqx.Module):
     def name(self) -> str:
         """``paper`` or the damping laws' names joined by ``+``, with ``+stiffening`` if present."""
         base = "+".join(d.name for d in self.damping) or "paper"
-        return base + ("+stiffening" if self.stiffening is not None else "")
+        return base + ("+stiffening" if self.stiffening is not None else "") + ("+ball-mode" if self.ball_mode is not None else "")
+
+    @property
+    def num_damping_states(self) -> int:
+        return sum(d.num_states for d in self.damping)
 
     @property
     def num_internal_states(self) -> int:
-        return sum(d.num_states for d in self.damping)
+        """States beyond (δ, δ̇): the damping laws', then the ball mode's (w, ẇ), then the floor's."""
+        return self.num_damping_states + (BallMode.num_states if self.ball_mode is not None else 0) + self.floor.num_states
+
+    def ball_mode_states(self, internal):
+        """(w, ẇ) of the ball mode from the internal-state vector (empty without one)."""
+        i = self.num_damping_states
+        return internal[i : i + (BallMode.num_states if self.ball_mode is not None else 0)]
+
+    def floor_states(self, internal):
+        """The floor's states from the internal-state vector."""
+        i = self.num_damping_states + (BallMode.num_states if self.ball_mode is not None else 0)
+        return internal[i : i + self.floor.num_states]
 
     def split_internal(self, internal) -> list:
         """The internal-state vector cut into one slice per damping law."""
@@ -133,6 +164,12 @@ class Model(eqx.Module):
     def velocity_dependent(self) -> bool:
         """True if the contact force depends on δ̇ or an internal state (damped models)."""
         return bool(self.damping)
+
+    @property
+    def coupled(self) -> bool:
+        """True if the shell is pressed by more than the ball's rigid motion (a ball mode or a
+        moving floor): δ = X + w − u."""
+        return self.ball_mode is not None or not self.floor.rigid
 
 
 _SOLVERS = {
@@ -216,5 +253,5 @@ def superset_model(base: Model, laws=None, stiffening: bool = True) -> Model:
     stiff = base.stiffening if base.stiffening is not None else (CubicStiffening(0.0) if stiffening else None)
     return Model(
         gas=base.gas, damping=damping, stiffening=stiff, max_deflection_ratio=base.max_deflection_ratio,
-        momentum_flux_weight=base.momentum_flux_weight,
+        momentum_flux_weight=base.momentum_flux_weight, ball_mode=base.ball_mode, floor=base.floor,
     )

@@ -14,7 +14,9 @@ from jaxtyping import ArrayLike
 from ._validate import check_choice, check_range, is_traced
 from ._x64 import require_x64
 from .ball import JIS_RUBBER_BALL, Ball
+from .ball_mode import BallMode
 from .damping import AbstractDamping
+from .floor import AbstractFloor
 from .forces import CubicStiffening
 from .impact import STATUS_CODES, STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
 from .model import Model, Solver
@@ -28,7 +30,7 @@ PAPER_RATE_Hz = 44_100.0
 PAPER_DURATION_S = 1.0
 
 
-def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0) -> Model:
+def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None) -> Model:
     """A ``Model`` from the keyword options of ``simulate`` (validated)."""
     return Model(
         gas=gas,
@@ -36,6 +38,8 @@ def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffeni
         damping=damping,
         stiffening=stiffening,
         max_deflection_ratio=max_deflection_ratio,
+        ball_mode=ball_mode,
+        floor=floor,
     )
 
 
@@ -64,6 +68,10 @@ def quadrature_unsupported(model: Model) -> str | None:
     if model.damping:
         names = ", ".join(d.name for d in model.damping)
         return f"the damping ({names}) makes the contact force depend on the velocity or on internal states, not on δ alone"
+    if model.ball_mode is not None:
+        return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
+    if not model.floor.rigid:
+        return f"the floor ({model.floor.name}) moves under the force (δ = X − u)"
     return None
 
 
@@ -186,12 +194,15 @@ def simulate(
     damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
     stiffening: CubicStiffening | None = None,
     max_deflection_ratio: float = 2.0,
+    ball_mode: BallMode | None = None,
+    floor: AbstractFloor | None = None,
     solver: Solver | None = None,
     method: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
 ) -> ImpactResult:
-    """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2).
+    """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2), or on the
+    ``floor`` given (``rbjax.floor``; the force is then the force that floor receives).
 
     ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
     may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
@@ -211,7 +222,10 @@ def simulate(
     ``.force_N`` / ``.history()`` integrate the histories (ODE) on request.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
-    model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, max_deflection_ratio=max_deflection_ratio)
+    model = make_model(
+        gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening,
+        max_deflection_ratio=max_deflection_ratio, ball_mode=ball_mode, floor=floor,
+    )
     path = resolve_method(method, model, solver)
     solver = Solver() if solver is None else solver
     return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s, method=path, fallback=method == "auto")
