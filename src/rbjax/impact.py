@@ -46,6 +46,7 @@ STATUS_NAMES = {
     2: "mass_singularity",
     3: "deflection_limit",
     4: "solver_failed",
+    5: "recontact",
 }
 STATUS_CODES = {v: k for k, v in STATUS_NAMES.items()}
 #: Fraction of 2R at which the dynamic mass M(1 − δ/2R) is taken as singular.
@@ -305,14 +306,110 @@ def _status(sols, y_max, outputs, ball, model: Model):
     ).astype(jnp.int32)
 
 
+#: Samples per phase of the search for the global maxima of a coupled impact (then refined).
+MAXIMA_SAMPLES = 128
+
+
+def _refined_maximum(f, lo, hi):
+    """The maximum of a smooth f on [lo, hi]: the best of ``MAXIMA_SAMPLES`` samples, refined
+    by Newton's method on f′ = 0 within one sample spacing of it (f′, f″ by forward mode)."""
+    ts = jnp.linspace(lo, hi, MAXIMA_SAMPLES)
+    values = jax.vmap(f)(ts)
+    i = jnp.argmax(values)
+    spacing = (hi - lo) / (MAXIMA_SAMPLES - 1)
+    a, b = jnp.maximum(ts[i] - spacing, lo), jnp.minimum(ts[i] + spacing, hi)
+
+    def slope(t):
+        return jax.jvp(f, (t,), (jnp.ones_like(t),))[1]
+
+    t = ts[i]
+    for _ in range(4):
+        d1, d2 = jax.jvp(slope, (t,), (jnp.ones_like(t),))
+        t = jnp.clip(jnp.where(d2 < 0.0, t - d1 / jnp.where(d2 < 0.0, d2, -1.0), t), a, b)
+    best = f(t)
+    return jnp.where(best >= values[i], best, values[i]), jnp.where(best >= values[i], t, ts[i])
+
+
+def _coupled_maxima(segments, args):
+    """Global maxima of the floor force (and its time) and of δ over the contact, from the
+    phases' dense solutions ``segments`` = ((sol, t_start, t_end), ...): a ball mode or a
+    moving floor can give several local maxima, and the phase events find the first one only."""
+    ball, model = args
+    forces, deflections = [], []
+    for sol, lo, hi in segments:
+        forces.append(_refined_maximum(lambda t, sol=sol: floor_force_N(sol.evaluate(t), ball, model), lo, hi))
+        deflections.append(_refined_maximum(lambda t, sol=sol: sol.evaluate(t)[0], lo, hi)[0])
+    values = jnp.stack([f for f, _ in forces])
+    times = jnp.stack([t for _, t in forces])
+    i = jnp.argmax(values)
+    return values[i], times[i], jnp.max(jnp.stack(deflections))
+
+
+def _free_oscillation(q0, qd0, omega, eta, tau):
+    """q(τ) of q̈ + ηωq̇ + ω²q = 0 from (q0, q̇0) (any damping: complex ω_d; ω = 0: a free mass)."""
+    zeta = 0.5 * eta
+    wd = omega * jnp.sqrt((1.0 - zeta**2) + 0j)
+    small = jnp.abs(wd) < 1e-9 * jnp.maximum(omega, 1.0)
+    safe = jnp.where(small, 1.0, wd)
+    sin_over = jnp.where(small, tau, jnp.sin(safe * tau) / safe)
+    q = jnp.exp(-zeta * omega * tau) * (q0 * jnp.cos(wd * tau) + (qd0 + zeta * omega * q0) * sin_over)
+    return jnp.real(q)
+
+
+def recontact_horizon_s(model: Model) -> float:
+    """How long after separation ``_recontacts`` follows the free motion: two periods of the
+    slowest ball or floor mode, at least 10 ms."""
+    from .floor import ModalFloor
+
+    freqs = [f for f in getattr(model.floor, "frequency_Hz", ()) if f > 0.0] if isinstance(model.floor, ModalFloor) else []
+    periods = [2.0 / f for f in freqs] + [0.01]
+    return max(periods)
+
+
+def _recontacts(y_end, args):
+    """True if, after separation, the free motion brings the shell back onto the floor.
+
+    After the end of contact the ball's moving part flies off at Ẋ (gravity is neglected over
+    the short horizon), the ball mode and a modal floor ring freely (a massless floor stops).
+    The gap closes again where δ(τ) = δ_end + Ẋτ + Δw(τ) − Δu(τ) > δ_end, checked on 256 times
+    over ``recontact_horizon_s``. The model does not follow a second contact within one
+    record: such an impact is flagged ``recontact``.
+    """
+    from .floor import ModalFloor
+
+    ball, model = args
+    taus = jnp.linspace(0.0, recontact_horizon_s(model), 257)[1:]
+    z = y_end[2:]
+    gap_close = body_velocity_m_per_s(y_end, ball, model) * taus
+    if model.ball_mode is not None:
+        bm = model.ball_mode
+        w, wd = model.ball_mode_states(z)[0], model.ball_mode_states(z)[1]
+        gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
+    if isinstance(model.floor, ModalFloor):
+        s = model.floor_states(z)
+        n = model.floor.num_modes
+        for k in range(n):
+            omega = 2.0 * jnp.pi * model.floor.frequency_Hz[k]
+            gap_close = gap_close - (_free_oscillation(s[k], s[n + k], omega, model.floor.loss_factor[k], taus) - s[k])
+    scale = 1e-9 * ball.wall_m
+    return jnp.any(gap_close > scale)
+
+
 def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
-    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False)
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=model.coupled)
     sol3 = sols[2]
     t_end, y_end = sol3.ts[-1], sol3.ys[-1]
     args = (ball, model)
 
     peak = floor_force_N(y_peak, *args)
     first = floor_force_N(_initial_state(v0, ball, model), *args)
+    max_deflection = y_max[0]
+    recontact = jnp.asarray(False)
+    if model.coupled:
+        sol1, sol2, _ = sols
+        segments = [(sol1, 0.0, t_peak), (sol3, t_max, t_end)] + ([] if sol2 is None else [(sol2, t_peak, t_max)])
+        peak, t_peak, max_deflection = _coupled_maxima(segments, args)
+        recontact = _recontacts(y_end, args)
     peak_force = jnp.maximum(peak, first)
     peak_time = jnp.where(peak >= first, t_peak, 0.0)
     momentum_out = -dynamic_mass_kg(y_end[0], ball) * body_velocity_m_per_s(y_end, *args)
@@ -320,7 +417,8 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
 
     solved = [s for s in sols if s is not None]
     steps = sum(s.stats["num_steps"] for s in solved)
-    status = _status(sols, y_max, jnp.stack([t_end, peak_force, restitution, y_max[0], t_max, peak_time]), ball, model)
+    status = _status(sols, y_max.at[0].set(max_deflection), jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]), ball, model)
+    status = jnp.where((status == 0) & recontact, STATUS_CODES["recontact"], status).astype(jnp.int32)
     ok = status == 0
     nan = jnp.nan
     return ImpactScalars(
@@ -328,7 +426,7 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
         peak_force_N=jnp.where(ok, peak_force, nan),
         peak_time_s=jnp.where(ok, peak_time, nan),
         restitution=jnp.where(ok, restitution, nan),
-        max_deflection_m=jnp.where(ok, y_max[0], nan),
+        max_deflection_m=jnp.where(ok, max_deflection, nan),
         max_compression_time_s=jnp.where(ok, t_max, nan),
         status=status,
         num_steps=jnp.asarray(steps, dtype=jnp.int32),
