@@ -3,7 +3,9 @@
     {"ball": {"radius_m": .., "wall_m": .., "mass_kg": .., "youngs_Pa": .., "poisson": ..},
      "model": {"gas": "adiabatic", "blocked_force": "paper", "max_deflection_ratio": 2.0,
                "damping": null | {"name": "zener", "stiffness_ratio": .., "relaxation_time_s": ..},
-               "stiffening": null | {"beta": ..}}}
+               "stiffening": null | {"beta": ..},
+               "ball_mode": null | {"mode_mass_ratio": .., "mode_frequency_Hz": .., "mode_loss_factor": ..},
+               "floor": {"name": "rigid"} | {"name": "infinite-plate", "plate_thickness_m": .., ...}}}
 
 A fit's JSON output carries these two keys, so ``rbjax simulate --params FIT.json`` predicts
 with the fitted model.
@@ -21,7 +23,9 @@ import numpy as np
 
 from ._validate import as_float
 from .ball import Ball
+from .ball_mode import BallMode
 from .damping import DAMPING_MODELS
+from .floor import FLOOR_MODELS
 from .forces import CubicStiffening
 from .model import Model
 
@@ -79,6 +83,8 @@ def model_to_dict(model: Model) -> dict:
     out: dict[str, Any] = {"gas": model.gas}
     out.update({"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w})
     out.update({"max_deflection_ratio": as_float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
+    out["ball_mode"] = None if model.ball_mode is None else _fields(model.ball_mode)
+    out["floor"] = {"name": model.floor.name, **_fields(model.floor)}
     return out
 
 
@@ -96,6 +102,13 @@ def model_from_dict(d: dict) -> Model:
     stiffening = d.get("stiffening")
     if stiffening is not None:
         stiffening = _construct("stiffening", CubicStiffening, _table("stiffening", stiffening))
+    ball_mode = d.get("ball_mode")
+    if ball_mode is not None:
+        ball_mode = _construct("ball_mode", BallMode, _table("ball_mode", ball_mode))
+    floor = dict(_table("floor", d.get("floor", {"name": "rigid"})))
+    floor_name = floor.pop("name", None)
+    if floor_name not in FLOOR_MODELS:
+        raise ValueError(f"floor name={floor_name!r} is not known; valid: {sorted(FLOOR_MODELS)}")
     weight = d.get("momentum_flux_weight")
     return Model(
         gas=d.get("gas", "adiabatic"),
@@ -104,6 +117,8 @@ def model_from_dict(d: dict) -> Model:
         stiffening=stiffening,
         max_deflection_ratio=float(d.get("max_deflection_ratio", 2.0)),
         momentum_flux_weight=None if weight is None else float(weight),
+        ball_mode=ball_mode,
+        floor=_construct(f"floor {floor_name!r}", FLOOR_MODELS[floor_name], floor),
     )
 
 
