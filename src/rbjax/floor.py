@@ -134,13 +134,13 @@ class _Impedance(AbstractFloor):
 class Dashpot(_Impedance):
     """A floor with a given real point impedance Z (N·s/m): u̇ = F/Z (a dashpot to ground)."""
 
-    damping_Ns_per_m: ArrayLike
+    floor_impedance_Ns_per_m: ArrayLike
     name = "dashpot"
-    PARAMETERS = {"damping_Ns_per_m": Parameter("N s/m", **POSITIVE, description="point impedance Z of the floor, u̇ = F/Z")}
+    PARAMETERS = {"floor_impedance_Ns_per_m": Parameter("N s/m", **POSITIVE, description="point impedance Z of the floor, u̇ = F/Z")}
 
     @property
     def impedance_Ns_per_m(self):
-        return self.damping_Ns_per_m
+        return self.floor_impedance_Ns_per_m
 
 
 def plate_impedance_Ns_per_m(thickness_m, youngs_Pa, density_kg_per_m3, poisson):
