@@ -113,7 +113,8 @@ def test_paper_model_is_linear_for_small_drops(paper_model_growth):
 def test_paper_model_low_band_grows_about_3_dB(paper_model_growth):
     # 10–160 cm: δ_max/2R reaches 10 %; the 31.5 Hz band (22–45 Hz) lies below the pulse's first
     # notch (≈ 1.5/t_c ≈ 70 Hz), where the spectrum is close to the impulse ∫F dt ∝ v0(1 + e)
-    # times a shape factor. Restitution falls from 0.96 to 0.86 over these four doublings,
+    # times a shape factor. Restitution falls by about 0.1 over these four doublings (gas off:
+    # 0.96 → 0.86),
     # 20·log10(1.86/1.96)/4 ≈ −0.1 dB per doubling, and the shortening contact (≈ −2 % per
     # doubling) moves the band's shape factor by a similar amount the other way; the paper
     # reads "about 3 dB". Tolerance ±0.2 dB: twice the size of either effect.
