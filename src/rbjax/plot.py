@@ -30,6 +30,7 @@ __all__ = [
     "plot_lfe_increase",
     "plot_increase_per_doubling",
     "plot_narrowband",
+    "plot_growth",
 ]
 
 
@@ -246,6 +247,35 @@ def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None,
         ax.plot(x, np.asarray(paper, dtype=float), ls="none", marker="s", ms=9, mfc="none", color="k", label="paper (≈, §4.2)")
     ax.set_xticks(x, list(bands))
     return _finish(fig, ax, "octave band centre frequency (Hz)", "L_FE increase per doubling of height (dB)", title)
+
+
+def plot_growth(growths, ax=None, *, paper=None, title=None):
+    """L_FE growth per doubling of drop height per band, data against models, with ±1
+    standard-error bars (``rbjax.growth.Growth`` objects; paper Fig. 11).
+
+    ``growths``: a sequence of ``Growth`` (their ``label`` is the legend); the first one is
+    drawn with markers only (the data), the rest as lines; ``paper``: dB per band as
+    reported (NaN where none). A dotted line marks a linear source, 10·log10 2 = 3.01 dB.
+    """
+    fig, ax = _axes(ax)
+    growths = list(growths)
+    if not growths:
+        raise ValueError("plot_growth: growths is empty (give at least one rbjax.growth.Growth)")
+    bands = growths[0].bands_Hz
+    x = np.arange(len(bands))
+    n = len(growths)
+    for k, g in enumerate(growths):
+        if g.bands_Hz != bands:
+            raise ValueError(f"plot_growth: {g.label!r} has bands {g.bands_Hz}, expected {bands}")
+        dx = (k - (n - 1) / 2) * 0.06
+        err = np.where(np.isfinite(g.stderr_dB), g.stderr_dB, 0.0)
+        style = {"ls": "none", "marker": "o", "ms": 6, "color": "k"} if k == 0 else {"marker": ".", "lw": 1.2}
+        ax.errorbar(x + dx, g.slope_dB, yerr=err, capsize=3, label=g.label or f"series {k + 1}", **style)
+    if paper is not None:
+        ax.plot(x, np.asarray(paper, dtype=float), ls="none", marker="s", ms=9, mfc="none", color="0.4", label="paper (≈, §4.2)")
+    ax.axhline(10.0 * np.log10(2.0), color="0.6", lw=0.8, ls=":")
+    ax.set_xticks(x, list(bands))
+    return _finish(fig, ax, "octave band centre frequency (Hz)", "L_FE growth per doubling of height (dB)", title)
 
 
 def plot_narrowband(freq_Hz, spectra_dB: Mapping[str, np.ndarray], ax=None, *, resonances_Hz=None, references_Hz=None, fmax_Hz=500.0, title=None):
