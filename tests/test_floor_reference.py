@@ -10,9 +10,16 @@ linear-spring ball, the finite-difference points of the gradient check) is one b
 program; the floating floor with the stiff layer is the 2-mode ModalFloor of the scalar,
 energy and history checks.
 
-Measured (default Solver(), rtol 1e-9): contact time, peak force, restitution and injected
-energy agree with the reference to ≲ 1e-9 relative on every dashpot and modal case; the energy
-balance closes to ≲ 1e-9 of the impact energy.
+Measured (default Solver(), rtol 1e-9; the tests assert 1e-7): contact time, peak force,
+restitution and injected energy agree with the reference to ≤ 7e-10 relative on every dashpot
+(Z = 500, 2000, 1e5) and modal case, both conventions, h = 0.1 and 1 m; Z = 1e12 matches the
+rigid reference to ≤ 7e-10; the linear-spring ball matches the closed form to ≤ 4e-10; the
+energy balance closes to ≤ 6e-10 of the impact energy; jax.grad of the contact time matches
+central differences to ≤ 3e-9; the 1482-mode plate is within 0.1–0.4 % of the infinite plate.
+
+Known limitation (xfail, strict): on a floor where the force has two maxima (the floating
+floor with the stiffer layer), rbjax's ``peak_force_N`` (and ``max_deflection_m``) of an
+elastic ball is taken at the FIRST maximum compression, although the second is higher.
 """
 
 from __future__ import annotations
@@ -228,7 +235,9 @@ def _maxima(f):
 
 
 def test_floating_floor_force_peaks():
-    """Soft layer: one force peak; the stiffer layer: two (counted on the 20 kHz history)."""
+    """The stiffer layer: two force peaks (counted on rbjax's 20 kHz history, paper convention),
+    as the reference finds; the soft layer: one (the reference's history: one more ModalFloor
+    would be one more ~10 s compile)."""
     times = np.arange(0.0, 0.05, 1 / 20_000)
     hist = rbjax.trajectory(np.array(HEIGHTS), times, BALL, rbjax.Model(floor=STIFF))
     for i, h in enumerate(HEIGHTS):
@@ -255,3 +264,65 @@ def test_contact_time_gradients():
     fd_e = (got[("fd-e", 1.0)]["contact_time_s"] - got[("fd-e", -1.0)]["contact_time_s"]) / (2 * FD_STEP * FD_E)
     assert _rel(float(dz), fd_z) < 1e-4
     assert _rel(float(de), fd_e) < 1e-4
+
+
+# ------------------------------------------------------------------------------------------------
+# floor_modes: the modal data and the named errors (no solve)
+
+
+def test_plate_modes_closed_form():
+    plate = simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=1.7, drive_y_m=2.3, max_frequency_Hz=200.0)
+    bending = 30e9 * 0.14**3 / (12 * (1 - 0.2**2))
+    f11 = np.pi / 2 * np.sqrt(bending / (2300 * 0.14)) * (1 / 4.0**2 + 1 / 5.0**2)
+    m11 = 2300 * 0.14 * 4.0 * 5.0 / 4 / (np.sin(np.pi * 1.7 / 4.0) * np.sin(np.pi * 2.3 / 5.0)) ** 2
+    assert plate.frequency_Hz[0] == pytest.approx(f11, rel=1e-14)
+    assert plate.mass_kg[0] == pytest.approx(m11, rel=1e-14)
+    assert list(plate.frequency_Hz) == sorted(plate.frequency_Hz) and max(plate.frequency_Hz) <= 200.0
+    # a drive point on the centre lines leaves out the modes with a node there (m or n even)
+    centre = simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=2.0, drive_y_m=2.5, max_frequency_Hz=400.0)
+    assert centre.num_modes < simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=1.7, drive_y_m=2.3, max_frequency_Hz=400.0).num_modes
+
+
+def test_floating_floor_modal_masses():
+    """Σ 1/m_k = 1/m₁ (the screed's mass at high frequency); the soft layer's lower mode is the
+    screed on the layer, f₀ = √(s′A/m₁)/2π over the heavy base."""
+    for floor in (SOFT, STIFF):
+        assert sum(1.0 / m for m in floor.mass_kg) == pytest.approx(1.0 / (0.05 * 2000.0 * 0.01), rel=1e-12)
+    assert SOFT.frequency_Hz[0] == pytest.approx(np.sqrt(1e6 * 0.01 / 1.0) / (2 * np.pi), rel=1e-3)
+    free = floating_floor(0.05, 2000.0, 0.01, 1e7, base_mass_kg=100.0, base_frequency_Hz=0.0)
+    assert free.frequency_Hz[0] == 0.0 and free.loss_factor[0] == 0.0
+
+
+@pytest.mark.parametrize(
+    "change, name",
+    [
+        (dict(thickness_m=0.0), "thickness_m"),
+        (dict(density_kg_per_m3=-1.0), "density_kg_per_m3"),
+        (dict(youngs_Pa=0.0), "youngs_Pa"),
+        (dict(loss_factor=-0.01), "loss_factor"),
+        (dict(drive_x_m=7.0), "drive_x_m"),
+        (dict(max_frequency_Hz=1e-3), "max_frequency_Hz"),
+    ],
+)
+def test_plate_modes_named_errors(change, name):
+    args = dict(length_x_m=6.0, length_y_m=6.6, loss_factor=0.02, drive_x_m=2.8, drive_y_m=3.5, max_frequency_Hz=100.0, **OSB) | change
+    with pytest.raises(ValueError, match=name):
+        simply_supported_plate_modes(**args)
+
+
+@pytest.mark.parametrize(
+    "change, name",
+    [
+        (dict(screed_thickness_m=0.0), "screed_thickness_m"),
+        (dict(screed_density_kg_per_m3=0.0), "screed_density_kg_per_m3"),
+        (dict(area_m2=0.0), "area_m2"),
+        (dict(dynamic_stiffness_N_per_m3=-1.0), "dynamic_stiffness_N_per_m3"),
+        (dict(base_mass_kg=0.0), "base_mass_kg"),
+        (dict(base_frequency_Hz=-1.0), "base_frequency_Hz"),
+        (dict(layer_loss_factor=-0.1), "layer_loss_factor"),
+        (dict(base_loss_factor=-0.1), "base_loss_factor"),
+    ],
+)
+def test_floating_floor_named_errors(change, name):
+    with pytest.raises(ValueError, match=name):
+        floating_floor(**(FLOAT | dict(dynamic_stiffness_N_per_m3=1e7) | change))
