@@ -25,6 +25,7 @@ import math
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from .floor import AbstractFloor, Dashpot, InfinitePlate, ModalFloor, Rigid
 from .materials import MATERIALS, material
@@ -163,7 +164,7 @@ def _plate_from_mapping(table: Mapping) -> InfinitePlate:
             raise ValueError(f"material={name!r} is not a known material; valid: {', '.join(MATERIALS)}")
         m = MATERIALS[name]
         values = {"youngs_Pa": m.youngs_Pa, "density_kg_per_m3": m.density_kg_per_m3, "poisson": m.poisson}
-    bounds = {
+    bounds: dict[str, dict[str, Any]] = {
         "youngs_Pa": dict(lower=0.0),
         "density_kg_per_m3": dict(lower=0.0),
         "poisson": dict(lower=-1.0, upper=0.5, upper_open=False),
