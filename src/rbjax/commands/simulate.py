@@ -15,16 +15,31 @@ level L_FE (Eq. 11) in octave bands 31.5-1000 Hz and one-third-octave bands from
 44.1 kHz x 1 s force history (§2.4), and the check against the rubber-ball tolerance table
 (JIS A 1418-2 / ISO 10140-5 Annex F) at the standard drop height.
 
+With --floor the ball falls on a floor that moves under it (rbjax.floor; solved by the ODE):
+the outputs are those of the force that floor receives, and each JSON row adds "floor" (its
+name), "floor_energy_J" (the energy injected into the floor, rbjax.energy_balance) and
+"lfe_ratio_dB" (per octave band: L_FE on the floor minus L_FE of the blocked force of the
+same ball and model on the rigid floor). --floor takes a preset,
+  {presets}
+(infinite plates of rbjax.materials, Z = 8 sqrt(B'm''); rbjax.floor_presets), or a
+.toml/.json floor file (type = "infinite-plate", "dashpot", "modal" or "rigid"; see
+rbjax.floor_presets and src/rbjax/examples/floors/).
+
 examples:
   rbjax simulate --height-m 1.0
   rbjax simulate --height-m 0.1 1.0 1.6 --gas none --json
   rbjax simulate --height-m 1.0 --params fit.json --youngs-pa 1.8e6
   rbjax simulate --height-m 1.0 --method ode
+  rbjax simulate --height-m 1.0 --floor osb-15mm --json
+  rbjax simulate --height-m 1.0 --floor my-floor.toml
 """
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "simulate", help="predict the blocked force for drop heights", description=DESCRIPTION)
+    from ..floor_presets import FLOOR_PRESETS
+
+    description = DESCRIPTION.format(presets=", ".join(FLOOR_PRESETS))
+    p = add_command(subparsers, "simulate", help="predict the blocked force for drop heights", description=description)
     p.add_argument("--height-m", type=float, nargs="+", required=True, metavar="H", help="drop height(s) in m (> 0)")
     p.add_argument("--gas", choices=("adiabatic", "none"), default=None, help="gas force F_G (Eq. 4, corrected); default: from --params, else adiabatic")
     p.add_argument(
@@ -43,6 +58,13 @@ def register(subparsers) -> None:
         help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models only, "
         "fastest), 'ode' runs the diffrax ODE, 'auto' (default) picks the quadrature where the model "
         "allows it; the JSON rows record the path that ran",
+    )
+    p.add_argument(
+        "--floor",
+        default=None,
+        metavar="NAME|FILE",
+        help="the floor under the ball: a preset name (rigid, concrete-150mm, osb-15mm, ...; see above) "
+        "or a .toml/.json floor file; default: rigid (the blocked force)",
     )
     p.set_defaults(func=run)
 
@@ -66,6 +88,11 @@ def load_ball_and_model(args):
     if args.poisson is not None:
         ball = ball.replace(poisson=args.poisson)
     changes = {}
+    floor = getattr(args, "floor", None)  # (commands that reuse this helper may not have --floor)
+    if floor is not None:
+        from ..floor_presets import load_floor
+
+        changes["floor"] = load_floor(floor)
     if args.gas is not None:
         changes["gas"] = args.gas
     if args.blocked_force is not None:
@@ -77,14 +104,32 @@ def load_ball_and_model(args):
             damping=model.damping,
             stiffening=model.stiffening,
             max_deflection_ratio=model.max_deflection_ratio,
+            ball_mode=model.ball_mode,
+            floor=changes.get("floor", model.floor),
         )
     return ball, model
 
 
-def simulate_rows(heights_m, ball, model, method: str = "auto") -> list[dict]:
-    """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
-    ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran."""
+def _simulate(heights, ball, model, method: str, floor=None):
+    """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
     from .. import simulate
+
+    return simulate(
+        heights,
+        ball,
+        gas=model.gas,
+        blocked_force=model.blocked_force,
+        damping=model.damping,
+        stiffening=model.stiffening,
+        max_deflection_ratio=model.max_deflection_ratio,
+        ball_mode=model.ball_mode,
+        floor=model.floor if floor is None else floor,
+        method=method,
+    )
+
+
+def _octave_lfe(result):
+    """(L_FE total, octave, third-octave) of every impact of ``result`` (NaN if every solve failed)."""
     from ..simulate import PAPER_RATE_Hz
     from ..spectrum import (
         OCTAVE_BANDS,
@@ -93,26 +138,43 @@ def simulate_rows(heights_m, ball, model, method: str = "auto") -> list[dict]:
         lfe_third_octave_dB,
         lfe_total_dB,
     )
-    from ..standards import check_conformance
 
-    heights = np.asarray(heights_m, dtype=float)
-    result = simulate(
-        heights,
-        ball,
-        gas=model.gas,
-        blocked_force=model.blocked_force,
-        damping=model.damping,
-        stiffening=model.stiffening,
-        max_deflection_ratio=model.max_deflection_ratio,
-        method=method,
-    )
-    n = heights.size
+    n = np.size(result.status)
     total, octave, third = np.full(n, np.nan), np.full((n, len(OCTAVE_BANDS)), np.nan), np.full((n, len(THIRD_OCTAVE_BANDS)), np.nan)
     if np.any(np.asarray(result.status) == 0):  # no history to integrate when every solve failed
-        force = np.asarray(result.force_N)  # (n, 44100): the paper's 44.1 kHz x 1 s record (§2.4)
+        force = np.asarray(result.force_N).reshape(n, -1)  # (n, 44100): the paper's 44.1 kHz x 1 s record (§2.4)
         total = np.asarray(lfe_total_dB(force, PAPER_RATE_Hz))
         octave = np.asarray(lfe_octave_dB(force, PAPER_RATE_Hz))
         third = np.asarray(lfe_third_octave_dB(force, PAPER_RATE_Hz))
+    return total, octave, third
+
+
+def floor_outputs(heights_m, ball, model, octave_dB, method: str = "auto") -> tuple[np.ndarray, np.ndarray]:
+    """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
+    the rigid floor, per height and band) for a model on a moving floor."""
+    from ..energy import energy_balance
+    from ..floor import Rigid
+
+    heights = np.asarray(heights_m, dtype=float)
+    blocked = _simulate(heights, ball, model, method, floor=Rigid())
+    energy = np.asarray(energy_balance(heights, ball, model).floor_energy_J, dtype=float).reshape(-1)
+    return energy, np.asarray(octave_dB) - _octave_lfe(blocked)[1]
+
+
+def simulate_rows(heights_m, ball, model, method: str = "auto", floor_name: str | None = None) -> list[dict]:
+    """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
+    ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran. On a floor
+    that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
+    floor's type), ``floor_energy_J`` and ``lfe_ratio_dB`` (``floor_outputs``)."""
+    from ..spectrum import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
+    from ..standards import check_conformance
+
+    heights = np.asarray(heights_m, dtype=float)
+    result = _simulate(heights, ball, model, method)
+    total, octave, third = _octave_lfe(result)
+    moving = not model.floor.rigid
+    if moving:
+        floor_energy, ratio = floor_outputs(heights, ball, model, octave, method)
     names = np.atleast_1d(result.status_name)
     rows = []
     for i, h in enumerate(heights):
@@ -130,6 +192,10 @@ def simulate_rows(heights_m, ball, model, method: str = "auto") -> list[dict]:
             "status": str(names[i]),
             "method": result.method,
         }
+        if moving:
+            row["floor"] = floor_name or model.floor.name
+            row["floor_energy_J"] = float(floor_energy[i]) if ok else nan
+            row["lfe_ratio_dB"] = {b: (float(ratio[i, j]) if ok else nan) for j, b in enumerate(OCTAVE_BANDS)}
         if ok:
             row["conformance"] = check_conformance(
                 octave[i],
@@ -160,6 +226,22 @@ def _failures(rows) -> list[str]:
     return lines
 
 
+def _floor_notes(rows: list[dict]) -> list[str]:
+    """On a moving floor: the floor's name, the energy it took and the L_FE ratios per height."""
+    from ..spectrum import OCTAVE_BANDS
+
+    if not rows or "floor" not in rows[0]:
+        return []
+    lines = [
+        f"floor {rows[0]['floor']}: the force is the force this floor receives; E_floor: energy injected into the floor;",
+        "ΔL_FE: L_FE on this floor minus L_FE of the blocked force (rigid floor), per octave band (Hz):",
+    ]
+    for r in rows:
+        bands = ", ".join(f"{b} {fmt(r['lfe_ratio_dB'][b], '+.2f')}" for b in OCTAVE_BANDS)
+        lines.append(f"  {r['height_m']:g} m: E_floor {fmt(r['floor_energy_J'], '.3g')} J; ΔL_FE {bands} dB")
+    return lines
+
+
 def render_table(rows: list[dict]) -> str:
     from ..spectrum import OCTAVE_BANDS
 
@@ -184,6 +266,7 @@ def render_table(rows: list[dict]) -> str:
         "conformance: rubber-ball table (ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), only at the",
         "standard drop height 1.00 ± 0.01 m (n/a elsewhere).",
     ]
+    notes += _floor_notes(rows)
     failures = _failures(rows)
     if failures:
         notes += ["outside the tolerances:", *failures]
@@ -195,8 +278,14 @@ def run(args) -> int:
         if not (math.isfinite(h) and h > 0.0):
             raise ValueError(f"height_m={h!r} (--height-m value {i + 1}) is outside the valid range (0, inf) and finite")
     ball, model = load_ball_and_model(args)
-    progress(f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}")
-    rows = simulate_rows(args.height_m, ball, model, method=args.method)
+    floor_name = None
+    if args.floor is not None:
+        from ..floor_presets import load_named_floor
+
+        floor_name = load_named_floor(args.floor)[0]
+    on = "" if model.floor.rigid else f", floor {floor_name}"
+    progress(f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}{on}")
+    rows = simulate_rows(args.height_m, ball, model, method=args.method, floor_name=floor_name)
     if args.json:
         emit_json(rows)
     else:
