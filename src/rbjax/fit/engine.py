@@ -87,6 +87,8 @@ def _start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: floa
         values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     if model.stiffening is not None:
         values["beta"] = 0.05
+    if model.ball_mode is not None:
+        values.update(type(model.ball_mode).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     return values
 
 
