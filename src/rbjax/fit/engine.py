@@ -57,6 +57,8 @@ from .result import FitResult, ParameterEstimate
 SCALES = ("noise", "peak")
 BLOCKED_FORCES = ("paper", "momentum")
 EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
+#: Parameters that may be held at 0 (the ball mode off, μ = 0, or lossless, η = 0).
+NON_NEGATIVE_FIX = ("mode_mass_ratio", "mode_loss_factor")
 #: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
 
@@ -105,7 +107,10 @@ def validate_fix(names, fix):
     if "poisson" in out and not -1.0 < out["poisson"] <= 0.5:
         raise ValueError(f"fix: poisson={out['poisson']!r} is outside the valid range (-1, 0.5]")
     for k, v in out.items():
-        if k != "poisson" and not (math.isfinite(v) and v > 0):
+        if k in NON_NEGATIVE_FIX:
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"fix: {k}={v!r} must be non-negative and finite (valid range: [0, inf))")
+        elif k != "poisson" and not (math.isfinite(v) and v > 0):
             raise ValueError(f"fix: {k}={v!r} must be positive and finite (valid range: (0, inf))")
     return out
 
