@@ -27,13 +27,14 @@ import tempfile
 import time
 
 import numpy as np
-from _common import finish_machine_info, machine_info, time_call, write_json
 
 import rbjax
 from rbjax.data import examples_dir
 from rbjax.fit import fit, prepare_data
 from rbjax.selection import _held_out_rows, shared_structure
 from rbjax.spectrum import OCTAVE_BANDS
+
+from _common import finish_machine_info, machine_info, time_call, write_json
 
 FIT_HEIGHTS = (0.1, 0.4, 1.0, 1.6)
 MODELS = ("hunt-crossley", "zener", "hunt-crossley+ball-mode", "zener+ball-mode")

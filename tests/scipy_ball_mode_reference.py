@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
+
 from scipy_reference import ball_parameters, damping_spec, gas_force, shell_stiffness
 
 STANDARD_GRAVITY = 9.80665

@@ -8,7 +8,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy_ball_mode_reference import reference_ball_mode_impact
-from scipy_reference import reference_impact
 
 import rbjax
 from rbjax import JIS_RUBBER_BALL as BALL
@@ -19,6 +18,8 @@ from rbjax.fit.layout import fitted_parameter_names
 from rbjax.fit.problem import embed
 from rbjax.model import superset_model
 from rbjax.selection import candidate_pairs, shared_structure
+
+from scipy_reference import reference_impact
 
 #: (height, μ, f, η): modes at 300 and 800 Hz, μ from 5 to 50, heights 0.1 and 1 m.
 CASES = [(0.1, 20.0, 300.0, 0.1), (1.0, 20.0, 800.0, 0.05), (0.1, 5.0, 800.0, 0.1), (1.0, 50.0, 300.0, 0.02)]

@@ -11,9 +11,9 @@ here.
 
 from __future__ import annotations
 
-import numpy as np
-
 from typing import NamedTuple
+
+import numpy as np
 
 from ..ball import Ball
 from ..ball_mode import BallMode
