@@ -237,13 +237,15 @@ class Solver(eqx.Module):
         return optx.Newton(rtol=1e-12, atol=1e-13)
 
 
-def superset_model(base: Model, laws=None, stiffening: bool = True) -> Model:
-    """``base`` with every damping law of ``laws`` (default: all registered) and the
-    stiffening present but switched off (their ``off()`` values, β = 0).
+def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False) -> Model:
+    """``base`` with every damping law of ``laws`` (default: all registered), the stiffening
+    and (with ``ball_mode``) the ball mode present but switched off (their ``off()`` values,
+    β = 0, μ = 0).
 
     Models that differ in which of these terms are on share the superset's structure, so one
     compiled program serves them all; the terms a candidate leaves off are held at their
-    off values.
+    off values. The ball mode is opt-in: held off it is exact (w ≡ 0) but carries two states
+    and three Jacobian columns through every solve.
     """
     from .damping import DAMPING_MODELS
 
@@ -251,7 +253,8 @@ def superset_model(base: Model, laws=None, stiffening: bool = True) -> Model:
     have = {type(d) for d in base.damping}
     damping = base.damping + tuple(law.off() for law in laws if law not in have)
     stiff = base.stiffening if base.stiffening is not None else (CubicStiffening(0.0) if stiffening else None)
+    mode = base.ball_mode if base.ball_mode is not None else (BallMode.off() if ball_mode else None)
     return Model(
         gas=base.gas, damping=damping, stiffening=stiff, max_deflection_ratio=base.max_deflection_ratio,
-        momentum_flux_weight=base.momentum_flux_weight, ball_mode=base.ball_mode, floor=base.floor,
+        momentum_flux_weight=base.momentum_flux_weight, ball_mode=mode, floor=base.floor,
     )

@@ -25,7 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._progress import progress as say
-from .fit import MODEL_NAMES, FitResult, fit, parse_model_name, predict, prepare_data
+from .fit import MODEL_NAMES, FitResult, fit, parse_model_terms, predict, prepare_data
 from .model import Model, superset_model
 
 __all__ = [
@@ -274,14 +274,16 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
 
 def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
     """One model holding the terms of every candidate named (their damping laws, and the
-    stiffening if any candidate has it): the structure of the one compiled fit program that
-    all candidates and folds run through, each with the terms it lacks held off."""
-    laws, stiff = [], False
+    stiffening and the ball mode if any candidate has them): the structure of the one compiled
+    fit program that all candidates and folds run through, each with the terms it lacks held
+    off (the ball mode at μ = 0)."""
+    laws, stiff, mode = [], False, False
     for name in names:
-        terms, s = parse_model_name(name)
-        laws += [t for t in terms if t not in laws]
-        stiff = stiff or s
-    return superset_model(Model(gas=gas), laws, stiffening=stiff)
+        terms = parse_model_terms(name)
+        laws += [t for t in terms.laws if t not in laws]
+        stiff = stiff or terms.stiffening
+        mode = mode or terms.ball_mode
+    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode)
 
 
 def candidate_pairs(candidates: Sequence[str], blocked_forces: Sequence[str]) -> list[tuple[str, str]]:

@@ -12,11 +12,14 @@ time and predict it (leave-one-height-out cross-validation), and recommend the s
 model whose held-out error is within the noise of the best (paired one-standard-error
 rule). The table gives the held-out history error (% of peak), contact time, peak force and
 octave-band L_FE errors, and AIC/BIC; the unfitted paper model (E = 1.6 MPa) is the
-baseline. Takes several minutes (one compilation per candidate).
+baseline. Takes several minutes (one compilation for all candidates). Any model name of
+`rbjax fit` is a candidate, e.g. hunt-crossley+ball-mode (a mode of the ball in series with
+the shell; the other candidates then run with it held off, μ = 0, in the same program).
 
 examples:
   rbjax select recordings/
   rbjax select recordings/ --candidates paper,hunt-crossley --blocked-force momentum
+  rbjax select recordings/ --candidates hunt-crossley,hunt-crossley+ball-mode --blocked-force momentum
   rbjax select recordings/ --hold-out 0.2,0.8 --json > selection.json
 """
 
@@ -24,7 +27,7 @@ examples:
 def register(subparsers) -> None:
     p = add_command(subparsers, "select", help="choose the impact model by cross-validation over drop heights", description=DESCRIPTION)
     add_data_options(p)
-    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names, each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener)")
+    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener)")
     p.add_argument("--blocked-force", choices=("paper", "momentum", "both"), default="both", help="blocked-force definitions to compare (default both)")
     p.add_argument("--hold-out", default=None, metavar="HEIGHTS", help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them")
     p.add_argument("--out", default=None, metavar="DIR", help="write selection.json into DIR")

@@ -12,11 +12,13 @@ onset alignment), :mod:`~rbjax.fit.engine` drives it (:func:`fit`) and
 
 from .engine import fit
 from .layout import (
+    BALL_MODE_SUFFIX,
     MODEL_NAMES,
     STIFFENING_SUFFIX,
     all_model_names,
     model_from_name,
     parse_model_name,
+    parse_model_terms,
 )
 from .prediction import model_histories, predict
 from .prediction import parameter_names_of as parameter_names
@@ -25,6 +27,7 @@ from .records import FitData, load_data, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction
 
 __all__ = [
+    "BALL_MODE_SUFFIX",
     "MODEL_NAMES",
     "OPTIMIZERS",
     "STIFFENING_SUFFIX",
@@ -39,6 +42,7 @@ __all__ = [
     "model_histories",
     "parameter_names",
     "parse_model_name",
+    "parse_model_terms",
     "predict",
     "prepare_data",
     "record_features",

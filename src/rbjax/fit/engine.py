@@ -57,6 +57,8 @@ from .result import FitResult, ParameterEstimate
 SCALES = ("noise", "peak")
 BLOCKED_FORCES = ("paper", "momentum")
 EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
+#: Parameters that may be held at 0 (the ball mode off, μ = 0, or lossless, η = 0).
+NON_NEGATIVE_FIX = ("mode_mass_ratio", "mode_loss_factor")
 #: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
 
@@ -87,6 +89,8 @@ def _start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: floa
         values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     if model.stiffening is not None:
         values["beta"] = 0.05
+    if model.ball_mode is not None:
+        values.update(type(model.ball_mode).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     return values
 
 
@@ -103,7 +107,10 @@ def validate_fix(names, fix):
     if "poisson" in out and not -1.0 < out["poisson"] <= 0.5:
         raise ValueError(f"fix: poisson={out['poisson']!r} is outside the valid range (-1, 0.5]")
     for k, v in out.items():
-        if k != "poisson" and not (math.isfinite(v) and v > 0):
+        if k in NON_NEGATIVE_FIX:
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"fix: {k}={v!r} must be non-negative and finite (valid range: [0, inf))")
+        elif k != "poisson" and not (math.isfinite(v) and v > 0):
             raise ValueError(f"fix: {k}={v!r} must be positive and finite (valid range: (0, inf))")
     return out
 

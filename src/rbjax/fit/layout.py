@@ -11,9 +11,12 @@ here.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..ball import Ball
+from ..ball_mode import BallMode
 from ..damping import DAMPING_MODELS, AbstractDamping
 from ..forces import CubicStiffening
 from ..model import Model
@@ -21,40 +24,66 @@ from ..parameters import HEIGHT_ERROR, ONSET_SHIFT, declaration, parameter_table
 
 #: The fitted models that model selection compares by default (the paper's elastic model and
 #: one damping law each); any registered damping law's name is a model name too. Append
-#: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²).
+#: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²), and then
+#: ``+ball-mode`` for one mode of the ball in series with the shell (``rbjax.BallMode``:
+#: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``.
 MODEL_NAMES = ("paper", "kelvin-voigt", "hunt-crossley", "zener")
 STIFFENING_SUFFIX = "+stiffening"
+BALL_MODE_SUFFIX = "+ball-mode"
 #: Parameters that are never fitted: constants of the program (``fix`` may still set them).
 CONSTANT_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "momentum_flux_weight")
 
 
 def all_model_names() -> tuple[str, ...]:
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
-    return base + tuple(m + STIFFENING_SUFFIX for m in base)
+    with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
+    return with_stiffening + tuple(m + BALL_MODE_SUFFIX for m in with_stiffening)
+
+
+class ModelTerms(NamedTuple):
+    """The terms a model name stands for."""
+
+    laws: tuple[type[AbstractDamping], ...]
+    stiffening: bool
+    ball_mode: bool
+
+
+def parse_model_terms(name: str) -> ModelTerms:
+    """(damping law classes, stiffening?, ball mode?) of a model name such as
+    ``zener+stiffening+ball-mode`` (the suffixes in this order, as ``Model.name`` writes them)."""
+    if not isinstance(name, str):
+        raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")
+    rest, mode = (name[: -len(BALL_MODE_SUFFIX)], True) if name.endswith(BALL_MODE_SUFFIX) else (name, False)
+    base, stiff = (rest[: -len(STIFFENING_SUFFIX)], True) if rest.endswith(STIFFENING_SUFFIX) else (rest, False)
+    if base != "paper" and base not in DAMPING_MODELS:
+        raise ValueError(f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}")
+    return ModelTerms((() if base == "paper" else (DAMPING_MODELS[base],)), stiff, mode)
 
 
 def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
-    """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``."""
-    if not isinstance(name, str):
-        raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")
-    base, stiff = (name[: -len(STIFFENING_SUFFIX)], True) if name.endswith(STIFFENING_SUFFIX) else (name, False)
-    if base != "paper" and base not in DAMPING_MODELS:
-        raise ValueError(f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}")
-    return (() if base == "paper" else (DAMPING_MODELS[base],)), stiff
+    """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``
+    (a ``+ball-mode`` suffix is accepted; :func:`parse_model_terms` also says whether it is there)."""
+    terms = parse_model_terms(name)
+    return terms.laws, terms.stiffening
 
 
 def model_from_name(name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None) -> Model:
-    """The ``Model`` a model name stands for, its parameters from ``values`` (name → value)."""
-    laws, stiff = parse_model_name(name)
+    """The ``Model`` a model name stands for, its parameters from ``values`` (name → value;
+    the ball mode's default is ``BallMode.start``'s)."""
+    laws, stiff, mode = parse_model_terms(name)
     values = dict(values or {})
     damping = tuple(law(**{k: values.get(k, 1.0) for k in law.PARAMETERS}) for law in laws)
     stiffening = CubicStiffening(values.get("beta", 0.05)) if stiff else None
-    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+    ball_mode = None
+    if mode:
+        default = BallMode.start(1.0, 1.0, 0.8, 0.02, 1.0)
+        ball_mode = BallMode(**{k: values.get(k, default[k]) for k in BallMode.PARAMETERS})
+    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, ball_mode=ball_mode)
 
 
 def fitted_parameter_names(model: Model) -> tuple[str, ...]:
     """The physical parameters a fit of ``model`` frees by default: E, ν and every parameter
-    of its damping laws and stiffening."""
+    of its damping laws, stiffening and ball mode."""
     names = [row.name for row in parameter_table(1.0, Ball(1.0, 0.5, 1.0, 1.0, 0.0), model)]
     return tuple(n for n in names if n not in CONSTANT_PARAMETERS and n != "height_m")
 
