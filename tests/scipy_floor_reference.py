@@ -48,8 +48,8 @@ def floor_spec(floor):
         return floor
     if floor is None or type(floor).__name__ == "Rigid":
         return ("rigid",)
-    if hasattr(floor, "damping_Ns_per_m"):
-        return ("dashpot", float(floor.damping_Ns_per_m))
+    if hasattr(floor, "floor_impedance_Ns_per_m"):
+        return ("dashpot", float(floor.floor_impedance_Ns_per_m))
     if hasattr(floor, "plate_thickness_m"):
         t, e, rho, nu = (float(getattr(floor, f"plate_{n}")) for n in ("thickness_m", "youngs_Pa", "density_kg_per_m3", "poisson"))
         return ("dashpot", 8.0 * math.sqrt(e * t**3 / (12.0 * (1.0 - nu**2)) * rho * t))

@@ -4,11 +4,12 @@ balance checked against the independent scipy reference on the rigid floor."""
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from scipy_reference import reference_scalars
 
 import rbjax
 from rbjax.ball_mode import from_modal_mass
 from rbjax.serialize import model_from_dict, model_to_dict
+
+from scipy_reference import reference_scalars
 
 BALL = rbjax.JIS_RUBBER_BALL
 

@@ -146,7 +146,7 @@ def floor_from_mapping(table: Mapping) -> AbstractFloor:
     if kind == "rigid":
         return Rigid()
     if kind == "dashpot":
-        return Dashpot(damping_Ns_per_m=_number("impedance_Ns_per_m", table["impedance_Ns_per_m"], lower=0.0))
+        return Dashpot(floor_impedance_Ns_per_m=_number("impedance_Ns_per_m", table["impedance_Ns_per_m"], lower=0.0))
     if kind == "modal":
         return ModalFloor(
             mass_kg=_numbers("mass_kg", table["mass_kg"], lower=0.0),
