@@ -388,9 +388,11 @@ def _recontacts(y_end, args):
     if isinstance(model.floor, ModalFloor):
         s = model.floor_states(z)
         n = model.floor.num_modes
-        for k in range(n):
-            omega = 2.0 * jnp.pi * model.floor.frequency_Hz[k]
-            gap_close = gap_close - (_free_oscillation(s[k], s[n + k], omega, model.floor.loss_factor[k], taus) - s[k])
+        q, qd = s[:n], s[n:]
+        omega = 2.0 * jnp.pi * jnp.asarray(model.floor.frequency_Hz)
+        eta = jnp.asarray(model.floor.loss_factor)
+        free = _free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
+        gap_close = gap_close - jnp.sum(free - q, axis=1)
     scale = 1e-9 * ball.wall_m
     return jnp.any(gap_close > scale)
 
