@@ -185,7 +185,7 @@ def _force_rate(y, args):
     return rate
 
 
-def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, dense=False):
+def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, dense=False, steps=False, max_steps=None):
     event = dfx.Event(conds, solver.root_finder(), direction=directions)
     return dfx.diffeqsolve(
         dfx.ODETerm(rhs),
@@ -195,13 +195,32 @@ def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, 
         solver.dt0(),
         y0,
         args,
-        saveat=dfx.SaveAt(t1=True, dense=dense),
+        saveat=_saveat(dense, steps),
         stepsize_controller=solver.controller(),
         adjoint=solver.diffrax_adjoint(),
         event=event,
-        max_steps=solver.max_steps,
+        max_steps=(min(solver.max_steps, COUPLED_MAX_STEPS) if steps else solver.max_steps) if max_steps is None else max_steps,
         throw=False,
     )
+
+
+def _with_force(t, y, args):
+    return jnp.concatenate([y, jnp.reshape(floor_force_N(y, *args), (1,))])
+
+
+def _saveat(dense: bool, steps: bool):
+    """The end of the solve; with ``steps`` also every step's (y, floor force) in a second
+    sub-save (the force computed at the steps taken only, not over the padded buffer)."""
+    if not steps:
+        return dfx.SaveAt(t1=True, dense=dense)
+    return dfx.SaveAt(subs=[dfx.SubSaveAt(t1=True), dfx.SubSaveAt(steps=True, fn=_with_force)], dense=dense)
+
+
+def _final(sol):
+    """(t, y) at the end of a solve."""
+    if isinstance(sol.ts, (list, tuple)):
+        return sol.ts[0][-1], sol.ys[0][-1]
+    return sol.ts[-1], sol.ys[-1]
 
 
 def _ok(sol):
@@ -228,7 +247,7 @@ def _initial_state(v0, ball, model: Model, energy: bool = False):
     return y0.at[1].set(v)
 
 
-def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False):
+def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False, steps: bool = False):
     """Solve the phases of one impact; return the diffrax solutions and the phase ends.
 
     With ``peak`` (and a velocity-dependent model) compression stops at the force peak (an
@@ -261,14 +280,14 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
         conds, dirs = (force_rate, velocity, singularity), (False, False, True)
     else:
         conds, dirs = (velocity, singularity), (False, True)
-    sol1 = _solve(compression, 0.0, y0, args, conds, dirs, solver, dense=dense)
-    t_peak, y_peak = sol1.ts[-1], sol1.ys[-1]
+    sol1 = _solve(compression, 0.0, y0, args, conds, dirs, solver, dense=dense, steps=steps)
+    t_peak, y_peak = _final(sol1)
 
     if split:
         # From the force peak on to maximum compression (zero length if they coincide).
         t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
-        sol2 = _solve(compression, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense)
-        t_max, y_max = sol2.ts[-1], sol2.ys[-1]
+        sol2 = _solve(compression, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense, steps=steps)
+        t_max, y_max = _final(sol2)
     else:
         sol2, t_max, y_max = None, t_peak, y_peak
 
@@ -287,7 +306,7 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
         conds3, dirs3 = deflection, False
     # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
     y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
-    sol3 = _solve(restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense)
+    sol3 = _solve(restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense, steps=steps)
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 
 
@@ -306,43 +325,75 @@ def _status(sols, y_max, outputs, ball, model: Model):
     ).astype(jnp.int32)
 
 
-#: Samples per phase of the search for the global maxima of a coupled impact (then refined).
-MAXIMA_SAMPLES = 128
+#: Step budget per phase of a coupled model's scalar solve, which saves every step (a vmapped
+#: solve carries the whole buffer through every step): ``min(Solver.max_steps, this)``;
+#: exhausting it is status ``step_limit`` as always.
+COUPLED_MAX_STEPS = 512
+#: Step budget of the short solves that locate a global maximum between two saved steps.
+REFINE_MAX_STEPS = 64
 
 
-def _refined_maximum(f, lo, hi):
-    """The maximum of a smooth f on [lo, hi]: the best of ``MAXIMA_SAMPLES`` samples, refined
-    by Newton's method on f′ = 0 within one sample spacing of it (f′, f″ by forward mode)."""
-    ts = jnp.linspace(lo, hi, MAXIMA_SAMPLES)
-    values = jax.vmap(f)(ts)
-    i = jnp.argmax(values)
-    spacing = (hi - lo) / (MAXIMA_SAMPLES - 1)
-    a, b = jnp.maximum(ts[i] - spacing, lo), jnp.minimum(ts[i] + spacing, hi)
-
-    def slope(t):
-        return jax.jvp(f, (t,), (jnp.ones_like(t),))[1]
-
-    t = ts[i]
-    for _ in range(4):
-        d1, d2 = jax.jvp(slope, (t,), (jnp.ones_like(t),))
-        t = jnp.clip(jnp.where(d2 < 0.0, t - d1 / jnp.where(d2 < 0.0, d2, -1.0), t), a, b)
-    best = f(t)
-    return jnp.where(best >= values[i], best, values[i]), jnp.where(best >= values[i], t, ts[i])
+def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
+    """The maximum of ``value_of(y)`` on [t_start, t_end], where it has one interior maximum
+    or none: a short solve from ``start`` = (t_start, y_start) with an event where ``rate_of``
+    (its rate along the flow, scaled to O(1)) falls through 0; (value, time) at the event, or
+    ``value_of`` at t_start if no event occurs."""
+    t0, y0 = start
+    sol = _solve(_RESTITUTION, t0, y0, args, lambda t, y, args, **kw: rate_of(y), False, solver, t1=t_end, max_steps=REFINE_MAX_STEPS)
+    t, y = _final(sol)
+    hit = sol.result == dfx.RESULTS.event_occurred
+    return jnp.where(hit, value_of(y), value_of(y0)), jnp.where(hit, t, t0)
 
 
-def _coupled_maxima(segments, args):
-    """Global maxima of the floor force (and its time) and of δ over the contact, from the
-    phases' dense solutions ``segments`` = ((sol, t_start, t_end), ...): a ball mode or a
-    moving floor can give several local maxima, and the phase events find the first one only."""
+def _coupled_maxima(sols, v0, args, solver: Solver):
+    """Global maxima of the floor force (and its time) and of δ over the contact.
+
+    A ball mode or a moving floor can give several local maxima, and the phase events find
+    the first one only. Every step of every phase is saved (``_phases(steps=True)``); the
+    largest value over the step ends and the step ends either side of it bracket the global
+    maximum, located exactly by a short solve to the event dF/dt = 0 (or δ̇ = 0) between them.
+    The restitution vector field is valid in every phase (its thrust acts only where δ̇ < 0).
+    """
     ball, model = args
-    forces, deflections = [], []
-    for sol, lo, hi in segments:
-        forces.append(_refined_maximum(lambda t, sol=sol: floor_force_N(sol.evaluate(t), ball, model), lo, hi))
-        deflections.append(_refined_maximum(lambda t, sol=sol: sol.evaluate(t)[0], lo, hi)[0])
-    values = jnp.stack([f for f, _ in forces])
-    times = jnp.stack([t for _, t in forces])
-    i = jnp.argmax(values)
-    return values[i], times[i], jnp.max(jnp.stack(deflections))
+    ts = jnp.concatenate([s.ts[1] for s in sols if s is not None])
+    rows = jnp.concatenate([s.ys[1] for s in sols if s is not None])
+    valid = jnp.isfinite(ts)
+    rows = jnp.where(valid[:, None], rows, rows[0])  # padding (inf) never reaches an output or a gradient
+    ys, forces = rows[:, :-1], rows[:, -1]
+    ts_safe = jnp.where(valid, ts, 0.0)
+    force_scale = reissner_stiffness_N_per_m(ball) * ball.wall_m
+
+    def force(y):
+        return floor_force_N(y, ball, model)
+
+    def force_rate(y):
+        _, rate = jax.jvp(force, (y,), (_RESTITUTION(0.0, y, args),))
+        return rate / (force_scale * v0 / ball.wall_m)
+
+    def deflection(y):
+        return y[0]
+
+    def velocity(y):
+        return y[1] / v0
+
+    def best(values):
+        values = jnp.where(valid, values, -jnp.inf)
+        i = jnp.argmax(values)
+        before = jnp.argmax(jnp.where(valid & (ts_safe < ts_safe[i]), ts_safe, -jnp.inf))
+        after = jnp.argmin(jnp.where(valid & (ts_safe > ts_safe[i]), ts_safe, jnp.inf))
+        first = ~jnp.any(valid & (ts_safe < ts_safe[i]))
+        last = ~jnp.any(valid & (ts_safe > ts_safe[i]))
+        start = (jnp.where(first, ts_safe[i], ts_safe[before]), jnp.where(first, ys[i], ys[before]))
+        end = jnp.where(last, ts_safe[i], ts_safe[after])
+        return values[i], ts_safe[i], start, end
+
+    f_best, t_best, start, end = best(forces)
+    f_ref, t_ref = _refine(start, end, force, force_rate, args, solver)
+    peak = jnp.maximum(f_best, f_ref)
+    peak_time = jnp.where(f_ref > f_best, t_ref, t_best)
+    d_best, _, start, end = best(ys[:, 0])
+    d_ref, _ = _refine(start, end, deflection, velocity, args, solver)
+    return peak, peak_time, jnp.maximum(d_best, d_ref)
 
 
 def _free_oscillation(q0, qd0, omega, eta, tau):
@@ -398,9 +449,9 @@ def _recontacts(y_end, args):
 
 
 def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
-    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=model.coupled)
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, steps=model.coupled)
     sol3 = sols[2]
-    t_end, y_end = sol3.ts[-1], sol3.ys[-1]
+    t_end, y_end = _final(sol3)
     args = (ball, model)
 
     peak = floor_force_N(y_peak, *args)
@@ -408,9 +459,7 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     max_deflection = y_max[0]
     recontact = jnp.asarray(False)
     if model.coupled:
-        sol1, sol2, _ = sols
-        segments = [(sol1, 0.0, t_peak), (sol3, t_max, t_end)] + ([] if sol2 is None else [(sol2, t_peak, t_max)])
-        peak, t_peak, max_deflection = _coupled_maxima(segments, args)
+        peak, t_peak, max_deflection = _coupled_maxima(sols, v0, args, solver)
         recontact = _recontacts(y_end, args)
     peak_force = jnp.maximum(peak, first)
     peak_time = jnp.where(peak >= first, t_peak, 0.0)
