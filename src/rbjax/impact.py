@@ -199,7 +199,7 @@ def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, 
         stepsize_controller=solver.controller(),
         adjoint=solver.diffrax_adjoint(),
         event=event,
-        max_steps=(min(solver.max_steps, COUPLED_MAX_STEPS) if steps else solver.max_steps) if max_steps is None else max_steps,
+        max_steps=solver.max_steps if max_steps is None else max_steps,
         throw=False,
     )
 
@@ -325,10 +325,6 @@ def _status(sols, y_max, outputs, ball, model: Model):
     ).astype(jnp.int32)
 
 
-#: Step budget per phase of a coupled model's scalar solve, which saves every step (a vmapped
-#: solve carries the whole buffer through every step): ``min(Solver.max_steps, this)``;
-#: exhausting it is status ``step_limit`` as always.
-COUPLED_MAX_STEPS = 512
 #: Step budget of the short solves that locate a global maximum between two saved steps.
 REFINE_MAX_STEPS = 64
 
