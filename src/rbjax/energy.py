@@ -28,7 +28,7 @@ from jaxtyping import ArrayLike
 
 from .ball import JIS_RUBBER_BALL, Ball
 from .forces import dynamic_mass_kg
-from .impact import _phases, _split_energy, _status, body_velocity_m_per_s
+from .impact import _final, _phases, _split_energy, _status, body_velocity_m_per_s
 from .model import Model, Solver
 
 
@@ -52,10 +52,11 @@ class EnergyBalance(eqx.Module):
 def _balance(height_m, ball, model, solver) -> EnergyBalance:
     v0, sols, _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, peak=False, energy=True)
     sol1, _, sol3 = sols
-    y_end, acc = _split_energy(sol3.ys[-1], model)
+    t_end, y_end = _final(sol3)
+    y_end, acc = _split_energy(y_end, model)
     speed = body_velocity_m_per_s(y_end, ball, model)
     rebound = 0.5 * dynamic_mass_kg(y_end[0], ball) * speed**2
-    status = _status((sol1, sol3), y_max[:2], jnp.stack([sol3.ts[-1], rebound, *acc]), ball, model)
+    status = _status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
     nan = jnp.where(status == 0, 1.0, jnp.nan)
     return EnergyBalance(
         impact_energy_J=0.5 * ball.mass_kg * v0**2,

@@ -28,6 +28,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
+from .floor import ModalFloor
 from .forces import (
     contact_force_N,
     dynamic_mass_kg,
@@ -403,14 +404,15 @@ def _free_oscillation(q0, qd0, omega, eta, tau):
     return jnp.real(q)
 
 
-def recontact_horizon_s(model: Model) -> float:
+def recontact_horizon_s(model: Model):
     """How long after separation ``_recontacts`` follows the free motion: two periods of the
     slowest ball or floor mode, at least 10 ms."""
-    from .floor import ModalFloor
-
-    freqs = [f for f in getattr(model.floor, "frequency_Hz", ()) if f > 0.0] if isinstance(model.floor, ModalFloor) else []
-    periods = [2.0 / f for f in freqs] + [0.01]
-    return max(periods)
+    floor = model.floor
+    freqs = [f for f in floor.frequency_Hz if f > 0.0] if isinstance(floor, ModalFloor) else []
+    horizon = max([2.0 / f for f in freqs] + [0.01])
+    if model.ball_mode is not None:
+        return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
+    return horizon
 
 
 def _recontacts(y_end, args):
@@ -422,15 +424,13 @@ def _recontacts(y_end, args):
     over ``recontact_horizon_s``. The model does not follow a second contact within one
     record: such an impact is flagged ``recontact``.
     """
-    from .floor import ModalFloor
-
     ball, model = args
     taus = jnp.linspace(0.0, recontact_horizon_s(model), 257)[1:]
     z = y_end[2:]
     gap_close = body_velocity_m_per_s(y_end, ball, model) * taus
     if model.ball_mode is not None:
         bm = model.ball_mode
-        w, wd = model.ball_mode_states(z)[0], model.ball_mode_states(z)[1]
+        w, wd = model.ball_mode_states(z)
         gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
     if isinstance(model.floor, ModalFloor):
         s = model.floor_states(z)
