@@ -3,9 +3,9 @@ references.
 
 References: the scipy solution of Eq. 7 (tests/scipy_reference.py, DOP853 at rtol 1e-12, written
 from the paper and calling nothing of rbjax) and central finite differences of it. The default
-``method="auto"`` runs the quadrature (``rbjax.quadrature``) for undamped models and the diffrax
-ODE otherwise; both must agree with the reference, and so must the histories, which come from the
-ODE whichever path computed the scalars.
+``method="auto"`` runs the quadrature (``rbjax.quadrature``) for undamped models, the phase-angle
+integration (``rbjax.angle``; its own tests: tests/test_angle.py) for damped ones on the rigid
+floor and the diffrax ODE otherwise; all must agree with the reference, and so must the histories.
 """
 
 from __future__ import annotations
@@ -49,11 +49,12 @@ def test_auto_picks_the_quadrature_for_undamped_models():
 
 
 @pytest.mark.parametrize("name", list(DAMPED))
-def test_auto_picks_the_ode_for_damped_models(name):
+def test_auto_picks_the_phase_angle_path_for_damped_models_on_the_rigid_floor(name):
     model = rbjax.Model(damping=DAMPED[name])
     reason = quadrature_unsupported(model)
     assert reason is not None and name in reason
-    assert resolve_method("auto", model) == "ode"
+    assert resolve_method("auto", model) == "angle"
+    assert resolve_method("auto", rbjax.Model(damping=DAMPED[name], floor=rbjax.Dashpot(1e5))) == "ode"
     with pytest.raises(ValueError, match="method='quadrature' cannot solve this model.*damping"):
         resolve_method("quadrature", model)
 
@@ -65,8 +66,8 @@ def test_a_given_solver_asks_for_the_ode():
 
 
 def test_method_is_validated():
-    assert METHODS == ("auto", "ode", "quadrature")
-    with pytest.raises(ValueError, match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature'"):
+    assert METHODS == ("auto", "ode", "quadrature", "angle")
+    with pytest.raises(ValueError, match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'"):
         rbjax.simulate(1.0, method="rk4")
     with pytest.raises(ValueError, match="method='quadrature' cannot solve this model: the damping \\(zener\\)"):
         rbjax.simulate(1.0, damping=DAMPED["zener"], method="quadrature")
@@ -89,10 +90,10 @@ def test_default_elastic_agrees_with_scipy_reference(gas, blocked):
 
 
 @pytest.mark.parametrize("name", list(DAMPED))
-def test_default_damped_runs_the_ode_and_agrees_with_scipy_reference(name):
+def test_default_damped_runs_the_phase_angle_path_and_agrees_with_scipy_reference(name):
     blocked = "momentum" if name == "zener" else "paper"
     res = rbjax.simulate(HEIGHTS_M, BALL, damping=DAMPED[name], blocked_force=blocked)
-    assert res.method == "ode"
+    assert res.method == "angle"
     ref = reference_scalars(HEIGHTS_M, BALL, damping=DAMPED[name], blocked_force=blocked)
     for field in ("contact_time_s", "peak_force_N", "restitution"):
         assert np.max(_rel(getattr(res, field), ref[field])) <= 1e-6, field

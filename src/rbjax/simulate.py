@@ -13,6 +13,7 @@ from jaxtyping import ArrayLike
 
 from ._validate import check_choice, check_range, is_traced
 from ._x64 import require_x64
+from .angle import angle_unsupported
 from .ball import JIS_RUBBER_BALL, Ball
 from .ball_mode import BallMode
 from .damping import AbstractDamping
@@ -22,8 +23,9 @@ from .impact import STATUS_CODES, STATUS_NAMES, Trajectory, impact_batch, trajec
 from .model import Model, Solver
 
 #: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
-#: ``quadrature_unsupported``) and no ``Solver`` was given, ``ode`` otherwise.
-METHODS = ("auto", "ode", "quadrature")
+#: ``quadrature_unsupported``), else ``angle`` where that allows it (``angle_unsupported``: the
+#: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
+METHODS = ("auto", "ode", "quadrature", "angle")
 
 #: The paper's output grid (§2.4): 44.1 kHz over 1 s.
 PAPER_RATE_Hz = 44_100.0
@@ -76,21 +78,23 @@ def quadrature_unsupported(model: Model) -> str | None:
 
 
 def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
-    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"`` or ``"ode"``.
+    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or ``"ode"``.
 
-    ``auto`` is the quadrature where ``quadrature_unsupported(model)`` is None and no ``solver``
-    is given (a ``Solver`` describes an ODE integration: passing one asks for it), the ODE
-    otherwise. ``"quadrature"`` on a model it cannot solve raises ``ValueError`` saying why.
+    ``auto`` is the fastest exact path the model allows when no ``solver`` is given (a ``Solver``
+    describes an ODE integration: passing one asks for it): the quadrature where
+    ``quadrature_unsupported(model)`` is None, else the phase-angle integration where
+    ``angle_unsupported(model)`` is None, else the ODE. Asking for a path that cannot solve the
+    model raises ``ValueError`` saying why.
     """
     check_choice("method", method, METHODS)
-    reason = quadrature_unsupported(model)
-    if method == "quadrature":
-        if reason is not None:
-            raise ValueError(f"method='quadrature' cannot solve this model: {reason}; valid: method='ode' or method='auto'")
-        return "quadrature"
-    if method == "ode":
+    reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
+    if method in reasons:
+        if reasons[method] is not None:
+            raise ValueError(f"method={method!r} cannot solve this model: {reasons[method]}; valid: method='ode' or method='auto'")
+        return method
+    if method == "ode" or solver is not None:
         return "ode"
-    return "quadrature" if reason is None and solver is None else "ode"
+    return next((path for path, reason in reasons.items() if reason is None), "ode")
 
 
 class ImpactResult(eqx.Module):
@@ -101,10 +105,10 @@ class ImpactResult(eqx.Module):
     ``deflection_limit``, ``solver_failed``).
 
     ``method`` records the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` =
-    solver steps), ``"quadrature"`` (``rbjax.quadrature``, ``num_steps`` = force evaluations) or
-    ``"quadrature+ode"`` (the quadrature, with the ODE for the impacts it flagged
-    ``solver_failed``). Histories (``force_N``, ``history()``) always integrate the ODE with
-    ``solver``.
+    solver steps), ``"quadrature"`` (``rbjax.quadrature``, ``num_steps`` = force evaluations),
+    ``"angle"`` (``rbjax.angle``, ``num_steps`` = fixed steps in the phase angle), or
+    ``"quadrature+ode"`` / ``"angle+ode"`` (that path, with the ODE for the impacts it flagged
+    ``solver_failed``).
     """
 
     height_m: jax.Array
@@ -211,12 +215,15 @@ def simulate(
 
     ``method`` picks the path of the scalar outputs (``result.method`` records it):
 
-    * ``"auto"`` (default): the quadrature (``rbjax.quadrature``: Eq. 7 integrated in δ, exact to
-      ~1e-12, no time stepping) for models without damping when no ``solver`` is given, the
-      diffrax ODE otherwise. Impacts the quadrature flags ``solver_failed`` (δ_max very close to
-      2R) are solved again by the ODE when the inputs are concrete (``"quadrature+ode"``).
+    * ``"auto"`` (default), when no ``solver`` is given: the quadrature (``rbjax.quadrature``:
+      Eq. 7 integrated in δ, ~1e-12, no time stepping) for models without damping on the rigid
+      floor; the phase-angle integration (``rbjax.angle``: fixed 8th-order steps in the phase
+      angle, ~1e-8) for damped models on the rigid floor; the diffrax ODE otherwise (ball mode,
+      moving floors) or when a ``solver`` is given. Impacts the quadrature or the phase-angle
+      path flags ``solver_failed`` (its error estimate too large) are solved again by the ODE
+      when the inputs are concrete (``"quadrature+ode"``, ``"angle+ode"``).
     * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
-    * ``"quadrature"``: the quadrature only (``ValueError`` for damped models).
+    * ``"quadrature"``, ``"angle"``: that path only (``ValueError`` for models it cannot solve).
 
     Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
     ``.force_N`` / ``.history()`` integrate the histories (ODE) on request.
@@ -232,8 +239,8 @@ def simulate(
 
 
 def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, method="ode", fallback=False) -> ImpactResult:
-    if method == "quadrature":
-        height, out, method = _quadrature_scalars(height_m, ball, model, solver, fallback)
+    if method in ("quadrature", "angle"):
+        height, out, method = _fast_scalars(method, height_m, ball, model, solver, fallback)
     else:
         shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
         out = jax.tree_util.tree_map(lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver))
@@ -263,39 +270,42 @@ def _as_float64(x):
 
 
 @eqx.filter_jit
-def _quadrature_program(height_m, ball, model):
-    """Broadcast, vmapped quadrature and reshape as ONE compiled program (one dispatch)."""
+def _fast_program(path: str, height_m, ball, model):
+    """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
+    from .angle import impact_angle
     from .quadrature import impact_quadrature
 
     shape, height, ball, model = _broadcast_inputs(height_m, ball, model)
-    out = jax.vmap(impact_quadrature)(height, ball, model)
+    solve = impact_quadrature if path == "quadrature" else impact_angle
+    out = jax.vmap(solve)(height, ball, model)
     return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
 
 
-def _quadrature_scalars(height_m, ball, model, solver, fallback: bool):
-    """The quadrature (broadcast height, outputs, path); with ``fallback`` (and concrete values)
-    the impacts it flags ``solver_failed`` are solved again by the ODE (the batch padded to a
-    power of two, so that few shapes compile)."""
-    from .quadrature import DEFAULT_NODES, _check
+def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
+    """The quadrature or phase-angle path (broadcast height, outputs, path); with ``fallback``
+    (and concrete values) the impacts it flags ``solver_failed`` are solved again by the ODE (the
+    batch padded to a power of two, so that few shapes compile)."""
+    if path == "quadrature":
+        from .quadrature import DEFAULT_NODES, _check
 
-    _check(height_m, ball, model, DEFAULT_NODES)
+        _check(height_m, ball, model, DEFAULT_NODES)
     # every value an array, so that new values reuse the compiled program (NumPy for concrete
     # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
     arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
     arrays = jax.tree_util.tree_map(_as_float64, arrays)
-    height, out = _quadrature_program(*eqx.combine(arrays, static))
+    height, out = _fast_program(path, *eqx.combine(arrays, static))
     if not fallback or is_traced(out.status):
-        return height, out, "quadrature"
+        return height, out, path
     failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
     if failed.size == 0:
-        return height, out, "quadrature"
+        return height, out, path
     shape, flat_height, flat_ball, flat_model = _broadcast_inputs(height_m, ball, model)
     padded = np.concatenate([failed, np.full((1 << int(failed.size - 1).bit_length()) - failed.size, failed[0])])
     pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
     redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
     index = jnp.asarray(failed)
     out = jax.tree_util.tree_map(lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo)
-    return height, out, "quadrature+ode"
+    return height, out, path + "+ode"
 
 
 def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:

@@ -53,11 +53,11 @@ def register(subparsers) -> None:
     p.add_argument("--params", default=None, metavar="FIT.json", help="ball and model from a params/fit JSON file (options above override it)")
     p.add_argument(
         "--method",
-        choices=("auto", "ode", "quadrature"),
+        choices=("auto", "ode", "quadrature", "angle"),  # rbjax.simulate.METHODS (not imported: --help stays fast)
         default="auto",
-        help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models only, "
-        "fastest), 'ode' runs the diffrax ODE, 'auto' (default) picks the quadrature where the model "
-        "allows it; the JSON rows record the path that ran",
+        help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on the rigid "
+        "floor, fastest), 'angle' takes fixed steps in the phase angle (any damping, rigid floor), 'ode' runs "
+        "the diffrax ODE, 'auto' (default) picks the fastest the model allows; the JSON rows record the path that ran",
     )
     p.add_argument(
         "--floor",
