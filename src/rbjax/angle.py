@@ -125,19 +125,24 @@ def _rates(phi, y, setup: _Setup, flux_on: bool):
     return r * u * (d - a) / denom, dt, internal_rates(d, v, z, ball, model) * dt
 
 
-def _combine(y, h, coefficients, stages):
-    """y + h Σ_j c_j k_j over the nonzero coefficients, component by component."""
-    terms = [(cj, kj) for cj, kj in zip(coefficients, stages) if cj != 0.0]
-    return jax.tree_util.tree_map(lambda y_, *ks: y_ + h * sum(cj * k_ for (cj, _), k_ in zip(terms, ks)), y, *(kj for _, kj in terms))
+def _combine(y, h, weights, stages):
+    """y + h Σ_j w_j k_j, component by component (stages: a tuple of (s, ...) arrays)."""
+    return jax.tree_util.tree_map(lambda y_, k_: y_ + h * jnp.tensordot(weights, k_, axes=1), y, stages)
 
 
 def _stages(phi, y, fy, h, setup: _Setup, flux_on: bool):
-    """The stages of one Dormand–Prince 8 step from (φ, y) with y′ = fy given (FSAL)."""
+    """The stages of one Dormand–Prince 8 step from (φ, y) with y′ = fy given (FSAL), as a tuple
+    of (14, ...) arrays. A loop over the stages, not an unrolled sequence: the vector field appears
+    once in the compiled program (compile time), at the price of multiplying A's zeros."""
     c, a, _, _ = _tableau()
-    stages = [fy]
-    for i in range(1, len(c)):
-        stages.append(_rates(phi + c[i] * h, _combine(y, h, a[i, :i], stages), setup, flux_on))
-    return stages
+    c, a = jnp.asarray(c), jnp.asarray(a)
+    stages = jax.tree_util.tree_map(lambda f: jnp.zeros((c.shape[0],) + f.shape, f.dtype).at[0].set(f), fy)
+
+    def body(i, stages):
+        rates = _rates(phi + c[i] * h, _combine(y, h, a[i], stages), setup, flux_on)
+        return jax.tree_util.tree_map(lambda k_, f_: k_.at[i].set(f_), stages, rates)
+
+    return jax.lax.fori_loop(1, c.shape[0], body, stages)
 
 
 def _weights(setup: _Setup):
@@ -159,7 +164,7 @@ def _quarter(phi0, y0, setup: _Setup, flux_on: bool, n_steps: int):
         local = _combine(zero, h, b_err, stages)
         err = err + jnp.max(jnp.concatenate([jnp.abs(e).reshape(-1) * w for e, w in zip(local, weights)]))
         # the FSAL stage (c = 1, last row of A = b) is y′ at the step's end
-        out = (_combine(y, h, b, stages), stages[-1])
+        out = (_combine(y, h, b, stages), _node(stages, -1))
         return (*out, err), out
 
     f0 = _rates(phi0, y0, setup, flux_on)
@@ -204,7 +209,7 @@ def _locate(event, k, phis, ys, fs, g, setup: _Setup, flux_on: bool, s_end=1.0):
         for column in coef[:, 1:].T:  # Horner: no pow
             weights = weights * s + column
         weights = weights * s
-        return pa + s * h, jax.tree_util.tree_map(lambda y_, *ks: y_ + h * sum(weights[j] * k_ for j, k_ in enumerate(ks)), ya, *stages)
+        return pa + s * h, _combine(ya, h, weights, stages)
 
     def newton(s):
         value, slope = jax.jvp(lambda ss: event(curve, ss), (s,), (jnp.ones_like(s),))
@@ -265,8 +270,8 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
 
     # maximum compression: the node at φ = π/2
     y_max = _node(ys1, -1)
-    peak_phi, y_peak = half, y_max
-    end_phi, y_end = np.pi, _node(ys2, -1)
+    peak_phi, y_peak = jnp.asarray(half), y_max
+    end_phi, y_end = jnp.asarray(np.pi), _node(ys2, -1)
     early = jnp.asarray(False)
     if model.velocity_dependent:
         # the force peak: dF/dφ falls through 0 in compression (else the peak is at π/2)
