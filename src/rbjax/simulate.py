@@ -153,13 +153,18 @@ class ImpactResult(eqx.Module):
 
     @property
     def force_N(self) -> jax.Array:
-        """Blocked-force histories on ``time_s`` (computed on access; zero after contact)."""
+        """Blocked-force histories on ``time_s`` (computed on access by ``history()``; zero after
+        contact)."""
         return self.history().force_N
 
     def history(self, rate_Hz: float | None = None, duration_s: float | None = None) -> Trajectory:
         """Deflection, velocity and floor force sampled at ``rate_Hz`` over ``duration_s``.
 
-        Only the samples during contact are integrated; the rest of the record is zero.
+        Only the samples during contact are integrated; the rest of the record is zero. The
+        rigid-floor models (no ball mode, no moving floor) are integrated by fixed RK4 steps
+        sampled inside the solve (``rbjax.sampled_history``) unless a ``Solver`` other than the
+        default was given, which asks for the diffrax ODE with it (as the coupled models
+        always are); see ``force_history``.
         """
         rate = self.rate_Hz if rate_Hz is None else rate_Hz
         duration = self.duration_s if duration_s is None else duration_s
@@ -326,43 +331,53 @@ def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_
     return jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), traj)
 
 
-def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None) -> Trajectory:
+def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None, method="auto") -> Trajectory:
     """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
 
     Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
     batch, computed first if not given); the rest of the record is zeros.
+
+    ``method``: ``"auto"`` integrates the rigid-floor models (no ball mode, no moving floor) by
+    fixed Runge–Kutta steps sampled inside the solve (``rbjax.sampled_history``; sub-steps where
+    the shortest contact spans few samples) when no ``solver`` other than the default
+    ``Solver()`` is given and the contact times are concrete and shorter than the record; it
+    solves the diffrax ODE with ``solver`` otherwise, as ``"ode"`` always does.
     """
-    _check_record(rate_Hz, duration_s)  # heights and ball: checked by trajectory() below
+    from .sampled_history import (
+        pad_record,
+        sampled_history_unsupported,
+        sampled_solve,
+        substeps_for_contact,
+    )
+
+    check_choice("method", method, ("auto", "ode"))
+    check_inputs(height_m, ball, rate_Hz, duration_s)
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
         path = resolve_method("auto", model)
         contact_time_s = _simulate(height_m, ball, model, solver, method=path, fallback=True).contact_time_s
-    if is_traced(contact_time_s):
+    tc = None if is_traced(contact_time_s) else np.asarray(contact_time_s, dtype=float)
+    if tc is None:
         n_contact = n_total
     else:
-        tc = np.asarray(contact_time_s, dtype=float)
         longest = np.nanmax(tc) if np.any(np.isfinite(tc)) else 0.0
         n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
-    times = jnp.arange(n_contact) / rate_Hz
-    traj = trajectory(height_m, times, ball, model, solver)
-    if n_contact < n_total and not is_traced(traj.in_contact) and np.any(np.asarray(traj.in_contact)[..., -1]):
+    default_solver = solver is None or solver == Solver()
+    sampled = method == "auto" and n_contact < n_total and default_solver and sampled_history_unsupported(model) is None
+
+    def solve(n):
+        if sampled:
+            return sampled_solve(height_m, ball, model, rate_Hz, n, substeps_for_contact(tc, rate_Hz))
+        return trajectory(height_m, jnp.arange(n) / rate_Hz, ball, model, solver)
+
+    def outlasts(traj):
+        """The contact goes on after the last sample computed (the ODE: is in contact there)."""
+        return np.asarray(traj.status == STATUS_CODES["step_limit"] if sampled else traj.in_contact[..., -1])
+
+    traj = solve(n_contact)
+    if n_contact < n_total and not is_traced(traj.status) and np.any(outlasts(traj)):
         # a contact outlasts the window (its contact time was not known: a failed scalar solve
-        # whose trajectory succeeds): integrate the whole record instead of truncating it
+        # whose history succeeds): integrate the whole record instead of truncating it
         n_contact = n_total
-        traj = trajectory(height_m, jnp.arange(n_total) / rate_Hz, ball, model, solver)
-    pad = n_total - n_contact
-    failed = (traj.status != 0)[..., None]
-
-    def padded(x):
-        widths = [(0, 0)] * (x.ndim - 1) + [(0, pad)]
-        # a failed solve stays NaN over the whole record, padding included
-        return jnp.where(failed, jnp.nan, jnp.pad(x, widths))
-
-    return Trajectory(
-        time_s=jnp.arange(n_total) / rate_Hz,
-        deflection_m=padded(traj.deflection_m),
-        velocity_m_per_s=padded(traj.velocity_m_per_s),
-        force_N=padded(traj.force_N),
-        in_contact=jnp.pad(traj.in_contact, [(0, 0)] * (traj.in_contact.ndim - 1) + [(0, pad)]),
-        status=traj.status,
-    )
+        traj = solve(n_total)
+    return pad_record(traj, n_total, float(rate_Hz))
