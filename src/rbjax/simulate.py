@@ -157,10 +157,11 @@ class ImpactResult(eqx.Module):
         contact)."""
         return self.history().force_N
 
-    def history(self, rate_Hz: float | None = None, duration_s: float | None = None) -> Trajectory:
+    def history(self, rate_Hz: float | None = None, duration_s: float | None = None, *, pad: bool = True) -> Trajectory:
         """Deflection, velocity and floor force sampled at ``rate_Hz`` over ``duration_s``.
 
-        Only the samples during contact are integrated; the rest of the record is zero. The
+        Only the samples during contact are integrated; the rest of the record is zero (with
+        ``pad=False``: left out, the history ends a sample or two after the longest contact). The
         rigid-floor models (no ball mode, no moving floor) are integrated by fixed RK4 steps
         sampled inside the solve (``rbjax.sampled_history``) unless a ``Solver`` other than the
         default was given, which asks for the diffrax ODE with it (as the coupled models
@@ -168,7 +169,21 @@ class ImpactResult(eqx.Module):
         """
         rate = self.rate_Hz if rate_Hz is None else rate_Hz
         duration = self.duration_s if duration_s is None else duration_s
-        return force_history(self.height_m, self.ball, self.model, self.solver, rate_Hz=rate, duration_s=duration, contact_time_s=self.contact_time_s)
+        return force_history(self.height_m, self.ball, self.model, self.solver, rate_Hz=rate, duration_s=duration, contact_time_s=self.contact_time_s, pad=pad)
+
+    def lfe_octave_dB(self) -> jax.Array:
+        """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.lfe_octave_dB``) of the force record
+        of ``rate_Hz`` over ``duration_s``, from its contact samples (exact: the rest is zero);
+        shape (..., 6), NaN where the solve failed."""
+        from .spectrum import lfe_octave_dB
+
+        return lfe_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
+
+    def lfe_third_octave_dB(self) -> jax.Array:
+        """One-third-octave-band L_FE of the force record, as ``lfe_octave_dB``; shape (..., 18)."""
+        from .spectrum import lfe_third_octave_dB
+
+        return lfe_third_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
 
     def plot(self, ax=None, *, rate_Hz: float | None = None):
         """Plot the force histories over the contact (one line per height)."""
@@ -231,7 +246,8 @@ def simulate(
     * ``"quadrature"``, ``"angle"``: that path only (``ValueError`` for models it cannot solve).
 
     Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
-    ``.force_N`` / ``.history()`` integrate the histories (ODE) on request.
+    ``.force_N`` / ``.history()`` compute the histories on request (``rbjax.sampled_history`` on the
+    rigid floor, the ODE otherwise); ``.lfe_octave_dB()`` the band levels from the contact samples.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
     model = make_model(
@@ -331,11 +347,13 @@ def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_
     return jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), traj)
 
 
-def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None, method="auto") -> Trajectory:
+def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None, method="auto", pad=True) -> Trajectory:
     """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
 
     Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
-    batch, computed first if not given); the rest of the record is zeros.
+    batch, computed first if not given); the rest of the record is zeros. With ``pad=False`` the
+    computed samples are returned as they are (every non-zero sample of the record: pass
+    ``n_record=round(rate_Hz·duration_s)`` to the ``rbjax.spectrum`` functions).
 
     ``method``: ``"auto"`` integrates the rigid-floor models (no ball mode, no moving floor) by
     fixed Runge–Kutta steps sampled inside the solve (``rbjax.sampled_history``; sub-steps where
@@ -380,4 +398,4 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
         # whose history succeeds): integrate the whole record instead of truncating it
         n_contact = n_total
         traj = solve(n_total)
-    return pad_record(traj, n_total, float(rate_Hz))
+    return pad_record(traj, n_total, float(rate_Hz)) if pad else traj
