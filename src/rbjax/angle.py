@@ -204,29 +204,35 @@ def _locate(event, k, phis, ys, fs, g, setup: _Setup, flux_on: bool, s_end=1.0):
     stages = _stages(pa, ya, _node(fs, k - 1), h, setup, flux_on)
     coef = _dense_coefficients()
 
-    def curve(s):
-        weights = coef[:, 0]
-        for column in coef[:, 1:].T:  # Horner: no pow
-            weights = weights * s + column
-        weights = weights * s
-        return pa + s * h, _combine(ya, h, weights, stages)
+    def curve_of(pa, h, ya, stages):
+        def curve(s):
+            weights = coef[:, 0]
+            for column in coef[:, 1:].T:  # Horner: no pow
+                weights = weights * s + column
+            weights = weights * s
+            return pa + s * h, _combine(ya, h, weights, stages)
 
-    def newton(s):
+        return curve
+
+    def newton(curve, s):
         value, slope = jax.jvp(lambda ss: event(curve, ss), (s,), (jnp.ones_like(s),))
         return value, s - value / slope
 
-    g0, g1 = g[k - 1], g[k]
+    curve = curve_of(pa, h, ya, stages)
+    # the bracketing iterations carry no tangents (gradients come from the last Newton step)
+    fixed = curve_of(*jax.lax.stop_gradient((pa, h, ya, stages)))
+    g0, g1 = jax.lax.stop_gradient((g[k - 1], g[k]))
     guess = jnp.clip(g0 / (g0 - g1), 0.0, 1.0) * s_end
 
     def body(_, carry):
         lo, hi, s = carry
-        value, proposal = newton(s)
+        value, proposal = newton(fixed, s)
         lo, hi = jnp.where(value > 0.0, s, lo), jnp.where(value > 0.0, hi, s)
         inside = (proposal >= lo) & (proposal <= hi)
         return lo, hi, jnp.where(inside, proposal, 0.5 * (lo + hi))
 
-    _, _, s = jax.lax.fori_loop(0, EVENT_ITERATIONS, body, (jnp.zeros(()), jnp.asarray(s_end), guess))
-    return curve(newton(jax.lax.stop_gradient(s))[1])
+    _, _, s = jax.lax.fori_loop(0, EVENT_ITERATIONS, body, jax.lax.stop_gradient((jnp.zeros(()), jnp.asarray(s_end), guess)))
+    return curve(newton(curve, jax.lax.stop_gradient(s))[1])
 
 
 def _start(height_m, ball: Ball, model: Model):
