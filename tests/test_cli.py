@@ -149,7 +149,7 @@ def test_method_option_runs_the_ode_and_agrees(json_rows):
     for name in ("contact_time_s", "peak_force_N", "restitution"):
         np.testing.assert_allclose([r[name] for r in rows], [r[name] for r in json_rows], rtol=1e-8)
     code, out, err = run_cli(["simulate", "--help"])
-    assert code == 0 and "--method {auto,ode,quadrature}" in out
+    assert code == 0 and "--method {auto,ode,quadrature,angle}" in out
 
 
 def test_json_agrees_with_the_scipy_reference(json_rows):

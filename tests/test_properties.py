@@ -173,4 +173,6 @@ def test_damped_model_never_gains_energy(params):
     # the damping force cδ̇ opposes the compression, so δ_max only falls: a point inside the
     # shell model without damping is inside it with damping, and must be solved
     assert np.all(np.asarray(res.status)[both] == 0), np.asarray(res.status)[both]
-    assert np.all(np.asarray(res.restitution)[both] <= np.asarray(elastic.restitution)[both] + 1e-12)
+    # (up to the two paths' accuracy: the elastic model runs the quadrature, ~1e-12, the damped
+    # one the phase-angle path, ≤ 1e-7 against the scipy reference; ζ = 0 is among the draws)
+    assert np.all(np.asarray(res.restitution)[both] <= np.asarray(elastic.restitution)[both] * (1.0 + 1e-7))

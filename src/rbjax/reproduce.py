@@ -68,7 +68,7 @@ def _run(heights: np.ndarray, gas: str) -> dict:
     )
 
     res = simulate(heights, gas=gas)
-    hist = res.history()  # rbjax.trajectory on the paper's 44.1 kHz x 1 s grid (§2.4)
+    hist = res.history()  # the paper's 44.1 kHz x 1 s grid (§2.4)
     force = np.asarray(hist.force_N)
     ok = np.asarray(res.status) == 0
     octave = np.array(lfe_octave_dB(force, PAPER_RATE_Hz))
