@@ -74,12 +74,9 @@ EDGE = 1e-9
 
 
 def angle_unsupported(model: Model) -> str | None:
-    """Why the phase-angle path cannot solve ``model``; None if it can (rigid floor, no ball mode)."""
-    if model.ball_mode is not None:
-        return "the ball mode adds a second oscillator (δ = X + w): the contact is not a half-turn in (δ, δ̇)"
-    if not model.floor.rigid:
-        return f"the floor ({model.floor.name}) moves under the force (δ = X − u)"
-    return None
+    """Why the phase-angle path cannot solve ``model``; None if it can (rigid floor, no ball mode:
+    the contact is a half-turn in (δ, δ̇) only when δ is the ball's rigid motion)."""
+    return model.coupling
 
 
 @functools.cache

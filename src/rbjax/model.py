@@ -166,10 +166,20 @@ class Model(eqx.Module):
         return bool(self.damping)
 
     @property
+    def coupling(self) -> str | None:
+        """Why the shell is pressed by more than the ball's rigid motion, δ = X + w − u (a ball
+        mode, a moving floor), in words; None on the rigid floor without a ball mode. The paths
+        that solve only δ = X (quadrature, phase angle, sampled histories) give it as their reason."""
+        if self.ball_mode is not None:
+            return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
+        if not self.floor.rigid:
+            return f"the floor ({self.floor.name}) moves under the force (δ = X − u)"
+        return None
+
+    @property
     def coupled(self) -> bool:
-        """True if the shell is pressed by more than the ball's rigid motion (a ball mode or a
-        moving floor): δ = X + w − u."""
-        return self.ball_mode is not None or not self.floor.rigid
+        """True if the shell is pressed by more than the ball's rigid motion (``coupling``)."""
+        return self.coupling is not None
 
 
 _SOLVERS = {

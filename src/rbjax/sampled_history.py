@@ -52,8 +52,8 @@ from .impact import (
     floor_force_N,
     impact_velocity_m_per_s,
 )
+from .inputs import PAPER_RATE_Hz, _as_float64, _broadcast_inputs, check_inputs
 from .model import Model
-from .simulate import PAPER_RATE_Hz, _as_float64, _broadcast_inputs, check_inputs
 
 #: Fourth-order Runge–Kutta steps per sample unless the caller asks for more.
 DEFAULT_SUBSTEPS = 1
@@ -185,11 +185,7 @@ def _count(name: str, value) -> int:
 
 def sampled_history_unsupported(model: Model) -> str | None:
     """Why ``sampled_history`` cannot solve ``model``; None if it can (rigid floor, no ball mode)."""
-    if model.ball_mode is not None:
-        return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
-    if not model.floor.rigid:
-        return f"the floor ({model.floor.name}) moves under the force (δ = X − u)"
-    return None
+    return model.coupling
 
 
 def substeps_for_contact(contact_time_s, rate_Hz: float) -> int:

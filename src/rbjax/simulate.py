@@ -12,7 +12,6 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from ._validate import check_choice, check_range, is_traced
-from ._x64 import require_x64
 from .angle import angle_unsupported
 from .ball import JIS_RUBBER_BALL, Ball
 from .ball_mode import BallMode
@@ -20,6 +19,13 @@ from .damping import AbstractDamping
 from .floor import AbstractFloor
 from .forces import CubicStiffening
 from .impact import STATUS_CODES, STATUS_NAMES, Trajectory, impact_batch, trajectory_batch
+from .inputs import (
+    PAPER_DURATION_S,
+    PAPER_RATE_Hz,
+    _as_float64,
+    _broadcast_inputs,
+    check_inputs,
+)
 from .model import Model, Solver
 
 #: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
@@ -27,9 +33,7 @@ from .model import Model, Solver
 #: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
 METHODS = ("auto", "ode", "quadrature", "angle")
 
-#: The paper's output grid (§2.4): 44.1 kHz over 1 s.
-PAPER_RATE_Hz = 44_100.0
-PAPER_DURATION_S = 1.0
+
 
 
 def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None) -> Model:
@@ -45,20 +49,6 @@ def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffeni
     )
 
 
-def _broadcast_inputs(height_m, ball: Ball, model: Model):
-    """Flatten height, ball and model parameters to one batch axis (shape kept for outputs)."""
-    height = jnp.asarray(height_m, dtype=jnp.float64)
-    ball = ball.as_arrays()
-    arrays, static = eqx.partition(model, eqx.is_array_like)
-    arrays = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=jnp.float64), arrays)
-    leaves = [height, *jax.tree_util.tree_leaves(ball), *jax.tree_util.tree_leaves(arrays)]
-    shape = jnp.broadcast_shapes(*(x.shape for x in leaves))
-    flat = lambda x: jnp.broadcast_to(x, shape).reshape(-1)  # noqa: E731
-    height = flat(height)
-    ball = jax.tree_util.tree_map(flat, ball)
-    model = eqx.combine(jax.tree_util.tree_map(flat, arrays), static)
-    return shape, height, ball, model
-
 
 def quadrature_unsupported(model: Model) -> str | None:
     """Why the quadrature path (``rbjax.quadrature``) cannot solve ``model``; None if it can.
@@ -70,11 +60,7 @@ def quadrature_unsupported(model: Model) -> str | None:
     if model.damping:
         names = ", ".join(d.name for d in model.damping)
         return f"the damping ({names}) makes the contact force depend on the velocity or on internal states, not on δ alone"
-    if model.ball_mode is not None:
-        return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
-    if not model.floor.rigid:
-        return f"the floor ({model.floor.name}) moves under the force (δ = X − u)"
-    return None
+    return model.coupling
 
 
 def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
@@ -192,22 +178,6 @@ class ImpactResult(eqx.Module):
         return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
 
 
-def _check_record(rate_Hz, duration_s) -> None:
-    check_range("rate_Hz", rate_Hz, lower=0.0)
-    check_range("duration_s", duration_s, lower=0.0)
-    if int(round(rate_Hz * duration_s)) < 1:
-        raise ValueError(f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need rate_Hz·duration_s ≥ 1")
-
-
-def check_inputs(height_m, ball, rate_Hz=None, duration_s=None) -> None:
-    """The checks at the API edge shared by simulate, trajectory and sensitivities."""
-    require_x64()
-    check_range("height_m", height_m, lower=0.0)
-    if not isinstance(ball, Ball):
-        raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
-    if rate_Hz is not None:
-        _check_record(rate_Hz, duration_s)
-
 
 def simulate(
     height_m: ArrayLike,
@@ -283,11 +253,6 @@ def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_
         method=method,
     )
 
-
-def _as_float64(x):
-    if isinstance(x, (jax.Array, jax.core.Tracer)):
-        return x if x.dtype == jnp.float64 else jnp.asarray(x, dtype=jnp.float64)
-    return np.asarray(x, dtype=np.float64)
 
 
 @eqx.filter_jit
