@@ -24,10 +24,10 @@ Valid while D > 0, i.e. the trajectory turns monotonically (checked at every nod
 
 Events inside a phase (damped models: the peak of the floor force, where dF/dt = 0, and the
 end of contact where the contact force returns to 0 before δ does) are bracketed by the signs
-at the step ends and located on the quintic Hermite interpolant of the bracketing step (values,
-first and second derivatives in φ at both ends), by Newton's method with a bisection safeguard
-and one last unguarded Newton step (so that derivatives of the event follow the implicit
-function theorem, not the bracket).
+at the step ends and located on the continuous extension of the bracketing step (its 14 stages
+computed once more; a quintic Hermite interpolant from the nodes alone was 1e-6 off: the steps
+are long), by Newton's method with a bisection safeguard and one last unguarded Newton step (so
+that derivatives of the event follow the implicit function theorem, not the bracket).
 
 Accuracy is checked a posteriori: the embedded error estimate of every step, weighted
 (r by r₀ = v₀/ω₀, t by 1/ω₀, internal states by k r₀), summed over the steps, must stay below
@@ -66,7 +66,8 @@ from .model import Model
 DEFAULT_STEPS = 6
 #: Largest accepted sum of weighted local error estimates (see the module docstring).
 ERROR_TOLERANCE = 1e-6
-#: Newton (with bisection safeguard) iterations locating an event on the Hermite interpolant.
+#: Newton (with bisection safeguard) iterations bracketing an event on the step's continuous
+#: extension before the last, unguarded Newton step.
 EVENT_ITERATIONS = 2
 #: The end of contact is tested at φ = π − EDGE (δ ≈ r·EDGE > 0): whether the contact force is
 #: still positive just before δ returns to 0.
