@@ -16,6 +16,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+from rbjax import band_kernel  # noqa: E402
 from rbjax import spectrum as S  # noqa: E402
 
 RATE = 44100.0  # Hz
@@ -144,15 +145,15 @@ def test_large_batch_in_blocks():
 
 
 def test_kernel_too_large_falls_back_to_the_padded_fft(monkeypatch):
-    monkeypatch.setattr(S, "_KERNEL_MAX_TERMS", 0)
-    S._band_kernel.cache_clear()
+    monkeypatch.setattr(band_kernel, "KERNEL_MAX_TERMS", 0)
+    band_kernel.band_kernel.cache_clear()
     try:
         x = records("random", (2,), 64)
         lower, upper = iec_edges(1, OCTAVE_X)
         got = S.band_energies_N2s(x, RATE, lower, upper, n_record=5000)
         np.testing.assert_allclose(got, padded_band_energies(x, 5000, lower, upper), rtol=1e-12)
     finally:
-        S._band_kernel.cache_clear()
+        band_kernel.band_kernel.cache_clear()
 
 
 # --------------------------------------------------------------------------------------
