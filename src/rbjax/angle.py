@@ -342,17 +342,15 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
         [STATUS_CODES["solver_failed"], STATUS_CODES["mass_singularity"], STATUS_CODES["deflection_limit"]],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
-    ok = status == 0
-    nan = jnp.nan
-    return ImpactScalars(
-        contact_time_s=jnp.where(ok, t_end, nan),
-        peak_force_N=jnp.where(ok, peak_force, nan),
-        peak_time_s=jnp.where(ok, peak_time, nan),
-        restitution=jnp.where(ok, restitution, nan),
-        max_deflection_m=jnp.where(ok, d_max, nan),
-        max_compression_time_s=jnp.where(ok, t_max, nan),
-        status=status,
-        num_steps=jnp.asarray(2 * n_steps, dtype=jnp.int32),
+    return ImpactScalars.flagged(
+        status,
+        2 * n_steps,
+        contact_time_s=t_end,
+        peak_force_N=peak_force,
+        peak_time_s=peak_time,
+        restitution=restitution,
+        max_deflection_m=d_max,
+        max_compression_time_s=t_max,
     )
 
 

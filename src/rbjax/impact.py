@@ -71,6 +71,14 @@ class ImpactScalars(eqx.Module):
     status: jax.Array
     num_steps: jax.Array
 
+    @classmethod
+    def flagged(cls, status, num_steps, **outputs) -> ImpactScalars:
+        """The outputs where ``status`` is 0 (ok) and NaN elsewhere: a failed solve never
+        returns plausible-looking numbers. ``outputs``: the six float fields by name."""
+        ok = status == 0
+        masked = {name: jnp.where(ok, value, jnp.nan) for name, value in outputs.items()}
+        return cls(**masked, status=jnp.asarray(status, dtype=jnp.int32), num_steps=jnp.asarray(num_steps, dtype=jnp.int32))
+
 
 def _split(y):
     return y[0], y[1], y[2:]
@@ -466,17 +474,15 @@ def _impact(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     steps = sum(s.stats["num_steps"] for s in solved)
     status = _status(sols, y_max.at[0].set(max_deflection), jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]), ball, model)
     status = jnp.where((status == 0) & recontact, STATUS_CODES["recontact"], status).astype(jnp.int32)
-    ok = status == 0
-    nan = jnp.nan
-    return ImpactScalars(
-        contact_time_s=jnp.where(ok, t_end, nan),
-        peak_force_N=jnp.where(ok, peak_force, nan),
-        peak_time_s=jnp.where(ok, peak_time, nan),
-        restitution=jnp.where(ok, restitution, nan),
-        max_deflection_m=jnp.where(ok, max_deflection, nan),
-        max_compression_time_s=jnp.where(ok, t_max, nan),
-        status=status,
-        num_steps=jnp.asarray(steps, dtype=jnp.int32),
+    return ImpactScalars.flagged(
+        status,
+        steps,
+        contact_time_s=t_end,
+        peak_force_N=peak_force,
+        peak_time_s=peak_time,
+        restitution=restitution,
+        max_deflection_m=max_deflection,
+        max_compression_time_s=t_max,
     )
 
 

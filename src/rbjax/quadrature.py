@@ -452,17 +452,15 @@ def impact_quadrature(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFA
     sol = _solve_scalars(height_m, ball, model, n_nodes)
     peak = sol.peak_force
     first = model.momentum_flux_weight * ball.mass_kg / (2.0 * ball.radius_m) * sol.v0**2
-    ok = sol.status == 0
-    nan = jnp.nan
-    return ImpactScalars(
-        contact_time_s=jnp.where(ok, sol.t_compression + sol.t_restitution, nan),
-        peak_force_N=jnp.where(ok, jnp.maximum(peak, first), nan),
-        peak_time_s=jnp.where(ok, jnp.where(peak >= first, sol.t_compression, 0.0), nan),
-        restitution=jnp.where(ok, sol.v_out / sol.v0, nan),
-        max_deflection_m=jnp.where(ok, sol.d_max, nan),
-        max_compression_time_s=jnp.where(ok, sol.t_compression, nan),
-        status=sol.status,
-        num_steps=jnp.asarray(_num_force_evaluations(n_nodes), dtype=jnp.int32),
+    return ImpactScalars.flagged(
+        sol.status,
+        _num_force_evaluations(n_nodes),
+        contact_time_s=sol.t_compression + sol.t_restitution,
+        peak_force_N=jnp.maximum(peak, first),
+        peak_time_s=jnp.where(peak >= first, sol.t_compression, 0.0),
+        restitution=sol.v_out / sol.v0,
+        max_deflection_m=sol.d_max,
+        max_compression_time_s=sol.t_compression,
     )
 
 
