@@ -27,7 +27,7 @@ import diffrax as dfx
 import jax
 import jax.numpy as jnp
 
-from rbjax.model import FIXED_STEP_METHODS, Solver
+from rbjax.terms.model import FIXED_STEP_METHODS, Solver
 
 HERE = Path(__file__).resolve().parent
 RESULTS_DIR = HERE / "results"
@@ -198,12 +198,12 @@ def scipy_impact_lean(height_m: float, ball, *, rtol: float = 1e-10, atol: float
 
 def quadrature_reference(heights_m, ball=None, *, gas="adiabatic", n_nodes: int = 64):
     """Scalar outputs of the elastic model by the quadrature path at a high node count (an
-    independent integration of Eq. 7 in δ, exponentially convergent; see rbjax.quadrature)."""
-    from rbjax.quadrature import impact_quadrature_batch
-    from rbjax.simulate import _broadcast_inputs, make_model
+    independent integration of Eq. 7 in δ, exponentially convergent; see rbjax.solve.quadrature)."""
+    from rbjax.solve import impact_quadrature_batch
+    from rbjax.solve.simulate import broadcast_inputs, make_model
 
     ball = rbjax.JIS_RUBBER_BALL if ball is None else ball
-    _, h, b, m = _broadcast_inputs(np.asarray(heights_m, dtype=float), ball, make_model(gas=gas))
+    _, h, b, m = broadcast_inputs(np.asarray(heights_m, dtype=float), ball, make_model(gas=gas))
     out = impact_quadrature_batch(h, b, m, n_nodes)
     return {k: np.asarray(getattr(out, k)) for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m", "status")}
 

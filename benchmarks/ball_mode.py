@@ -31,8 +31,8 @@ import numpy as np
 import rbjax
 from rbjax.data import examples_dir
 from rbjax.fit import fit, prepare_data
-from rbjax.selection import _held_out_rows, shared_structure
 from rbjax.spectrum import OCTAVE_BANDS
+from rbjax.studies.selection import held_out_rows, shared_structure
 
 from _common import finish_machine_info, machine_info, time_call, write_json
 
@@ -70,7 +70,7 @@ def held_out(data, superset, quick: bool):
             print(f"fit {name}/momentum start {start}: rms {res.residual_rms_N:.2f} N, {res.message}, {elapsed:.0f} s", flush=True)
         cost, res, start, elapsed = min(tried, key=lambda x: x[0])
         rest = [h for h in data.heights_m if not np.any(np.isclose(FIT_HEIGHTS, h))]
-        rows = _held_out_rows(res, rest)
+        rows = held_out_rows(res, rest)
         fits[name] = res
         out[name] = {
             "start": start,

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 import rbjax
-from rbjax.growth import model_growth, model_lfe_dB, recording_growth, recording_lfe_dB
-from rbjax.standards import check_conformance
+from rbjax.spectrum import check_conformance
+from rbjax.studies.growth import model_growth, model_lfe_dB, recording_growth, recording_lfe_dB
 
 from _common import read_json, write_json
 

@@ -1,4 +1,4 @@
-"""Speed and accuracy of the impact on moving floors (``rbjax.floor``).
+"""Speed and accuracy of the impact on moving floors (``rbjax.terms.floors.kinds``).
 
     .venv/bin/python benchmarks/floors.py [--quick]   # prints a table, writes results/floors.json
 
@@ -12,7 +12,7 @@ the independent scipy references (``tests/scipy_floor_reference.py`` for moving 
 Floors: rigid; dashpots Z = 500, 2000, 1e5 N·s/m; infinite plates of 15 mm OSB
 (E 4.9 GPa, ρ 600 kg/m³, ν 0.3) and 150 mm concrete (E 30 GPa, ρ 2300 kg/m³, ν 0.2); the
 first five drive-point modes of a simply supported 4 m × 5 m, 140 mm concrete slab
-(``rbjax.floor_modes.simply_supported_plate_modes``, η 0.02).
+(``rbjax.terms.simply_supported_plate_modes``, η 0.02).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 import rbjax
-from rbjax.floor_modes import simply_supported_plate_modes
+from rbjax.terms import simply_supported_plate_modes
 
 from _common import finish_machine_info, fmt, machine_info, parse_args, table, time_call, write_json
 from scipy_floor_reference import reference_floor_impact

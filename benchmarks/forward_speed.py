@@ -11,7 +11,7 @@ The targets (the project's "forward speed" goal), each measured here in one run:
   the forward, at batch 1, 1000 and 10 000, of the default paths: the quadrature (elastic) w.r.t.
   (E, ν), the phase-angle path (Zener) w.r.t. (E, ν, relaxation time);
 * the damped models (Zener, Hunt–Crossley; ``simulate`` default: the phase-angle path
-  ``rbjax.angle``) at batch 10 000: ≥ 300 000 impacts/s; histories (44.1 kHz × 1 s force record:
+  ``rbjax.solve.angle``) at batch 10 000: ≥ 300 000 impacts/s; histories (44.1 kHz × 1 s force record:
   its contact samples, ``history(pad=False)``, the rest being zero, and its octave-band L_FE with
   ``n_record=44 100``) ≥ 20 000/s.
 

@@ -1,5 +1,5 @@
 """Force histories: the ODE path (diffrax, dense interpolant at the sample times) against the
-histories sampled inside a fixed-step solve (``rbjax.sampled_history``, RK4, one step per sample),
+histories sampled inside a fixed-step solve (``rbjax.solve.sampled``, RK4, one step per sample),
 the default of ``force_history`` for the rigid-floor models since this change.
 
 Records per second at batch 100 and 1000 (heights 0.1–1.6 m, 44.1 kHz), for the force samples of
@@ -20,8 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
-from rbjax.sampled_history import sampled_solve, substeps_for_contact
-from rbjax.simulate import force_history, make_model, trajectory
+from rbjax.solve import force_history, make_model, trajectory
+from rbjax.solve.sampled import sampled_solve, substeps_for_contact
 
 from _common import finish_machine_info, machine_info, parse_args, table, time_call, write_json
 from scipy_reference import reference_impact

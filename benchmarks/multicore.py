@@ -1,5 +1,5 @@
 """Lever: both CPU cores. XLA:CPU runs a vmapped solve on one core; splitting the batch over two
-host devices (``--xla_force_host_platform_device_count=2``, ``jax.jit`` with a NamedSharding of the batch axis, as ``rbjax.sweep`` does)
+host devices (``--xla_force_host_platform_device_count=2``, ``jax.jit`` with a NamedSharding of the batch axis, as ``rbjax.studies.sweep`` does)
 runs the halves in parallel. Scalar outputs at batch 10 000 (quick: 1000), one device vs two.
 
 The XLA flag must be set before JAX starts, so this script sets it itself; run it on its own:
@@ -20,9 +20,9 @@ from jax.sharding import Mesh, NamedSharding  # noqa: E402
 from jax.sharding import PartitionSpec as P  # noqa: E402
 
 import rbjax  # noqa: E402
-from rbjax.impact import _impact  # noqa: E402
-from rbjax.quadrature import impact_quadrature  # noqa: E402
-from rbjax.simulate import _broadcast_inputs, make_model  # noqa: E402
+from rbjax.solve import impact_quadrature  # noqa: E402
+from rbjax.solve.ode import impact_ode  # noqa: E402
+from rbjax.solve.simulate import broadcast_inputs, make_model  # noqa: E402
 
 from _common import (  # noqa: E402
     finish_machine_info,
@@ -43,17 +43,17 @@ def main():
     n = 1000 if args.quick else 10_000
     model = make_model()
     heights = np.linspace(0.1, 1.6, n)
-    _, h, b, _ = _broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
+    _, h, b, _ = broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
     ref = quadrature_reference(heights)["contact_time_s"]
     devices = jax.devices()
     mesh = Mesh(np.array(devices[:2]), ("batch",))
     rows = []
-    for name, one in (("ode, recommended tsit5 1e-7/1e-10", lambda hh, bb: _impact(hh, bb, model, RECOMMENDED).contact_time_s),
+    for name, one in (("ode, recommended tsit5 1e-7/1e-10", lambda hh, bb: impact_ode(hh, bb, model, RECOMMENDED).contact_time_s),
                       ("quadrature, n_nodes=10", lambda hh, bb: impact_quadrature(hh, bb, model, n_nodes=10).contact_time_s),
                       ("quadrature, n_nodes=12 (default)", lambda hh, bb: impact_quadrature(hh, bb, model).contact_time_s)):
         batched = jax.vmap(one)
         single = jax.jit(batched)
-        # as rbjax.sweep shards: jit with the batch axis split over the mesh (GSPMD partitions
+        # as rbjax.studies.sweep shards: jit with the batch axis split over the mesh (GSPMD partitions
         # the vmapped solve; shard_map trips over the event root finder's lineax solve)
         spec = NamedSharding(mesh, P("batch"))
         sharded = jax.jit(batched, in_shardings=(spec, spec), out_shardings=spec)

@@ -30,9 +30,9 @@ import warnings
 import numpy as np
 
 import rbjax
-from rbjax.impact import SINGULAR_FRACTION, impact_batch
-from rbjax.quadrature import impact_quadrature_batch
-from rbjax.simulate import _broadcast_inputs, make_model
+from rbjax.solve import impact_batch, impact_quadrature_batch
+from rbjax.solve.outcome import SINGULAR_FRACTION
+from rbjax.solve.simulate import broadcast_inputs, make_model
 
 from _common import (
     RESULTS_DIR,
@@ -88,7 +88,7 @@ def reference(key, s):
     import scipy_reference as sr
 
     if key in ("A", "C"):
-        _, h, b, m = _broadcast_inputs(hh, ball, model)
+        _, h, b, m = broadcast_inputs(hh, ball, model)
         out = impact_quadrature_batch(h, b, m, 64)
         ref = {k: np.array(getattr(out, k)).reshape(shape) for k in SCALARS + ("max_deflection_m",)}
         ref["status"] = np.array(out.status).reshape(shape)
@@ -162,7 +162,7 @@ def main():
         entry = {"label": label, "method": method, "slices": {}}
         for key, s in slices.items():
             hh, ball, model = inputs(key, s)
-            shape, h, b, m = _broadcast_inputs(hh, ball, model)
+            shape, h, b, m = broadcast_inputs(hh, ball, model)
             t = time.perf_counter()
             out = impact_batch(h, b, m, solver)
             out = type(out)(**{f: np.asarray(getattr(out, f)).reshape(shape) for f in out.__dataclass_fields__})

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 import rbjax
-from rbjax.floor_presets import floor_preset
+from rbjax.terms import floor_preset
 
 from _common import finish_machine_info, machine_info, table, time_call, write_json
 

@@ -5,8 +5,8 @@ heights spread over 0.1–1.6 m. For each workload and batch size B the first ca
 compile + run) and the median of later calls are timed (``block_until_ready``); compile time =
 first − median. Workloads:
 
-(a) scalar outputs (contact time, peak force, restitution): ``rbjax.impact.impact_batch`` after
-    ``rbjax.simulate._broadcast_inputs`` (the core of ``rbjax.simulate``), with the library's
+(a) scalar outputs (contact time, peak force, restitution): ``rbjax.solve.impact_batch`` after
+    ``rbjax.solve.simulate.broadcast_inputs`` (the core of ``rbjax.simulate``), with the library's
     default ``Solver()`` and with the recommended one; the quadrature path
     ``impact_quadrature_batch`` (default 12 interpolation points, and 10 and 16); a batch of mixed difficulty with
     and without bucketing; and the scipy loop (DOP853, rtol 1e-10, one terminal event per phase).
@@ -38,9 +38,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
-from rbjax.impact import _COMPRESSION, _impact, impact_batch
-from rbjax.quadrature import impact_quadrature, impact_quadrature_batch
-from rbjax.simulate import _broadcast_inputs, make_model
+from rbjax.solve import impact_quadrature, impact_quadrature_batch
+from rbjax.solve.ode import COMPRESSION_FIELD, impact_batch, impact_ode
+from rbjax.solve.simulate import broadcast_inputs, make_model
 from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
 from _common import (
@@ -75,7 +75,7 @@ def heights(n):
 def flat(n, model=None, **ball_changes):
     model = make_model() if model is None else model
     ball = BALL.replace(**ball_changes) if ball_changes else BALL
-    _, h, b, m = _broadcast_inputs(heights(n), ball, model)
+    _, h, b, m = broadcast_inputs(heights(n), ball, model)
     return h, b, m
 
 
@@ -143,7 +143,7 @@ def bucketing_workload(rows, quick):
         outs = []
         for i in range(0, n, chunk):
             idx = order[i:i + chunk]
-            _, hh, bb, mm = _broadcast_inputs(height[idx], BALL.replace(youngs_Pa=youngs[idx]), make_model(damping=rbjax.KelvinVoigt(c[idx])))
+            _, hh, bb, mm = broadcast_inputs(height[idx], BALL.replace(youngs_Pa=youngs[idx]), make_model(damping=rbjax.KelvinVoigt(c[idx])))
             outs.append(impact_batch(hh, bb, mm, solver))
         return outs
 
@@ -262,7 +262,7 @@ def jacobian_workload(rows, sizes):
     def one_ode(theta, h, solver):
         ball = BALL.replace(youngs_Pa=theta[0], poisson=theta[1])
         model = eqx.tree_at(lambda m: m.damping[0].damping_Ns_per_m, model0, theta[2])
-        out = _impact(h, ball, model, solver)
+        out = impact_ode(h, ball, model, solver)
         return jnp.stack([out.contact_time_s, out.peak_force_N, out.restitution])
 
     def one_quad(theta, h):
@@ -311,7 +311,7 @@ def compile_breakdown(n=1000, quick=False):
     h, b, m = flat(n)
     variants = (("default Solver()", DEFAULT), ("recommended, adjoint=forward", RECOMMENDED_FWD))
     for name, solver in variants[:1] if quick else variants:
-        fn = jax.jit(jax.vmap(lambda hh, bb: _impact(hh, bb, make_model(), solver)))
+        fn = jax.jit(jax.vmap(lambda hh, bb: impact_ode(hh, bb, make_model(), solver)))
         t0 = time.perf_counter()
         lowered = fn.lower(h, b)
         t1 = time.perf_counter()
@@ -367,7 +367,7 @@ def vector_field_floor(n=10_000):
         @jax.jit
         def f(y, b, m):
             def body(_, yy):
-                return yy + 1e-9 * jax.vmap(lambda yi, bi, mi: _COMPRESSION(0.0, yi, (bi, mi)))(yy, b, m)
+                return yy + 1e-9 * jax.vmap(lambda yi, bi, mi: COMPRESSION_FIELD(0.0, yi, (bi, mi)))(yy, b, m)
 
             return jax.lax.fori_loop(0, 200, body, y)
 

@@ -6,13 +6,13 @@ Eq. 7 with the adiabatic gas force, paper blocked force) at drop heights 0.1, 1.
 * Adaptive methods (bosh3, tsit5, dopri5, dopri8, kvaerno5): rtol 1e-3 … 1e-12, atol = 1e-3·rtol
   (the state is δ in m, ~0.03, and δ̇ in m/s, ~1–5; the library default pair 1e-9/1e-12 has the
   same ratio). Fixed-step methods (euler, heun, midpoint): step_s swept.
-* Reference: the quadrature path (rbjax.quadrature, Eq. 7 integrated in δ by Gauss–Legendre rules,
+* Reference: the quadrature path (rbjax.solve.quadrature, Eq. 7 integrated in δ by Gauss–Legendre rules,
   64 nodes) for the scalars and its force history (48 nodes); cross-checked against scipy DOP853 at
   rtol 1e-13 and diffrax Dopri8 at rtol 1e-13 (the reference floor, printed).
 * Errors (maximum over the three heights): relative contact time, peak force and restitution; the
   force history on the 44.1 kHz grid over the contact (relative L2, paper §2.4); the octave-band
   force exposure level L_FE (paper Eq. 11) of the 1 s record, max |ΔL| over 31.5 Hz–1 kHz, dB.
-* Cost: median wall time of ``rbjax.impact.impact_batch`` (the core of ``rbjax.simulate``) on a
+* Cost: median wall time of ``rbjax.solve.impact_batch`` (the core of ``rbjax.simulate``) on a
   batch of heights (1000, from 0.1 to 1.6 m) divided by the batch size, after the compiling call.
   One compile per method: tolerances are traced (``_common.SweepSolver``).
 * Levers on the same chart: tsit5 with the forward-mode adjoint (``Solver(adjoint="forward")``),
@@ -30,10 +30,13 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
-from rbjax.impact import impact_batch, trajectory_batch
-from rbjax.quadrature import impact_quadrature_batch
-from rbjax.quadrature_history import force_history_quadrature
-from rbjax.simulate import _broadcast_inputs, make_model
+from rbjax.solve import (
+    force_history_quadrature,
+    impact_batch,
+    impact_quadrature_batch,
+    trajectory_batch,
+)
+from rbjax.solve.simulate import broadcast_inputs, make_model
 from rbjax.spectrum import lfe_octave_dB
 
 from _common import (
@@ -73,7 +76,7 @@ def configs(quick: bool):
 
 
 def status_counts(status):
-    from rbjax.impact import STATUS_NAMES
+    from rbjax.solve.outcome import STATUS_NAMES
 
     names, counts = np.unique(np.asarray(status), return_counts=True)
     return {STATUS_NAMES[int(k)]: int(c) for k, c in zip(names, counts)}
@@ -101,8 +104,8 @@ def main():
     model = make_model()
     batch = 100 if quick else 1000
     heights = np.concatenate([HEIGHTS_M, np.linspace(0.1, 1.6, batch - len(HEIGHTS_M))])
-    _, h_all, b_all, m_all = _broadcast_inputs(heights, ball, model)
-    _, h3, b3, m3 = _broadcast_inputs(np.asarray(HEIGHTS_M), ball, model)
+    _, h_all, b_all, m_all = broadcast_inputs(heights, ball, model)
+    _, h3, b3, m3 = broadcast_inputs(np.asarray(HEIGHTS_M), ball, model)
 
     # ---- references ---------------------------------------------------------------------------
     ref = quadrature_reference(HEIGHTS_M, n_nodes=64)
@@ -186,7 +189,7 @@ def main():
         "heights_m": HEIGHTS_M,
         "timing_batch": batch,
         "atol_over_rtol": 1e-3,
-        "reference": "rbjax.quadrature n_nodes=64 (scalars), force_history_quadrature n_nodes=48 (history)",
+        "reference": "rbjax.solve.quadrature n_nodes=64 (scalars), force_history_quadrature n_nodes=48 (history)",
         "reference_floor": floor,
         "target_rel": TARGET_REL,
         "rows": rows,
@@ -221,7 +224,7 @@ def damped_models(quick):
     out = {}
     for name, options in (list(DAMPED.items())[:1] if quick else DAMPED.items()):
         refs = [sr.reference_impact(h, ball, **options) for h in HEIGHTS_M]
-        _, h, b, m = _broadcast_inputs(np.asarray(HEIGHTS_M), ball, make_model(**options))
+        _, h, b, m = broadcast_inputs(np.asarray(HEIGHTS_M), ball, make_model(**options))
         out[name] = {}
         for rtol in rtols:
             res = impact_batch(h, b, m, sweep_solver("tsit5", rtol=rtol, atol=1e-3 * rtol))

@@ -4,28 +4,29 @@ Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x6
 """
 
 from . import _x64  # noqa: F401  (float64 before anything else touches JAX)
-from .ball import JIS_RUBBER_BALL, Ball
-from .ball_mode import BallMode
-from .damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
-from .energy import EnergyBalance, energy_balance
-from .floor import Dashpot, InfinitePlate, ModalFloor, Rigid, plate_impedance_Ns_per_m
-from .forces import (
-    CubicStiffening,
-    contact_area_m2,
-    gas_force_N,
-    reissner_stiffness_N_per_m,
-    shell_force_N,
-)
-from .impact import (
+from .solve.energy import EnergyBalance, energy_balance
+from .solve.outcome import (
     STATUS_CODES,
     STATUS_NAMES,
     ImpactScalars,
     Trajectory,
     impact_velocity_m_per_s,
 )
-from .model import Model, Solver
-from .parameters import Parameter, parameter_names, parameter_table
-from .simulate import ImpactResult, simulate, trajectory
+from .solve.simulate import ImpactResult, simulate, trajectory
+from .terms.ball import JIS_RUBBER_BALL, Ball
+from .terms.ball_mode import BallMode
+from .terms.damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
+from .terms.declare import Parameter
+from .terms.floors.kinds import Dashpot, InfinitePlate, ModalFloor, Rigid, plate_impedance_Ns_per_m
+from .terms.forces import (
+    CubicStiffening,
+    contact_area_m2,
+    gas_force_N,
+    reissner_stiffness_N_per_m,
+    shell_force_N,
+)
+from .terms.model import Model, Solver
+from .terms.parameters import parameter_names, parameter_table
 
 __version__ = "0.1.0"
 

@@ -53,7 +53,7 @@ def compile_cache_dir() -> str | None:
     ``$RBJAX_CACHE_DIR`` if set (empty: no cache), else ``$XDG_CACHE_HOME/rbjax/jax`` or
     ``~/.cache/rbjax/jax``. JAX's persistent compilation cache: a second ``rbjax fit`` or
     ``rbjax simulate`` skips the XLA compilation of the programs the first one built; the fit's
-    programs are also kept traced (:mod:`rbjax.program_store`), so a second fit skips tracing
+    programs are also kept traced (:mod:`rbjax.fit.program_store`), so a second fit skips tracing
     too. Only the command line switches it on; importing rbjax does not.
     """
     if "RBJAX_CACHE_DIR" in os.environ:

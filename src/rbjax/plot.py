@@ -122,7 +122,7 @@ def _band_values(lfe, bands):
 def tolerance_limits(bands: Sequence[str]):
     """Lower and upper L_FE limits (dB) per octave band from ``standards.RUBBER_BALL_TOLERANCES``
     (ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2); NaN for bands without a limit (1 kHz)."""
-    from .standards import RUBBER_BALL_TOLERANCES
+    from .spectrum.standards import RUBBER_BALL_TOLERANCES
 
     table = RUBBER_BALL_TOLERANCES.lfe_octave_dB
     lower = [table[b].lower if b in table else np.nan for b in bands]
@@ -135,9 +135,9 @@ def plot_lfe_bands(lfe_octave_dB, ax=None, tolerances=True, label=None, **line_k
 
     ``lfe_octave_dB``: a mapping band label → dB (as ``rbjax simulate --json``) or a sequence
     over ``spectrum.OCTAVE_BANDS``. The tolerance band is the rubber ball's L_FE range at the
-    standard drop height of 1 m (JIS A 1418-2 / ISO 10140-5 Annex F, via ``rbjax.standards``).
+    standard drop height of 1 m (JIS A 1418-2 / ISO 10140-5 Annex F, via ``rbjax.spectrum.standards``).
     """
-    from .spectrum import OCTAVE_BANDS
+    from .spectrum.bands import OCTAVE_BANDS
 
     fig, ax = _axes(ax)
     bands = list(OCTAVE_BANDS)
@@ -252,7 +252,7 @@ def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None,
 
 def plot_growth(growths, ax=None, *, paper=None, title=None):
     """L_FE growth per doubling of drop height per band, data against models, with ±1
-    standard-error bars (``rbjax.growth.Growth`` objects; paper Fig. 11).
+    standard-error bars (``rbjax.studies.growth.Growth`` objects; paper Fig. 11).
 
     ``growths``: a sequence of ``Growth`` (their ``label`` is the legend); the first one is
     drawn with markers only (the data), the rest as lines; ``paper``: dB per band as
@@ -261,7 +261,7 @@ def plot_growth(growths, ax=None, *, paper=None, title=None):
     fig, ax = _axes(ax)
     growths = list(growths)
     if not growths:
-        raise ValueError("plot_growth: growths is empty (give at least one rbjax.growth.Growth)")
+        raise ValueError("plot_growth: growths is empty (give at least one rbjax.studies.growth.Growth)")
     bands = growths[0].bands_Hz
     x = np.arange(len(bands))
     n = len(growths)
@@ -312,7 +312,8 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
     of ``results`` whose floor is rigid), drawn in black. ``axes``: three axes (a new figure is
     made without them). Returns the figure.
     """
-    from .spectrum import OCTAVE_BANDS, lfe_octave_dB
+    from .spectrum.bands import OCTAVE_BANDS
+    from .spectrum.levels import lfe_octave_dB
 
     if blocked is None:
         rigid = [r for r in results.values() if r.model.floor.rigid]  # type: ignore[attr-defined]
@@ -364,7 +365,7 @@ def plot_fit(result, out_dir) -> list[Path]:
     ``correlations.png`` of a ``FitResult`` into ``out_dir``; return their paths."""
     import matplotlib.pyplot as plt
 
-    from .spectrum import OCTAVE_BANDS
+    from .spectrum.bands import OCTAVE_BANDS
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

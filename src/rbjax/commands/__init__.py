@@ -21,7 +21,7 @@ import argparse
 import sys
 
 from .._progress import progress  # noqa: F401  (re-exported for the commands)
-from ..serialize import jsonable, to_json  # noqa: F401  (re-exported for the commands)
+from ..terms.serialize import jsonable, to_json  # noqa: F401  (re-exported for the commands)
 from ..text import fmt, format_table  # noqa: F401  (re-exported for the commands)
 
 

@@ -131,7 +131,7 @@ def run(args) -> int:
     data = load_fit_data(args)
     selection = None
     if args.model is None:
-        from ..selection import BLOCKED_FORCES, select_model
+        from ..studies.selection import BLOCKED_FORCES, select_model
 
         forces = BLOCKED_FORCES if args.blocked_force is None else (args.blocked_force,)
         progress("no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)")

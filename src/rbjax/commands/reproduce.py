@@ -34,7 +34,7 @@ def summary_table(results: dict) -> str:
 def run(args) -> int:
     from pathlib import Path
 
-    from ..reproduce import reproduce
+    from ..report.reproduce import reproduce
 
     results = reproduce(args.out, progress=True)
     out = Path(args.out)

@@ -37,7 +37,7 @@ def register(subparsers) -> None:
 
 def _parse_candidates(text, forces):
     from ..fit import MODEL_NAMES
-    from ..selection import candidate_pairs
+    from ..studies.selection import candidate_pairs
 
     if text is None:
         return MODEL_NAMES
@@ -64,7 +64,7 @@ def _parse_heights(text):
 
 
 def run(args) -> int:
-    from ..selection import BLOCKED_FORCES, held_out_comparison, select_model
+    from ..studies.selection import BLOCKED_FORCES, held_out_comparison, select_model
 
     forces = BLOCKED_FORCES if args.blocked_force == "both" else (args.blocked_force,)
     candidates = _parse_candidates(args.candidates, forces)

@@ -15,15 +15,15 @@ level L_FE (Eq. 11) in octave bands 31.5-1000 Hz and one-third-octave bands from
 44.1 kHz x 1 s force history (§2.4), and the check against the rubber-ball tolerance table
 (JIS A 1418-2 / ISO 10140-5 Annex F) at the standard drop height.
 
-With --floor the ball falls on a floor that moves under it (rbjax.floor; solved by the ODE):
+With --floor the ball falls on a floor that moves under it (rbjax.terms.floors.kinds; solved by the ODE):
 the outputs are those of the force that floor receives, and each JSON row adds "floor" (its
 name), "floor_energy_J" (the energy injected into the floor, rbjax.energy_balance) and
 "lfe_ratio_dB" (per octave band: L_FE on the floor minus L_FE of the blocked force of the
 same ball and model on the rigid floor). --floor takes a preset,
   {presets}
-(infinite plates of rbjax.materials, Z = 8 sqrt(B'm''); rbjax.floor_presets), or a
+(infinite plates of rbjax.terms.floors.materials, Z = 8 sqrt(B'm''); rbjax.terms.floors.presets), or a
 .toml/.json floor file (type = "infinite-plate", "dashpot", "modal" or "rigid"; see
-rbjax.floor_presets and src/rbjax/examples/floors/).
+rbjax.terms.floors.presets and src/rbjax/examples/floors/).
 
 examples:
   rbjax simulate --height-m 1.0
@@ -36,7 +36,7 @@ examples:
 
 
 def register(subparsers) -> None:
-    from ..floor_presets import FLOOR_PRESETS
+    from ..terms.floors.presets import FLOOR_PRESETS
 
     description = DESCRIPTION.format(presets=", ".join(FLOOR_PRESETS))
     p = add_command(subparsers, "simulate", help="predict the blocked force for drop heights", description=description)
@@ -53,7 +53,7 @@ def register(subparsers) -> None:
     p.add_argument("--params", default=None, metavar="FIT.json", help="ball and model from a params/fit JSON file (options above override it)")
     p.add_argument(
         "--method",
-        choices=("auto", "ode", "quadrature", "angle"),  # rbjax.simulate.METHODS (not imported: --help stays fast)
+        choices=("auto", "ode", "quadrature", "angle"),  # rbjax.solve.simulate.METHODS (not imported: --help stays fast)
         default="auto",
         help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on the rigid "
         "floor, fastest), 'angle' takes fixed steps in the phase angle (any damping, rigid floor), 'ode' runs "
@@ -72,10 +72,10 @@ def register(subparsers) -> None:
 def load_ball_and_model(args):
     """The ball and model from ``--params`` (if given) with the command-line overrides applied."""
     from .. import JIS_RUBBER_BALL
-    from ..simulate import make_model
+    from ..solve.simulate import make_model
 
     if args.params is not None:
-        from ..serialize import load_params
+        from ..terms.serialize import load_params
 
         try:
             ball, model = load_params(args.params)
@@ -90,7 +90,7 @@ def load_ball_and_model(args):
     changes = {}
     floor = getattr(args, "floor", None)  # (commands that reuse this helper may not have --floor)
     if floor is not None:
-        from ..floor_presets import load_floor
+        from ..terms.floors.presets import load_floor
 
         changes["floor"] = load_floor(floor)
     if args.gas is not None:
@@ -112,7 +112,7 @@ def load_ball_and_model(args):
 
 def _simulate(heights, ball, model, method: str, floor=None):
     """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
-    from .. import simulate
+    from ..solve import simulate
 
     return simulate(
         heights,
@@ -130,14 +130,9 @@ def _simulate(heights, ball, model, method: str, floor=None):
 
 def _octave_lfe(result):
     """(L_FE total, octave, third-octave) of every impact of ``result`` (NaN if every solve failed)."""
-    from ..simulate import PAPER_RATE_Hz
-    from ..spectrum import (
-        OCTAVE_BANDS,
-        THIRD_OCTAVE_BANDS,
-        lfe_octave_dB,
-        lfe_third_octave_dB,
-        lfe_total_dB,
-    )
+    from ..solve.simulate import PAPER_RATE_Hz
+    from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
+    from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
 
     n = np.size(result.status)
     total, octave, third = np.full(n, np.nan), np.full((n, len(OCTAVE_BANDS)), np.nan), np.full((n, len(THIRD_OCTAVE_BANDS)), np.nan)
@@ -152,8 +147,8 @@ def _octave_lfe(result):
 def floor_outputs(heights_m, ball, model, octave_dB, method: str = "auto") -> tuple[np.ndarray, np.ndarray]:
     """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
     the rigid floor, per height and band) for a model on a moving floor."""
-    from ..energy import energy_balance
-    from ..floor import Rigid
+    from ..solve.energy import energy_balance
+    from ..terms.floors.kinds import Rigid
 
     heights = np.asarray(heights_m, dtype=float)
     blocked = _simulate(heights, ball, model, method, floor=Rigid())
@@ -166,8 +161,8 @@ def simulate_rows(heights_m, ball, model, method: str = "auto", floor_name: str 
     ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran. On a floor
     that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
     floor's type), ``floor_energy_J`` and ``lfe_ratio_dB`` (``floor_outputs``)."""
-    from ..spectrum import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
-    from ..standards import check_conformance
+    from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
+    from ..spectrum.standards import check_conformance
 
     heights = np.asarray(heights_m, dtype=float)
     result = _simulate(heights, ball, model, method)
@@ -228,7 +223,7 @@ def _failures(rows) -> list[str]:
 
 def _floor_notes(rows: list[dict]) -> list[str]:
     """On a moving floor: the floor's name, the energy it took and the L_FE ratios per height."""
-    from ..spectrum import OCTAVE_BANDS
+    from ..spectrum.bands import OCTAVE_BANDS
 
     if not rows or "floor" not in rows[0]:
         return []
@@ -243,7 +238,7 @@ def _floor_notes(rows: list[dict]) -> list[str]:
 
 
 def render_table(rows: list[dict]) -> str:
-    from ..spectrum import OCTAVE_BANDS
+    from ..spectrum.bands import OCTAVE_BANDS
 
     header = ["height m", "t_c ms", "F_peak N", "e", "L_FE dB", *(f"{b} Hz" for b in OCTAVE_BANDS), "conformance", "status"]
     body = []
@@ -280,7 +275,7 @@ def run(args) -> int:
     ball, model = load_ball_and_model(args)
     floor_name = None
     if args.floor is not None:
-        from ..floor_presets import load_named_floor
+        from ..terms.floors.presets import load_named_floor
 
         floor_name = load_named_floor(args.floor)[0]
     on = "" if model.floor.rigid else f", floor {floor_name}"

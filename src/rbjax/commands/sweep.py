@@ -14,7 +14,7 @@ or GPUs):
   kind = "conformance"  Monte Carlo probability of meeting the rubber-ball tolerances
                         (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2)
 
-The format is described in the rbjax.sweep module docstring; examples are shipped in
+The format is described in the rbjax.studies.sweep module docstring; examples are shipped in
 rbjax/examples/sweeps/. A progress bar goes to stderr. With --out FILE.json the summary is
 written as JSON (plain text, readable anywhere) and every evaluated sample beside it as
 FILE.samples.npz (compact float64 arrays with their names, numpy.load).
@@ -44,7 +44,7 @@ def run(args) -> int:
 
     import jax
 
-    from ..sweep import load_config, run_sweep, write_outputs
+    from ..studies.sweep import load_config, run_sweep, write_outputs
 
     if args.distributed:
         jax.distributed.initialize()

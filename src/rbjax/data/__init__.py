@@ -35,12 +35,15 @@ Modules (every public name is also importable from ``rbjax.data``):
 from __future__ import annotations
 
 from .averaging import average
-from .conditioning import Impact, condition, estimate_noise_rms_N, find_impacts, locate_onset
+from .conditioning import Impact, condition, find_impacts, locate_onset
+from .crossings import estimate_noise_rms_N
 from .errors import DataError, DataWarning
 from .examples import EXAMPLES_LOWPASS_HZ, examples_dir, load_examples
-from .readers import height_from_name, load, read_csv, read_npy, read_wav
+from .readers import load, read_csv, read_npy
 from .recording import MIN_SAMPLES, Recording
 from .shift import fractional_shift
+from .sources import height_from_name
+from .wav import read_wav
 
 __all__ = [
     "DataError",

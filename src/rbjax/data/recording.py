@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .conditioning import _rising_crossing, _solve_crossing, estimate_noise_rms_N
+from .crossings import _rising_crossing, _solve_crossing, estimate_noise_rms_N
 from .errors import DataError
 from .shift import fractional_shift
 

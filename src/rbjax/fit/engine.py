@@ -12,7 +12,7 @@ paper's §3 measuring chain: 1250 Hz for the shipped emulated recordings); see
 :mod:`rbjax.fit.program` for the residuals and the compiled optimiser.
 
 Parameters, their units, bounds and transforms come from the terms' declarations
-(:mod:`rbjax.parameters`): E = exp(φ), ν in (−1, 0.5] by a bounded map, damping parameters and
+(:mod:`rbjax.terms.parameters`): E = exp(φ), ν in (−1, 0.5] by a bounded map, damping parameters and
 β = exp(φ) > 0, onset shifts free, optional drop-height errors |Δh_k| < 1 cm.
 
 Identifiability: E and ν enter only through E/√(1−ν²) (see :func:`rbjax.fit.uncertainty.identifiability`);
@@ -35,10 +35,10 @@ import numpy as np
 
 from .._progress import progress as say
 from .._validate import as_float, check_choice, check_range
-from ..ball import JIS_RUBBER_BALL, Ball
-from ..impact import G_N_PER_KG
-from ..model import GAS_OPTIONS, Model, Solver
-from ..parameters import replace
+from ..solve.outcome import G_N_PER_KG
+from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.model import GAS_OPTIONS, Model, Solver
+from ..terms.parameters import replace
 from . import uncertainty as unc
 from .layout import CONSTANT_PARAMETERS, fitted_parameter_names
 from .problem import (
@@ -70,7 +70,7 @@ def _start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: floa
     t_c ≈ π√(M/k) (a linear spring-mass half period), k → E by Eqs. 1–3; each damping law's
     own ``start`` rule from the restitution read off the impulse, e = ∫F dt/(M v0) − 1 (Eq. 10).
     """
-    from ..forces import reissner_stiffness_N_per_m
+    from ..terms.forces import reissner_stiffness_N_per_m
 
     d = problem.data
     meas = problem.measured
@@ -183,7 +183,7 @@ def fit(
         progress: print one line per optimiser round to stderr.
         solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``).
         superset: a model containing every term of ``model`` (e.g.
-            ``rbjax.model.superset_model``): the fit runs in its compiled program with the
+            ``rbjax.terms.model.superset_model``): the fit runs in its compiled program with the
             terms ``model`` lacks held at their values, so fits of different models share one
             program (model selection does this).
 

@@ -1,10 +1,10 @@
 """What a fit varies: model names, the fitted parameter vector θ and its transforms.
 
 θ holds, in this order, the physical parameters that a fit may free (those of the ball and
-the model's terms, in the order of :func:`rbjax.parameters.parameter_names`, except the
+the model's terms, in the order of :func:`rbjax.terms.parameters.parameter_names`, except the
 geometry R, h, M and the momentum-flux weight, which stay constants), then one onset shift
 per record, then (with ``height_error``) one drop-height error per record. Every entry has a
-:class:`rbjax.parameters.Parameter` declaration, so names, units, bounds and the transforms
+:class:`rbjax.terms.declare.Parameter` declaration, so names, units, bounds and the transforms
 φ ↔ θ come from the terms themselves; a new term's parameters are fitted without any change
 here.
 """
@@ -15,12 +15,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..ball import Ball
-from ..ball_mode import BallMode
-from ..damping import DAMPING_MODELS, AbstractDamping
-from ..forces import CubicStiffening
-from ..model import Model
-from ..parameters import HEIGHT_ERROR, ONSET_SHIFT, declaration, parameter_table, replace, to_vector
+from ..terms.ball import Ball
+from ..terms.ball_mode import BallMode
+from ..terms.damping import DAMPING_MODELS, AbstractDamping
+from ..terms.declare import HEIGHT_ERROR, ONSET_SHIFT
+from ..terms.forces import CubicStiffening
+from ..terms.model import Model
+from ..terms.parameters import declaration, parameter_table, replace, to_vector
 
 #: The fitted models that model selection compares by default (the paper's elastic model and
 #: one damping law each); any registered damping law's name is a model name too. Append

@@ -6,9 +6,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..ball import JIS_RUBBER_BALL, Ball
-from ..model import Model, Solver
-from ..parameters import replace
+from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.model import Model, Solver
+from ..terms.parameters import replace
 from .layout import fitted_parameter_names
 from .problem import Problem, aligned, candidate_model, fit_solver, per_height_rows
 from .records import prepare_data

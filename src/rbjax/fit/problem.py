@@ -10,10 +10,10 @@ import math
 
 import numpy as np
 
-from ..ball import Ball
-from ..filters import butter_lowpass_sos
-from ..model import Model, Solver
-from ..parameters import parameter_names, parameter_table, replace
+from ..spectrum.filters import butter_lowpass_sos
+from ..terms.ball import Ball
+from ..terms.model import Model, Solver
+from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
 from .layout import FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program

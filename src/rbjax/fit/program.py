@@ -6,7 +6,7 @@ everything else is a runtime value: the parameter values, which of them are free
 records in the fit (a mask), the extra residual weights, the ν prior. So every candidate of a
 model selection, embedded in one superset model whose unused terms are held at their off
 values, and every cross-validation fold run through the same compiled program, and the
-program can be exported and kept on disk (no host callback; see :mod:`rbjax.program_store`).
+program can be exported and kept on disk (no host callback; see :mod:`rbjax.fit.program_store`).
 
 Residuals r(θ) (all rows always present; rows of records outside the fit are 0):
 
@@ -34,8 +34,8 @@ import jax.numpy as jnp
 import lineax as lx
 import optimistix as optx
 
-from ..filters import sosfilt_jax
-from ..program_store import load_or_export
+from ..spectrum.filters import sosfilt_jax
+from .program_store import load_or_export
 from .records import _features
 
 OPTIMIZERS = ("lm", "gauss-newton")
@@ -51,7 +51,7 @@ def sample_force(height_m, tau_s, rate_Hz, ball, model, solver):
     times the force at the midpoint of the in-contact part (the box average of the jump);
     every other sample is the point value F(τ_i). Continuous and piecewise smooth in s.
     """
-    from ..simulate import trajectory
+    from ..solve.simulate import trajectory
 
     half = 0.5 / rate_Hz
     inside = jnp.clip((tau_s + half) * rate_Hz, 0.0, 1.0)
@@ -140,7 +140,7 @@ def _value_and_jac(s: Structure, u, phi_c, w, free, held, constants, data, weigh
 @functools.lru_cache(maxsize=8)
 def compiled(s: Structure, optimizer: str, max_steps: int):
     """The jitted fit program of a structure (cached in this process; :func:`run_program` also
-    keeps it on disk through :mod:`rbjax.program_store` where the compilation cache is on).
+    keeps it on disk through :mod:`rbjax.fit.program_store` where the compilation cache is on).
 
     ``run(phi_c, w, free, held, constants, data, weights, atol)`` → dict with ``u`` (the
     optimum in whitened coordinates), ``result`` (optimistix's code), ``steps``, and at the

@@ -175,10 +175,10 @@ def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRA
     sample below the level before the peak) and the falling edge (first sample below it
     after the peak), by linear interpolation (NaN where the record has no such sample); the
     contact time is t_fall − t_rise. L_FE:
-    paper Eq. 11 in octave bands (``rbjax.spectrum.lfe_octave_dB``) of the record
+    paper Eq. 11 in octave bands (``rbjax.spectrum.levels.lfe_octave_dB``) of the record
     zero-padded to ``n_pad`` samples (1 s, as in the paper's §2.4).
     """
-    from ..spectrum import lfe_octave_dB
+    from ..spectrum.levels import lfe_octave_dB
 
     x = jnp.asarray(force_N)
     n = x.shape[-1]

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ball import Ball
-from ..model import Model
-from ..spectrum import OCTAVE_BANDS
+from ..spectrum.bands import OCTAVE_BANDS
+from ..terms.ball import Ball
+from ..terms.model import Model
 
 
 @dataclasses.dataclass(frozen=True)
@@ -80,9 +80,9 @@ class FitResult:
         return self.model_name
 
     def to_dict(self) -> dict:
-        """JSON-ready dict; ``ball``/``model`` in the ``rbjax.serialize`` format
+        """JSON-ready dict; ``ball``/``model`` in the ``rbjax.terms.serialize`` format
         (``rbjax simulate --params FIT.json`` reproduces the fitted model)."""
-        from ..serialize import ball_to_dict, model_to_dict
+        from ..terms.serialize import ball_to_dict, model_to_dict
 
         names, matrix = self.correlations
         return {

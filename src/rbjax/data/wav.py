@@ -1,0 +1,152 @@
+"""WAV force records: the RIFF header check, integer PCM codes and their full scale, the
+calibration in N per full scale, and :func:`read_wav`."""
+
+from __future__ import annotations
+
+import math
+import re
+import struct
+import warnings
+from pathlib import Path
+
+import numpy as np
+from scipy.io import wavfile
+
+from .errors import DataError
+from .recording import Recording, _check_force, _check_height
+from .sources import _as_source, height_from_name
+
+_UNKNOWN_FORMAT_RE = re.compile(r"Unknown wave file format: (\w+)")
+
+
+def _check_riff_header(path, source: str) -> None:
+    """Empty, not RIFF/WAVE, or shorter than its RIFF header declares: DataError."""
+    size = Path(path).stat().st_size
+    if size == 0:
+        raise DataError(f"{source}: empty file")
+    with open(path, "rb") as fh:
+        head = fh.read(12)
+    if len(head) < 12 or head[:4] not in (b"RIFF", b"RIFX", b"RF64") or head[8:12] != b"WAVE":
+        raise DataError(f"{source}: not a RIFF/WAVE file: cannot read it as WAV")
+    if head[:4] != b"RF64":  # RF64 keeps its sizes in a ds64 chunk
+        declared = struct.unpack("<I" if head[:4] == b"RIFF" else ">I", head[4:8])[0] + 8
+        if declared > size + 1:  # + 1: a missing pad byte after an odd-sized last chunk
+            raise DataError(
+                f"{source}: truncated file: the header declares {declared} bytes, only {size} are present"
+            )
+
+
+def _pcm_codes(samples: np.ndarray) -> tuple[np.ndarray, float, int, int]:
+    """Integer samples as ``scipy.io.wavfile`` returns them -> (codes, full scale, min code, max code).
+
+    8-bit PCM is unsigned (offset 128); wider PCM is signed and left-justified in its
+    container (24 bit in int32: the low byte of every sample is 0), so the largest code
+    is the container's maximum rounded down to the step every sample is a multiple of.
+    """
+    if samples.dtype == np.uint8:
+        codes, bits = samples.astype(np.int64) - 128, 8
+    else:
+        codes, bits = samples.astype(np.int64), 8 * samples.dtype.itemsize
+    full = 1 << (bits - 1)
+    used = int(np.bitwise_or.reduce(codes))
+    step = (used & -used) or 1
+    return codes, float(full), -full, full - step
+
+
+def read_wav(
+    path,
+    *,
+    calibration_N_per_FS: float | None = None,
+    height_m: float | None = None,
+    channel: int | None = None,
+    lowpass_Hz: float | None = None,
+) -> Recording:
+    """Read a force record from a WAV file (``scipy.io.wavfile``).
+
+    * Integer PCM (8 to 32 bit, plain or WAVE_FORMAT_EXTENSIBLE): samples are divided
+      by full scale (2**(bits-1)) and multiplied by ``calibration_N_per_FS``, which is
+      then required. Any sample at the most negative or most positive code is
+      clipping -> DataError.
+    * IEEE float (32 or 64 bit, plain or EXTENSIBLE): samples are newtons, or
+      full-scale units multiplied by ``calibration_N_per_FS`` if one is given. A flat
+      top (>= 3 consecutive samples at the maximum |value|) is clipping -> DataError.
+
+    Warnings of the WAV reader (unknown chunks skipped, ...) go to ``notes``.
+
+    Args:
+      path: WAV file.
+      calibration_N_per_FS: newtons per full scale (required for integer PCM).
+      height_m: drop height in metres; default: from the file name, else None.
+      channel: channel to read from a multi-channel file (0-based; required then).
+      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Raises:
+      DataError: empty, truncated or not a WAV file, an unsupported format, a missing
+        channel or calibration, clipping, non-finite or too few samples.
+    """
+    source = _as_source(path)
+    _check_riff_header(path, source)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", wavfile.WavFileWarning)
+        try:
+            rate, data = wavfile.read(path)
+        except ValueError as e:
+            m = _UNKNOWN_FORMAT_RE.search(str(e))
+            if m:
+                raise DataError(f"{source}: WAV format {m.group(1)} is not supported (PCM or IEEE float)") from None
+            raise DataError(f"{source}: cannot read it as WAV ({e})") from None
+    notes = []
+    for w in caught:
+        if issubclass(w.category, wavfile.WavFileWarning):
+            notes.append(f"WAV reader: {w.message}")
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if rate <= 0:
+        raise DataError(f"{source}: corrupt fmt chunk (rate={rate})")
+    ch = 1 if data.ndim == 1 else data.shape[1]
+    if ch > 1 and channel is None:
+        raise DataError(f"{source}: {ch} channels: pass channel= (0 to {ch - 1})")
+    c = 0 if channel is None else int(channel)
+    if not 0 <= c < ch:
+        raise DataError(f"{source}: channel={channel} out of range (file has {ch})")
+    samples = data if data.ndim == 1 else data[:, c]
+    if samples.dtype.kind in "iu":
+        if calibration_N_per_FS is None:
+            raise DataError(
+                f"{source}: integer PCM WAV: pass calibration_N_per_FS= "
+                "(newtons per full scale) to turn samples into newtons"
+            )
+        codes, fs, lo, hi = _pcm_codes(samples)
+        clipped = np.flatnonzero((codes <= lo) | (codes >= hi))
+        if clipped.size:
+            raise DataError(
+                f"{source}: clipped: {clipped.size} sample(s) at full scale (first at sample "
+                f"{int(clipped[0])}); the peak force is not known"
+            )
+        force = codes / fs * _check_calibration(calibration_N_per_FS, source)
+        _check_force(force, source, flat_top=False)
+    else:
+        force = samples.astype(np.float64)
+        if calibration_N_per_FS is not None:
+            force = force * _check_calibration(calibration_N_per_FS, source)
+        _check_force(force, source)
+    if height_m is None:
+        height_m = height_from_name(source)
+    return Recording(
+        source=source,
+        height_m=_check_height(height_m, source),
+        rate_Hz=float(rate),
+        force_N=force,
+        calibration_N_per_FS=calibration_N_per_FS,
+        lowpass_Hz=lowpass_Hz,
+        notes=tuple(notes),
+    )
+
+
+def _check_calibration(calibration_N_per_FS, source: str) -> float:
+    cal = float(calibration_N_per_FS)
+    if not (math.isfinite(cal) and cal != 0):
+        raise DataError(f"{source}: calibration_N_per_FS={calibration_N_per_FS!r} must be finite and non-zero")
+    return cal
+
+

@@ -1,0 +1,35 @@
+"""Solving one impact, batched: what every path shares (:mod:`~rbjax.solve.outcome`: statuses,
+scalars, trajectories; :mod:`~rbjax.solve.inputs`: the checks and the broadcast at the API
+edge), the paths as siblings — the diffrax ODE with its events (:mod:`~rbjax.solve.ode`, the
+general path and the reference), the quadrature of the undamped rigid-floor impact
+(:mod:`~rbjax.solve.quadrature`, histories in :mod:`~rbjax.solve.quadrature_history`), the
+phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`) and histories
+sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
+:func:`~rbjax.solve.simulate.simulate` choosing among them, the energy balance
+(:mod:`~rbjax.solve.energy`) and sharded batched evaluation (:mod:`~rbjax.solve.batch`)."""
+
+from .angle import impact_angle
+from .batch import evaluate, sharded_map
+from .energy import EnergyBalance, energy_balance
+from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
+from .ode import impact_batch, recontact_horizon_s, trajectory_batch
+from .outcome import (
+    STATUS_CODES,
+    STATUS_NAMES,
+    ImpactScalars,
+    Trajectory,
+    impact_velocity_m_per_s,
+)
+from .quadrature import impact_quadrature, impact_quadrature_batch
+from .quadrature_history import force_history_quadrature
+from .sampled import sampled_history
+from .simulate import METHODS, ImpactResult, force_history, make_model, simulate, trajectory
+
+__all__ = [
+    "impact_angle", "evaluate", "sharded_map", "EnergyBalance", "energy_balance",
+    "PAPER_DURATION_S", "PAPER_RATE_Hz", "check_inputs", "impact_batch", "recontact_horizon_s",
+    "trajectory_batch", "STATUS_CODES", "STATUS_NAMES", "ImpactScalars", "Trajectory",
+    "impact_velocity_m_per_s", "impact_quadrature", "impact_quadrature_batch",
+    "force_history_quadrature", "sampled_history", "METHODS", "ImpactResult", "force_history",
+    "make_model", "simulate", "trajectory",
+]

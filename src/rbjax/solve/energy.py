@@ -1,0 +1,90 @@
+"""Where the impact energy goes: the energy balance of one impact (on any floor).
+
+From the equations of motion (``rbjax.solve.ode``) with E′ = ½(M − M_c)Ẋ² + ∫F_c δ̇ dt,
+
+    dE′/dt + F u̇ = −½(M/2R)|δ̇|³ − ½(M/2R)δ̇ u̇² − (1 − w)(M/2R)δ̇² H(δ̇) u̇,
+
+so over the contact ½Mv0² = ½(M − M_c)Ẋ_end² + W_floor + D_flux + W_contact + W_cap with
+
+- W_floor = ∫F u̇ dt, the energy injected into the floor;
+- D_flux = ∫½(M/2R)|δ̇|³ dt, lost as mass joins the cap and leaves it again at the relative
+  speed δ̇ (inelastic, §2.3);
+- W_contact = ∫F_c δ̇ dt: 0 for an elastic ball (the shell and gas forces are conservative
+  and δ returns to 0), the damping's loss for a damped one;
+- W_cap: the work of the stopped cap's inertia on a moving floor, which the model leaves out
+  (the cap moves with the floor, its mass M_c is not added to the floor's), and of the share
+  1 − w of the flux the floor force leaves out; 0 on the rigid floor, and for w = 1 of the
+  order of (M/2R)v0/Z of W_floor on a floor of impedance Z.
+
+Each integral is an extra state of the ODE, so the balance closes to the solver's tolerance.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import ArrayLike
+
+from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.forces import dynamic_mass_kg
+from ..terms.model import Model, Solver
+from .ode import _final, _phases, _split_energy, _status, body_velocity_m_per_s
+
+
+class EnergyBalance(eqx.Module):
+    """The terms of the energy balance of an impact (J); ``residual_J`` should be ~0."""
+
+    impact_energy_J: jax.Array
+    rebound_energy_J: jax.Array
+    floor_energy_J: jax.Array
+    flux_loss_J: jax.Array
+    contact_work_J: jax.Array
+    cap_work_J: jax.Array
+    status: jax.Array
+
+    @property
+    def residual_J(self):
+        """Impact energy less every term it went to."""
+        return self.impact_energy_J - (self.rebound_energy_J + self.floor_energy_J + self.flux_loss_J + self.contact_work_J + self.cap_work_J)
+
+
+def _balance(height_m, ball, model, solver) -> EnergyBalance:
+    v0, sols, _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, peak=False, energy=True)
+    sol1, _, sol3 = sols
+    t_end, y_end = _final(sol3)
+    y_end, acc = _split_energy(y_end, model)
+    speed = body_velocity_m_per_s(y_end, ball, model)
+    rebound = 0.5 * dynamic_mass_kg(y_end[0], ball) * speed**2
+    status = _status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
+    nan = jnp.where(status == 0, 1.0, jnp.nan)
+    return EnergyBalance(
+        impact_energy_J=0.5 * ball.mass_kg * v0**2,
+        rebound_energy_J=rebound * nan,
+        floor_energy_J=acc[0] * nan,
+        flux_loss_J=acc[1] * nan,
+        contact_work_J=acc[2] * nan,
+        cap_work_J=acc[3] * nan,
+        status=status,
+    )
+
+
+_balance_batch = eqx.filter_jit(eqx.filter_vmap(_balance, in_axes=(0, 0, 0, None)))
+
+
+def energy_balance(height_m: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> EnergyBalance:
+    """The energy balance of the impact from ``height_m`` (see the module docstring).
+
+    Models with a ``BallMode`` are not covered (the mode's own energy is not accounted for):
+    ``ValueError``.
+    """
+    from .simulate import broadcast_inputs, check_inputs
+
+    check_inputs(height_m, ball)
+    model = Model() if model is None else model
+    if model.ball_mode is not None:
+        raise ValueError("energy_balance: models with a ball_mode are not covered; valid: ball_mode=None")
+    solver = Solver() if solver is None else solver
+    shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+    out = _balance_batch(height, flat_ball, flat_model, solver)
+    return jax.tree_util.tree_map(lambda x: x.reshape(shape), out)

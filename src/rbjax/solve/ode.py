@@ -1,0 +1,479 @@
+"""The equation of motion (paper Eq. 7) as a diffrax ODE, solved to the exact end of contact.
+
+State y = (δ, δ̇[, internal states]) from first contact, δ(0) = 0, δ̇(0) = √(2 g h_D) (Eq. 10).
+
+    (M − M_c(δ)) δ̈ − (M/2R) δ̇² H(−δ̇) = −F(δ, δ̇, ...)                     (Eq. 7)
+
+The printed Eq. 7 writes H(δ̇); Eqs. 8–9 and the text make the flux term act in restitution
+only (δ̇ < 0), as here. The solve is split in phases at events located by a root finder on
+the solver's dense interpolant, never by a sign change on a sample grid:
+
+1. compression, from first contact to the peak of the floor force (dF/dt = 0); for the
+   elastic models this is maximum compression δ̇ = 0 (F increases with δ);
+2. (damped models only) from the force peak to maximum compression δ̇ = 0;
+3. restitution (flux term on) to the end of contact: δ = 0 for the elastic models, the
+   contact force returning to zero (or δ = 0) for damped ones.
+
+The contact time is the time of the last event; the peak force is the floor force at the
+end of phase 1; the restitution coefficient is the rebound momentum over the impact momentum.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..terms.floors.kinds import ModalFloor
+from ..terms.forces import (
+    contact_force_N,
+    dynamic_mass_kg,
+    internal_rates,
+    momentum_flux_N,
+    reissner_stiffness_N_per_m,
+)
+from ..terms.model import Model, Solver
+from .outcome import (
+    SINGULAR_FRACTION,
+    STATUS_CODES,
+    ImpactScalars,
+    Trajectory,
+    impact_velocity_m_per_s,
+)
+
+
+def _split(y):
+    return y[0], y[1], y[2:]
+
+
+def _contact_force(y, ball, model):
+    d, v, z = _split(y)
+    return contact_force_N(d, v, z, ball, model)
+
+
+def floor_force_N(y, ball, model):
+    """The force on the floor for state y: the contact force plus the share
+    ``model.momentum_flux_weight`` of the momentum flux during compression (the blocked force
+    on the rigid floor)."""
+    v = y[1]
+    flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
+    return _contact_force(y, ball, model) + model.momentum_flux_weight * flux
+
+
+def floor_velocity_m_per_s(y, ball, model):
+    """u̇, the velocity of the floor's surface under the ball (0 on the rigid floor)."""
+    if model.floor.rigid:
+        return jnp.zeros_like(y[1])
+    return model.floor.velocity_m_per_s(model.floor_states(y[2:]), floor_force_N(y, ball, model))
+
+
+def body_velocity_m_per_s(y, ball, model):
+    """Ẋ = δ̇ + u̇ − ẇ, the velocity of the ball's moving part (δ̇ on the rigid floor)."""
+    v = y[1] + floor_velocity_m_per_s(y, ball, model)
+    if model.ball_mode is not None:
+        v = v - model.ball_mode_states(y[2:])[1]
+    return v
+
+
+def _vector_field(flux_on: bool, energy: bool = False):
+    """dy/dt. The ball's moving part, mass M − M_c (Eq. 6), feels the contact force F_c and,
+    while mass leaves the cap (δ̇ < 0, restitution), the thrust (M/2R)δ̇² (Eq. 7):
+
+        (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
+
+    with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface (``rbjax.terms.floors.kinds``); on
+    the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A massless floor (u̇ = F/Z) has
+    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; it is solved for δ̈ in closed form.
+    With ``energy`` four accumulators follow the state (see ``energy_balance``).
+    """
+
+    def rhs(t, y, args):
+        ball, model = args
+        d, v, z = _split(y)
+        force = _contact_force(y, ball, model)
+        thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
+        accel = (thrust - force) / dynamic_mass_kg(d, ball)
+        parts = [internal_rates(d, v, z, ball, model)]
+        if model.ball_mode is not None:
+            mode_rates = model.ball_mode.rates(model.ball_mode_states(z), force, ball)
+            accel = accel + mode_rates[1]
+            parts.append(mode_rates)
+        floor = model.floor
+        if not floor.rigid:
+            states = model.floor_states(z)
+            ff = floor_force_N(y, ball, model)
+            parts.append(floor.rates(states, ff))
+            accel = accel - floor.acceleration_m_per_s2(states, ff)
+            if floor.massless:
+                # dF/dt = G + H δ̈ (F depends on δ, δ̇ and the damping states only)
+                nd = model.num_damping_states
+                ydot = jnp.concatenate([jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)])
+                force_of = lambda yy: floor_force_N(yy, ball, model)  # noqa: E731
+                _, g = jax.jvp(force_of, (y,), (ydot,))
+                _, h = jax.jvp(force_of, (y,), (jnp.zeros_like(y).at[1].set(1.0),))
+                b = floor.admittance_m_per_Ns
+                accel = (accel - b * g) / (1.0 + b * h)
+        rates = jnp.concatenate([jnp.stack([v, accel]), *parts])
+        if energy:
+            rates = jnp.concatenate([rates, _energy_rates(y, ball, model)])
+        return rates
+
+    return rhs
+
+
+#: Energy accumulators (``energy_balance``): floor work ∫F u̇ dt, flux loss ∫½(M/2R)|δ̇|³ dt,
+#: contact work ∫F_c δ̇ dt, and the work the quasi-static cap and the share 1 − w of the flux
+#: leave out, ∫[½(M/2R)δ̇ u̇² + (1 − w)(M/2R)δ̇² H(δ̇) u̇] dt.
+NUM_ENERGY_STATES = 4
+
+
+def _energy_rates(y, ball, model):
+    _, v, _ = _split(y)
+    ff = floor_force_N(y, ball, model)
+    u_dot = floor_velocity_m_per_s(y, ball, model)
+    flux = momentum_flux_N(v, ball)
+    per_speed = ball.mass_kg / (2.0 * ball.radius_m)
+    cap = 0.5 * per_speed * v * u_dot**2 + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
+    return jnp.stack([ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap])
+
+
+def _split_energy(y, model):
+    """The state without the energy accumulators, and the accumulators."""
+    n = 2 + model.num_internal_states
+    return y[:n], y[n:]
+
+
+COMPRESSION_FIELD = _vector_field(flux_on=False)
+_RESTITUTION = _vector_field(flux_on=True)
+_COMPRESSION_ENERGY = _vector_field(flux_on=False, energy=True)
+_RESTITUTION_ENERGY = _vector_field(flux_on=True, energy=True)
+
+
+def _force_rate(y, args):
+    """dF/dt of the floor force along the compression trajectory (a directional derivative)."""
+    ball, model = args
+    _, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (COMPRESSION_FIELD(0.0, y, args),))
+    return rate
+
+
+def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, dense=False, steps=False, max_steps=None):
+    event = dfx.Event(conds, solver.root_finder(), direction=directions)
+    return dfx.diffeqsolve(
+        dfx.ODETerm(rhs),
+        solver.diffrax_solver(),
+        t0,
+        t1,
+        solver.dt0(),
+        y0,
+        args,
+        saveat=_saveat(dense, steps),
+        stepsize_controller=solver.controller(),
+        adjoint=solver.diffrax_adjoint(),
+        event=event,
+        max_steps=solver.max_steps if max_steps is None else max_steps,
+        throw=False,
+    )
+
+
+def _with_force(t, y, args):
+    return jnp.concatenate([y, jnp.reshape(floor_force_N(y, *args), (1,))])
+
+
+def _saveat(dense: bool, steps: bool):
+    """The end of the solve; with ``steps`` also every step's (y, floor force) in a second
+    sub-save (the force computed at the steps taken only, not over the padded buffer)."""
+    if not steps:
+        return dfx.SaveAt(t1=True, dense=dense)
+    return dfx.SaveAt(subs=[dfx.SubSaveAt(t1=True), dfx.SubSaveAt(steps=True, fn=_with_force)], dense=dense)
+
+
+def _final(sol):
+    """(t, y) at the end of a solve."""
+    if isinstance(sol.ts, (list, tuple)):
+        return sol.ts[0][-1], sol.ys[0][-1]
+    return sol.ts[-1], sol.ys[-1]
+
+
+def _ok(sol):
+    return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
+
+
+def _initial_state(v0, ball, model: Model, energy: bool = False):
+    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0). On a massless floor
+    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term): δ̇ + F(0, δ̇)/Z = v0 is solved by
+    Newton's method (a contraction: ∂F/∂δ̇ / Z ≪ 1 for any floor stiffer than the ball)."""
+    zeros = jnp.zeros(model.num_internal_states + (NUM_ENERGY_STATES if energy else 0))
+    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), zeros])
+    if not model.floor.massless:
+        return y0
+    b = model.floor.admittance_m_per_Ns
+
+    def residual(v):
+        return v + b * floor_force_N(y0.at[1].set(v), ball, model) - v0
+
+    v = v0
+    for _ in range(8):
+        r, dr = jax.jvp(residual, (v,), (jnp.ones_like(v),))
+        v = v - r / dr
+    return y0.at[1].set(v)
+
+
+def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False, steps: bool = False):
+    """Solve the phases of one impact; return the diffrax solutions and the phase ends.
+
+    With ``peak`` (and a velocity-dependent model) compression stops at the force peak (an
+    event on dF/dt) and goes on to maximum compression in a second solve, so that the peak is
+    exact; without it (histories) compression is one solve and the "peak" is its end.
+    """
+    args = (ball, model)
+    v0 = impact_velocity_m_per_s(height_m)
+    y0 = _initial_state(v0, ball, model, energy)
+    compression, restitution = (_COMPRESSION_ENERGY, _RESTITUTION_ENERGY) if energy else (COMPRESSION_FIELD, _RESTITUTION)
+    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+
+    # Event functions are scaled to O(1) so that the root finder's tolerances (which also
+    # bound |cond| at the root) sit above round-off for every one of them.
+    force_scale = reissner_stiffness_N_per_m(ball) * ball.wall_m
+
+    def velocity(t, y, args, **kw):
+        return y[1] / v0
+
+    def singularity(t, y, args, **kw):
+        return (y[0] - singular) / ball.radius_m
+
+    def force_rate(t, y, args, **kw):
+        return _force_rate(y, args) / (force_scale * v0 / ball.wall_m)
+
+    conds: tuple[Callable, ...]
+    dirs: tuple[bool, ...]
+    split = model.velocity_dependent and peak
+    if split:
+        conds, dirs = (force_rate, velocity, singularity), (False, False, True)
+    else:
+        conds, dirs = (velocity, singularity), (False, True)
+    sol1 = _solve(compression, 0.0, y0, args, conds, dirs, solver, dense=dense, steps=steps)
+    t_peak, y_peak = _final(sol1)
+
+    if split:
+        # From the force peak on to maximum compression (zero length if they coincide).
+        t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
+        sol2 = _solve(compression, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense, steps=steps)
+        t_max, y_max = _final(sol2)
+    else:
+        sol2, t_max, y_max = None, t_peak, y_peak
+
+    def deflection(t, y, args, **kw):
+        return y[0] / ball.wall_m
+
+    conds3: Callable | tuple[Callable, ...]
+    dirs3: bool | tuple[bool, ...]
+    if model.velocity_dependent:
+
+        def contact(t, y, args, **kw):
+            return _contact_force(y, *args) / force_scale
+
+        conds3, dirs3 = (contact, deflection), (False, False)
+    else:
+        conds3, dirs3 = deflection, False
+    # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
+    y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
+    sol3 = _solve(restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense, steps=steps)
+    return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
+
+
+def _status(sols, y_max, outputs, ball, model: Model):
+    """The status code of one impact from its phase solutions and outputs (see STATUS_NAMES)."""
+    solved = [s for s in sols if s is not None]
+    step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
+    failed = ~jnp.all(jnp.stack([_ok(s) for s in solved]))
+    singular = y_max[0] >= SINGULAR_FRACTION * 2.0 * ball.radius_m * (1.0 - 1e-9)
+    nonfinite = ~jnp.all(jnp.isfinite(outputs))
+    too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
+    return jnp.select(
+        [step_limit, singular, failed | nonfinite, too_deep],
+        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
+        STATUS_CODES["ok"],
+    ).astype(jnp.int32)
+
+
+#: Step budget of the short solves that locate a global maximum between two saved steps.
+REFINE_MAX_STEPS = 64
+
+
+def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
+    """The maximum of ``value_of(y)`` on [t_start, t_end], where it has one interior maximum
+    or none: a short solve from ``start`` = (t_start, y_start) with an event where ``rate_of``
+    (its rate along the flow, scaled to O(1)) falls through 0; (value, time) at the event, or
+    ``value_of`` at t_start if no event occurs."""
+    t0, y0 = start
+    sol = _solve(_RESTITUTION, t0, y0, args, lambda t, y, args, **kw: rate_of(y), False, solver, t1=t_end, max_steps=REFINE_MAX_STEPS)
+    t, y = _final(sol)
+    hit = sol.result == dfx.RESULTS.event_occurred
+    return jnp.where(hit, value_of(y), value_of(y0)), jnp.where(hit, t, t0)
+
+
+def _coupled_maxima(sols, v0, args, solver: Solver):
+    """Global maxima of the floor force (and its time) and of δ over the contact.
+
+    A ball mode or a moving floor can give several local maxima, and the phase events find
+    the first one only. Every step of every phase is saved (``_phases(steps=True)``); the
+    largest value over the step ends and the step ends either side of it bracket the global
+    maximum, located exactly by a short solve to the event dF/dt = 0 (or δ̇ = 0) between them.
+    The restitution vector field is valid in every phase (its thrust acts only where δ̇ < 0).
+    """
+    ball, model = args
+    ts = jnp.concatenate([s.ts[1] for s in sols if s is not None])
+    rows = jnp.concatenate([s.ys[1] for s in sols if s is not None])
+    valid = jnp.isfinite(ts)
+    rows = jnp.where(valid[:, None], rows, rows[0])  # padding (inf) never reaches an output or a gradient
+    ys, forces = rows[:, :-1], rows[:, -1]
+    ts_safe = jnp.where(valid, ts, 0.0)
+    force_scale = reissner_stiffness_N_per_m(ball) * ball.wall_m
+
+    def force(y):
+        return floor_force_N(y, ball, model)
+
+    def force_rate(y):
+        _, rate = jax.jvp(force, (y,), (_RESTITUTION(0.0, y, args),))
+        return rate / (force_scale * v0 / ball.wall_m)
+
+    def deflection(y):
+        return y[0]
+
+    def velocity(y):
+        return y[1] / v0
+
+    def best(values):
+        values = jnp.where(valid, values, -jnp.inf)
+        i = jnp.argmax(values)
+        before = jnp.argmax(jnp.where(valid & (ts_safe < ts_safe[i]), ts_safe, -jnp.inf))
+        after = jnp.argmin(jnp.where(valid & (ts_safe > ts_safe[i]), ts_safe, jnp.inf))
+        first = ~jnp.any(valid & (ts_safe < ts_safe[i]))
+        last = ~jnp.any(valid & (ts_safe > ts_safe[i]))
+        start = (jnp.where(first, ts_safe[i], ts_safe[before]), jnp.where(first, ys[i], ys[before]))
+        end = jnp.where(last, ts_safe[i], ts_safe[after])
+        return values[i], ts_safe[i], start, end
+
+    f_best, t_best, start, end = best(forces)
+    f_ref, t_ref = _refine(start, end, force, force_rate, args, solver)
+    peak = jnp.maximum(f_best, f_ref)
+    peak_time = jnp.where(f_ref > f_best, t_ref, t_best)
+    d_best, _, start, end = best(ys[:, 0])
+    d_ref, _ = _refine(start, end, deflection, velocity, args, solver)
+    return peak, peak_time, jnp.maximum(d_best, d_ref)
+
+
+def _free_oscillation(q0, qd0, omega, eta, tau):
+    """q(τ) of q̈ + ηωq̇ + ω²q = 0 from (q0, q̇0) (any damping: complex ω_d; ω = 0: a free mass)."""
+    zeta = 0.5 * eta
+    wd = omega * jnp.sqrt((1.0 - zeta**2) + 0j)
+    small = jnp.abs(wd) < 1e-9 * jnp.maximum(omega, 1.0)
+    safe = jnp.where(small, 1.0, wd)
+    sin_over = jnp.where(small, tau, jnp.sin(safe * tau) / safe)
+    q = jnp.exp(-zeta * omega * tau) * (q0 * jnp.cos(wd * tau) + (qd0 + zeta * omega * q0) * sin_over)
+    return jnp.real(q)
+
+
+def recontact_horizon_s(model: Model):
+    """How long after separation ``_recontacts`` follows the free motion: two periods of the
+    slowest ball or floor mode, at least 10 ms."""
+    floor = model.floor
+    freqs = [f for f in floor.frequency_Hz if f > 0.0] if isinstance(floor, ModalFloor) else []
+    horizon = max([2.0 / f for f in freqs] + [0.01])
+    if model.ball_mode is not None:
+        return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
+    return horizon
+
+
+def _recontacts(y_end, args):
+    """True if, after separation, the free motion brings the shell back onto the floor.
+
+    After the end of contact the ball's moving part flies off at Ẋ (gravity is neglected over
+    the short horizon), the ball mode and a modal floor ring freely (a massless floor stops).
+    The gap closes again where δ(τ) = δ_end + Ẋτ + Δw(τ) − Δu(τ) > δ_end, checked on 256 times
+    over ``recontact_horizon_s``. The model does not follow a second contact within one
+    record: such an impact is flagged ``recontact``.
+    """
+    ball, model = args
+    taus = jnp.linspace(0.0, recontact_horizon_s(model), 257)[1:]
+    z = y_end[2:]
+    gap_close = body_velocity_m_per_s(y_end, ball, model) * taus
+    if model.ball_mode is not None:
+        bm = model.ball_mode
+        w, wd = model.ball_mode_states(z)
+        gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
+    if isinstance(model.floor, ModalFloor):
+        s = model.floor_states(z)
+        n = model.floor.num_modes
+        q, qd = s[:n], s[n:]
+        omega = 2.0 * jnp.pi * jnp.asarray(model.floor.frequency_Hz)
+        eta = jnp.asarray(model.floor.loss_factor)
+        free = _free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
+        gap_close = gap_close - jnp.sum(free - q, axis=1)
+    scale = 1e-9 * ball.wall_m
+    return jnp.any(gap_close > scale)
+
+
+def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, steps=model.coupled)
+    sol3 = sols[2]
+    t_end, y_end = _final(sol3)
+    args = (ball, model)
+
+    peak = floor_force_N(y_peak, *args)
+    first = floor_force_N(_initial_state(v0, ball, model), *args)
+    max_deflection = y_max[0]
+    recontact = jnp.asarray(False)
+    if model.coupled:
+        peak, t_peak, max_deflection = _coupled_maxima(sols, v0, args, solver)
+        recontact = _recontacts(y_end, args)
+    peak_force = jnp.maximum(peak, first)
+    peak_time = jnp.where(peak >= first, t_peak, 0.0)
+    momentum_out = -dynamic_mass_kg(y_end[0], ball) * body_velocity_m_per_s(y_end, *args)
+    restitution = momentum_out / (ball.mass_kg * v0)
+
+    solved = [s for s in sols if s is not None]
+    steps = sum(s.stats["num_steps"] for s in solved)
+    status = _status(sols, y_max.at[0].set(max_deflection), jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]), ball, model)
+    status = jnp.where((status == 0) & recontact, STATUS_CODES["recontact"], status).astype(jnp.int32)
+    return ImpactScalars.flagged(
+        status,
+        steps,
+        contact_time_s=t_end,
+        peak_force_N=peak_force,
+        peak_time_s=peak_time,
+        restitution=restitution,
+        max_deflection_m=max_deflection,
+        max_compression_time_s=t_max,
+    )
+
+
+def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
+    # compression in one solve: the force peak needs no exact time here
+    v0, (sol1, _, sol3), _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=True, peak=False)
+    t_end = sol3.ts[-1]
+    args = (ball, model)
+    status = _status((sol1, sol3), y_max, jnp.stack([t_end, t_max, y_max[0]]), ball, model)
+    failed = status != 0
+
+    def at(t):
+        # Each phase's interpolant is evaluated inside its own interval only (clipped), so an
+        # unused branch can never feed NaN into values or gradients.
+        y = sol1.evaluate(jnp.clip(t, 0.0, t_max))
+        y3 = sol3.evaluate(jnp.clip(t, t_max, t_end))
+        y = jnp.where(t > t_max, y3, y)
+        inside = (t >= 0.0) & (t < t_end)
+        y = jnp.where(inside, y, jnp.zeros_like(y))
+        force = jnp.where(inside, floor_force_N(y, *args), 0.0)
+        # a failed solve gives NaN, never a plausible-looking history
+        return jnp.where(failed, jnp.nan, y[0]), jnp.where(failed, jnp.nan, y[1]), jnp.where(failed, jnp.nan, force), inside & ~failed
+
+    d, v, f, inside = jax.vmap(at)(times_s)
+    return Trajectory(time_s=times_s, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside, status=status)
+
+
+impact_batch = eqx.filter_jit(eqx.filter_vmap(impact_ode, in_axes=(0, 0, 0, None)))
+trajectory_batch = eqx.filter_jit(eqx.filter_vmap(_trajectory, in_axes=(0, 0, 0, None, None)))

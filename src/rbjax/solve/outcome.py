@@ -1,0 +1,72 @@
+"""What every solve path returns and shares: the status table (codes and names), the per-impact
+scalars (:class:`ImpactScalars`), the sampled :class:`Trajectory`, the impact speed √(2 g h_D)
+(Eq. 10) and the mass fraction beyond which the dynamic mass counts as singular."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import ArrayLike
+
+G_N_PER_KG = 9.80665  # standard gravity (m/s²), Eq. 10
+
+
+#: Status codes of an impact; every non-zero status comes with NaN outputs.
+STATUS_NAMES = {
+    0: "ok",
+    1: "step_limit",
+    2: "mass_singularity",
+    3: "deflection_limit",
+    4: "solver_failed",
+    5: "recontact",
+}
+
+
+STATUS_CODES = {v: k for k, v in STATUS_NAMES.items()}
+
+
+#: Fraction of 2R at which the dynamic mass M(1 − δ/2R) is taken as singular.
+SINGULAR_FRACTION = 0.999
+
+
+def impact_velocity_m_per_s(height_m: ArrayLike) -> jax.Array:
+    """v0 = √(2 g h_D), the speed at first contact after a free fall from h_D (Eq. 10)."""
+    return jnp.sqrt(2.0 * G_N_PER_KG * height_m)
+
+
+class ImpactScalars(eqx.Module):
+    """The scalar outputs of one impact (or a batch: every field shares the batch shape)."""
+
+    contact_time_s: jax.Array
+    peak_force_N: jax.Array
+    peak_time_s: jax.Array
+    restitution: jax.Array
+    max_deflection_m: jax.Array
+    max_compression_time_s: jax.Array
+    status: jax.Array
+    num_steps: jax.Array
+
+    @classmethod
+    def flagged(cls, status, num_steps, **outputs) -> ImpactScalars:
+        """The outputs where ``status`` is 0 (ok) and NaN elsewhere: a failed solve never
+        returns plausible-looking numbers. ``outputs``: the six float fields by name."""
+        ok = status == 0
+        masked = {name: jnp.where(ok, value, jnp.nan) for name, value in outputs.items()}
+        return cls(**masked, status=jnp.asarray(status, dtype=jnp.int32), num_steps=jnp.asarray(num_steps, dtype=jnp.int32))
+
+
+class Trajectory(eqx.Module):
+    """State and floor force of one impact (or a batch) sampled at given times (0 after contact).
+
+    Where ``status != 0`` (see ``STATUS_NAMES``) the solve failed and the samples are NaN.
+    """
+
+    time_s: jax.Array
+    deflection_m: jax.Array
+    velocity_m_per_s: jax.Array
+    force_N: jax.Array
+    in_contact: jax.Array
+    status: jax.Array
+
+

@@ -1,0 +1,382 @@
+"""The public forward model: ``simulate`` and its frozen result."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import ArrayLike
+
+from .._validate import check_choice, check_range, is_traced
+from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.ball_mode import BallMode
+from ..terms.damping import AbstractDamping
+from ..terms.floors.kinds import AbstractFloor
+from ..terms.forces import CubicStiffening
+from ..terms.model import Model, Solver
+from .angle import angle_unsupported
+from .inputs import (
+    PAPER_DURATION_S,
+    PAPER_RATE_Hz,
+    _as_float64,
+    broadcast_inputs,
+    check_inputs,
+)
+from .ode import impact_batch, trajectory_batch
+from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
+
+#: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
+#: ``quadrature_unsupported``), else ``angle`` where that allows it (``angle_unsupported``: the
+#: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
+METHODS = ("auto", "ode", "quadrature", "angle")
+
+
+
+
+def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None) -> Model:
+    """A ``Model`` from the keyword options of ``simulate`` (validated)."""
+    return Model(
+        gas=gas,
+        blocked_force=blocked_force,
+        damping=damping,
+        stiffening=stiffening,
+        max_deflection_ratio=max_deflection_ratio,
+        ball_mode=ball_mode,
+        floor=floor,
+    )
+
+
+
+def quadrature_unsupported(model: Model) -> str | None:
+    """Why the quadrature path (``rbjax.solve.quadrature``) cannot solve ``model``; None if it can.
+
+    It solves Eq. 7 for a contact force F(δ) of the deflection alone: the shell (with or
+    without ``CubicStiffening``), the gas force or none, either blocked-force convention, any
+    ``max_deflection_ratio``. A damping law makes the force depend on δ̇ or on internal states.
+    """
+    if model.damping:
+        names = ", ".join(d.name for d in model.damping)
+        return f"the damping ({names}) makes the contact force depend on the velocity or on internal states, not on δ alone"
+    return model.coupling
+
+
+def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
+    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or ``"ode"``.
+
+    ``auto`` is the fastest exact path the model allows when no ``solver`` is given (a ``Solver``
+    describes an ODE integration: passing one asks for it): the quadrature where
+    ``quadrature_unsupported(model)`` is None, else the phase-angle integration where
+    ``angle_unsupported(model)`` is None, else the ODE. Asking for a path that cannot solve the
+    model raises ``ValueError`` saying why.
+    """
+    check_choice("method", method, METHODS)
+    reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
+    if method in reasons:
+        if reasons[method] is not None:
+            raise ValueError(f"method={method!r} cannot solve this model: {reasons[method]}; valid: method='ode' or method='auto'")
+        return method
+    if method == "ode" or solver is not None:
+        return "ode"
+    return next((path for path, reason in reasons.items() if reason is None), "ode")
+
+
+class ImpactResult(eqx.Module):
+    """Scalar outputs of ``simulate`` per drop height; the force history is computed on request.
+
+    Every scalar field has the broadcast shape of the inputs. Where ``status != 0`` the scalar
+    outputs are NaN and ``status_name`` says why (``step_limit``, ``mass_singularity``,
+    ``deflection_limit``, ``solver_failed``).
+
+    ``method`` records the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` =
+    solver steps), ``"quadrature"`` (``rbjax.solve.quadrature``, ``num_steps`` = force evaluations),
+    ``"angle"`` (``rbjax.solve.angle``, ``num_steps`` = fixed steps in the phase angle), or
+    ``"quadrature+ode"`` / ``"angle+ode"`` (that path, with the ODE for the impacts it flagged
+    ``solver_failed``).
+    """
+
+    height_m: jax.Array
+    contact_time_s: jax.Array
+    peak_force_N: jax.Array
+    peak_time_s: jax.Array
+    restitution: jax.Array
+    max_deflection_m: jax.Array
+    status: jax.Array
+    num_steps: jax.Array
+    ball: Ball
+    model: Model
+    solver: Solver = eqx.field(static=True)
+    rate_Hz: float = eqx.field(static=True, default=PAPER_RATE_Hz)
+    duration_s: float = eqx.field(static=True, default=PAPER_DURATION_S)
+    method: str = eqx.field(static=True, default="ode")
+
+    @property
+    def ok(self):
+        return self.status == 0
+
+    @property
+    def status_name(self):
+        """Status names with the shape of ``status`` (a str for a single impact)."""
+        codes = np.asarray(self.status)
+        names = np.vectorize(STATUS_NAMES.get, otypes=[object])(codes)
+        return str(names) if codes.ndim == 0 else names
+
+    def raise_for_status(self) -> ImpactResult:
+        """Raise ``RuntimeError`` naming the heights whose solve failed; return self otherwise."""
+        codes = np.asarray(self.status).reshape(-1)
+        if np.any(codes != 0):
+            heights = np.broadcast_to(np.asarray(self.height_m), np.shape(self.status)).reshape(-1)
+            bad = [f"height_m={h:g}: {STATUS_NAMES[int(c)]}" for h, c in zip(heights, codes) if c != 0]
+            raise RuntimeError("impact solve failed: " + "; ".join(bad[:10]))
+        return self
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """The history grid: ``rate_Hz`` samples per second over ``duration_s``."""
+        return np.arange(int(round(self.rate_Hz * self.duration_s))) / self.rate_Hz
+
+    @property
+    def force_N(self) -> jax.Array:
+        """Blocked-force histories on ``time_s`` (computed on access by ``history()``; zero after
+        contact)."""
+        return self.history().force_N
+
+    def history(self, rate_Hz: float | None = None, duration_s: float | None = None, *, pad: bool = True) -> Trajectory:
+        """Deflection, velocity and floor force sampled at ``rate_Hz`` over ``duration_s``.
+
+        Only the samples during contact are integrated; the rest of the record is zero (with
+        ``pad=False``: left out, the history ends a sample or two after the longest contact). The
+        rigid-floor models (no ball mode, no moving floor) are integrated by fixed RK4 steps
+        sampled inside the solve (``rbjax.solve.sampled``) unless a ``Solver`` other than the
+        default was given, which asks for the diffrax ODE with it (as the coupled models
+        always are); see ``force_history``.
+        """
+        rate = self.rate_Hz if rate_Hz is None else rate_Hz
+        duration = self.duration_s if duration_s is None else duration_s
+        return force_history(self.height_m, self.ball, self.model, self.solver, rate_Hz=rate, duration_s=duration, contact_time_s=self.contact_time_s, pad=pad)
+
+    def lfe_octave_dB(self) -> jax.Array:
+        """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.levels.lfe_octave_dB``) of the force record
+        of ``rate_Hz`` over ``duration_s``, from its contact samples (exact: the rest is zero);
+        shape (..., 6), NaN where the solve failed."""
+        from ..spectrum.levels import lfe_octave_dB
+
+        return lfe_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
+
+    def lfe_third_octave_dB(self) -> jax.Array:
+        """One-third-octave-band L_FE of the force record, as ``lfe_octave_dB``; shape (..., 18)."""
+        from ..spectrum.levels import lfe_third_octave_dB
+
+        return lfe_third_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
+
+    def plot(self, ax=None, *, rate_Hz: float | None = None):
+        """Plot the force histories over the contact (one line per height)."""
+        from ..plot import plot_histories
+
+        return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
+
+
+
+def simulate(
+    height_m: ArrayLike,
+    ball: Ball = JIS_RUBBER_BALL,
+    model: Model | None = None,
+    *,
+    gas: str | None = None,
+    blocked_force: str | None = None,
+    damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
+    stiffening: CubicStiffening | None = None,
+    max_deflection_ratio: float | None = None,
+    ball_mode: BallMode | None = None,
+    floor: AbstractFloor | None = None,
+    solver: Solver | None = None,
+    method: str = "auto",
+    rate_Hz: float = PAPER_RATE_Hz,
+    duration_s: float = PAPER_DURATION_S,
+) -> ImpactResult:
+    """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2), or on the
+    ``floor`` given (``rbjax.terms.floors.kinds``; the force is then the force that floor receives).
+
+    The model is a :class:`~rbjax.terms.model.Model`, the one calling convention of rbjax
+    (``trajectory``, ``fit``, ``batch``, the studies take the same): ``simulate(h, fit.ball,
+    fit.model)`` runs a fitted model. The keywords ``gas``, ``blocked_force``, ``damping``,
+    ``stiffening``, ``max_deflection_ratio``, ``ball_mode`` and ``floor`` are a thin shortcut that
+    builds the ``Model`` (``make_model``) when no ``model`` is given; giving both is a
+    ``ValueError``.
+
+    ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
+    may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
+    ``jax.grad``; ``jax.jacfwd`` works on the quadrature path, and on the ODE path with
+    ``Solver(adjoint="forward")``.
+
+    ``method`` picks the path of the scalar outputs (``result.method`` records it):
+
+    * ``"auto"`` (default), when no ``solver`` is given: the quadrature (``rbjax.solve.quadrature``:
+      Eq. 7 integrated in δ, ~1e-12, no time stepping) for models without damping on the rigid
+      floor; the phase-angle integration (``rbjax.solve.angle``: fixed 8th-order steps in the phase
+      angle, ~1e-8) for damped models on the rigid floor; the diffrax ODE otherwise (ball mode,
+      moving floors) or when a ``solver`` is given. Impacts the quadrature or the phase-angle
+      path flags ``solver_failed`` (its error estimate too large) are solved again by the ODE
+      when the inputs are concrete (``"quadrature+ode"``, ``"angle+ode"``).
+    * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
+    * ``"quadrature"``, ``"angle"``: that path only (``ValueError`` for models it cannot solve).
+
+    Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
+    ``.force_N`` / ``.history()`` compute the histories on request (``rbjax.solve.sampled`` on the
+    rigid floor, the ODE otherwise); ``.lfe_octave_dB()`` the band levels from the contact samples.
+    """
+    check_inputs(height_m, ball, rate_Hz, duration_s)
+    options = {
+        "gas": gas, "blocked_force": blocked_force, "damping": damping, "stiffening": stiffening,
+        "max_deflection_ratio": max_deflection_ratio, "ball_mode": ball_mode, "floor": floor,
+    }
+    given = {k: v for k, v in options.items() if v is not None}
+    if model is None:
+        model = make_model(**given)
+    elif not isinstance(model, Model):
+        raise ValueError(f"model={model!r} must be an rbjax.Model (or None, to build one from the keywords)")
+    elif given:
+        raise ValueError(f"simulate got model= and the keyword options {sorted(given)}: give the options in the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out")
+    path = resolve_method(method, model, solver)
+    solver = Solver() if solver is None else solver
+    return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s, method=path, fallback=method == "auto")
+
+
+def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, method="ode", fallback=False) -> ImpactResult:
+    if method in ("quadrature", "angle"):
+        height, out, method = _fast_scalars(method, height_m, ball, model, solver, fallback)
+    else:
+        shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+        out = jax.tree_util.tree_map(lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver))
+        height = flat_height.reshape(shape)
+    return ImpactResult(
+        height_m=height,
+        contact_time_s=out.contact_time_s,
+        peak_force_N=out.peak_force_N,
+        peak_time_s=out.peak_time_s,
+        restitution=out.restitution,
+        max_deflection_m=out.max_deflection_m,
+        status=out.status,
+        num_steps=out.num_steps,
+        ball=ball,
+        model=model,
+        solver=solver,
+        rate_Hz=float(rate_Hz),
+        duration_s=float(duration_s),
+        method=method,
+    )
+
+
+
+@eqx.filter_jit
+def _fast_program(path: str, height_m, ball, model):
+    """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
+    from .angle import impact_angle
+    from .quadrature import impact_quadrature
+
+    shape, height, ball, model = broadcast_inputs(height_m, ball, model)
+    solve = impact_quadrature if path == "quadrature" else impact_angle
+    out = jax.vmap(solve)(height, ball, model)
+    return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+
+
+def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
+    """The quadrature or phase-angle path (broadcast height, outputs, path); with ``fallback``
+    (and concrete values) the impacts it flags ``solver_failed`` are solved again by the ODE (the
+    batch padded to a power of two, so that few shapes compile)."""
+    if path == "quadrature":
+        from .quadrature import DEFAULT_NODES, _check
+
+        _check(height_m, ball, model, DEFAULT_NODES)
+    # every value an array, so that new values reuse the compiled program (NumPy for concrete
+    # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
+    arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
+    arrays = jax.tree_util.tree_map(_as_float64, arrays)
+    height, out = _fast_program(path, *eqx.combine(arrays, static))
+    if not fallback or is_traced(out.status):
+        return height, out, path
+    failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
+    if failed.size == 0:
+        return height, out, path
+    shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+    padded = np.concatenate([failed, np.full((1 << int(failed.size - 1).bit_length()) - failed.size, failed[0])])
+    pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
+    redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
+    index = jnp.asarray(failed)
+    out = jax.tree_util.tree_map(lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo)
+    return height, out, path + "+ode"
+
+
+def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
+    """State and floor force at the given times (1-D, shared by all heights); differentiable.
+
+    The building block for fitting: ``times_s`` is static in shape, so this jits and goes
+    through ``jax.jacfwd`` (with ``Solver(adjoint="forward")``).
+    """
+    check_inputs(height_m, ball)
+    if np.ndim(times_s) != 1:
+        raise ValueError(f"times_s has shape {np.shape(times_s)}; expected a 1-D array of times")
+    check_range("times_s", times_s)
+    model = Model() if model is None else model
+    solver = Solver() if solver is None else solver
+    shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+    times = jnp.asarray(times_s, dtype=jnp.float64)
+    traj = trajectory_batch(height, flat_ball, flat_model, solver, times)
+    return jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), traj)
+
+
+def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None, method="auto", pad=True) -> Trajectory:
+    """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
+
+    Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
+    batch, computed first if not given); the rest of the record is zeros. With ``pad=False`` the
+    computed samples are returned as they are (every non-zero sample of the record: pass
+    ``n_record=round(rate_Hz·duration_s)`` to the ``rbjax.spectrum`` functions).
+
+    ``method``: ``"auto"`` integrates the rigid-floor models (no ball mode, no moving floor) by
+    fixed Runge–Kutta steps sampled inside the solve (``rbjax.solve.sampled``; sub-steps where
+    the shortest contact spans few samples) when no ``solver`` other than the default
+    ``Solver()`` is given and the contact times are concrete and shorter than the record; it
+    solves the diffrax ODE with ``solver`` otherwise, as ``"ode"`` always does.
+    """
+    from .sampled import (
+        pad_record,
+        sampled_history_unsupported,
+        sampled_solve,
+        substeps_for_contact,
+    )
+
+    check_choice("method", method, ("auto", "ode"))
+    check_inputs(height_m, ball, rate_Hz, duration_s)
+    n_total = int(round(rate_Hz * duration_s))
+    if contact_time_s is None:
+        path = resolve_method("auto", model)
+        contact_time_s = _simulate(height_m, ball, model, solver, method=path, fallback=True).contact_time_s
+    tc = None if is_traced(contact_time_s) else np.asarray(contact_time_s, dtype=float)
+    if tc is None:
+        n_contact = n_total
+    else:
+        longest = np.nanmax(tc) if np.any(np.isfinite(tc)) else 0.0
+        n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
+    default_solver = solver is None or solver == Solver()
+    sampled = method == "auto" and n_contact < n_total and default_solver and sampled_history_unsupported(model) is None
+
+    def solve(n):
+        if sampled:
+            return sampled_solve(height_m, ball, model, rate_Hz, n, substeps_for_contact(tc, rate_Hz))
+        return trajectory(height_m, jnp.arange(n) / rate_Hz, ball, model, solver)
+
+    def outlasts(traj):
+        """The contact goes on after the last sample computed (the ODE: is in contact there)."""
+        return np.asarray(traj.status == STATUS_CODES["step_limit"] if sampled else traj.in_contact[..., -1])
+
+    traj = solve(n_contact)
+    if n_contact < n_total and not is_traced(traj.status) and np.any(outlasts(traj)):
+        # a contact outlasts the window (its contact time was not known: a failed scalar solve
+        # whose history succeeds): integrate the whole record instead of truncating it
+        n_contact = n_total
+        traj = solve(n_total)
+    return pad_record(traj, n_total, float(rate_Hz)) if pad else traj

@@ -1,0 +1,28 @@
+"""Studies built on the solve and the fit: model selection by held-out error
+(:mod:`~rbjax.studies.selection`), the growth of L_FE per doubling of drop height
+(:mod:`~rbjax.studies.growth`), sensitivities (:mod:`rbjax.studies.sensitivity`) and TOML
+sweeps (:mod:`~rbjax.studies.sweep`)."""
+
+from .growth import (
+    Growth,
+    GrowthError,
+    growth_per_doubling_dB,
+    growth_table,
+    model_growth,
+    recording_growth,
+)
+from .selection import (
+    Candidate,
+    Selection,
+    cross_validate,
+    held_out_comparison,
+    recommend,
+    select_model,
+)
+from .sweep import load_config, run_sweep, write_outputs
+
+__all__ = [
+    "Growth", "GrowthError", "growth_per_doubling_dB", "growth_table", "model_growth",
+    "recording_growth", "Candidate", "Selection", "cross_validate", "held_out_comparison",
+    "recommend", "select_model", "load_config", "run_sweep", "write_outputs",
+]

@@ -1,0 +1,175 @@
+"""Sweep configuration files: a TOML file → Sobol indices, Morris screening or conformance probability.
+
+The batched, sharded evaluation itself is :mod:`rbjax.solve.batch`; the estimators are
+:mod:`rbjax.studies.sensitivity`.
+
+Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.toml``)::
+
+    kind = "sobol"            # "sobol", "morris" or "conformance"
+    seed = 0
+    height_m = 1.0            # the nominal drop height (also a parameter: see below)
+    outputs = ["contact_time_s", "peak_force_N", "restitution", "lfe"]
+    chunk_size = 1024         # impacts per device per step
+
+    [ball]                    # nominal ball (defaults: rbjax.JIS_RUBBER_BALL)
+    youngs_Pa = 1.6e6
+
+    [model]                   # as in the params JSON (rbjax.terms.serialize): gas, blocked_force,
+    gas = "adiabatic"         # damping = {name = "kelvin-voigt", damping_Ns_per_m = 5.0}, ...
+
+    [solver]                  # rbjax.Solver fields (default: tsit5, rtol 1e-9, atol 1e-12)
+    rtol = 1e-9
+
+    [sobol]                   # kind = "sobol": n_base samples, N = n_base (d + 2) evaluations
+    n_base = 20000
+    n_bootstrap = 200
+    [ranges]                  # uniform ranges of the varied parameters
+    youngs_Pa = [1.2e6, 2.0e6]
+    mass_kg = [2.4, 2.6]
+
+    [morris]                  # kind = "morris": N = n_trajectories (d + 1) evaluations
+    n_trajectories = 500
+    n_levels = 4
+
+    [conformance]             # kind = "conformance"
+    n_samples = 20000
+    [distributions]           # each {kind = "uniform", low, high} | {kind = "normal", mean, sd}
+    height_m = {kind = "uniform", low = 0.99, high = 1.01}   # | {kind = "lognormal", median, sigma}
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from ..solve.batch import (  # noqa: F401  (re-exported: the sweep's public names)
+    BALL_PARAMETERS,
+    SCALAR_OUTPUTS,
+    assemble,
+    canonical_name,
+    evaluate,
+    lfe_output_names,
+    nominal_parameters,
+    parameter_names,
+    sharded_map,
+)
+from ..terms.ball import JIS_RUBBER_BALL
+from ..terms.model import Solver
+from ..terms.serialize import to_json
+from . import sensitivity as sens
+
+SWEEP_KINDS = ("sobol", "morris", "conformance")
+CONFIG_KEYS = ("kind", "seed", "height_m", "outputs", "chunk_size", "ball", "model", "solver", "sobol", "morris", "conformance", "ranges", "distributions")
+
+
+def load_config(path) -> dict:
+    """Read a sweep configuration (TOML) into a dict; ``ValueError`` if unreadable."""
+    try:
+        with open(path, "rb") as fh:
+            config = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        raise ValueError(f"config={str(path)!r}: cannot read TOML ({err})") from err
+    return config
+
+
+def _base(config: dict):
+    from ..terms.serialize import model_from_dict
+
+    ball_fields = config.get("ball", {})
+    if not isinstance(ball_fields, dict):
+        raise ValueError(f"ball = {ball_fields!r}: expected a [ball] table")
+    unknown = set(ball_fields) - set(BALL_PARAMETERS)
+    if unknown:
+        raise ValueError(f"[ball] has unknown keys {sorted(unknown)}; valid: {', '.join(BALL_PARAMETERS)}")
+    ball = JIS_RUBBER_BALL.replace(**{k: float(v) for k, v in ball_fields.items()})
+    model = model_from_dict(config.get("model", {}))
+    solver_fields = config.get("solver", {})
+    unknown = set(solver_fields) - {f.name for f in dataclasses.fields(Solver)}
+    if unknown:
+        raise ValueError(f"[solver] has unknown keys {sorted(unknown)}; valid: {', '.join(f.name for f in dataclasses.fields(Solver))}")
+    return float(config.get("height_m", 1.0)), ball, model, Solver(**solver_fields)
+
+
+def run_sweep(config: dict, *, progress: bool = False, devices=None):
+    """Run a sweep configuration (see the module docstring); returns the study's result object.
+
+    ``kind = "sobol"`` → ``rbjax.studies.sensitivity.SobolResult``, ``"morris"`` → ``MorrisResult``,
+    ``"conformance"`` → ``ConformanceProbability``. Each has ``.to_dict()`` (the JSON summary)
+    and ``.samples`` (the inputs and outputs of every evaluation).
+    """
+
+    unknown = set(config) - set(CONFIG_KEYS)
+    if unknown:
+        raise ValueError(f"config has unknown keys {sorted(unknown)}; valid: {', '.join(CONFIG_KEYS)}")
+    kind = config.get("kind")
+    if kind not in SWEEP_KINDS:
+        raise ValueError(f"kind={kind!r} is not a known sweep; valid: {', '.join(SWEEP_KINDS)}")
+    height_m, ball, model, solver = _base(config)
+    common = dict(
+        height_m=height_m,
+        ball=ball,
+        model=model,
+        solver=solver,
+        seed=int(config.get("seed", 0)),
+        chunk_size=int(config.get("chunk_size", 1024)),
+        devices=devices,
+        progress=progress,
+    )
+    if kind == "conformance":
+        section = config.get("conformance", {})
+        distributions = config.get("distributions")
+        if not distributions:
+            raise ValueError("a conformance sweep needs a [distributions] table")
+        return sens.conformance_probability(
+            int(section.get("n_samples", 10_000)),
+            distributions,
+            confidence=float(section.get("confidence", 0.95)),
+            **common,
+        )
+    ranges = config.get("ranges")
+    if not ranges:
+        raise ValueError(f"a {kind} sweep needs a [ranges] table of [low, high] per parameter")
+    outputs = config.get("outputs", ("contact_time_s", "peak_force_N", "restitution"))
+    if isinstance(outputs, str) or not isinstance(outputs, (list, tuple)):
+        raise ValueError(f"outputs = {outputs!r}: expected a list of output names")
+    outputs = tuple(outputs)
+    if kind == "sobol":
+        section = config.get("sobol", {})
+        return sens.global_sensitivity(
+            ranges,
+            int(section.get("n_base", 1024)),
+            method="sobol",
+            outputs=outputs,
+            n_bootstrap=int(section.get("n_bootstrap", 200)),
+            confidence=float(section.get("confidence", 0.95)),
+            **common,
+        )
+    section = config.get("morris", {})
+    return sens.global_sensitivity(
+        ranges,
+        int(section.get("n_trajectories", 100)),
+        method="morris",
+        outputs=outputs,
+        n_levels=int(section.get("n_levels", 4)),
+        **common,
+    )
+
+
+def write_outputs(result, path, config: dict | None = None) -> list[Path]:
+    """Write a study's summary as JSON to ``path`` and its samples as ``.npz`` beside it.
+
+    The summary is ``result.to_dict()``, with the ``config`` that produced it when given.
+
+    JSON (the summary: indices, probabilities, confidence intervals) is plain text that any
+    language reads; NumPy ``.npz`` keeps the N × (inputs + outputs) samples compact, in float64,
+    with their names (``np.load``). Returns the paths written.
+    """
+    path = Path(path)
+    summary = result.to_dict() if config is None else {"config": config, **result.to_dict()}
+    path.write_text(to_json(summary) + "\n")
+    samples = path.with_suffix(".samples.npz")
+    np.savez_compressed(samples, **result.samples)
+    return [path, samples]

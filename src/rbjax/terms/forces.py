@@ -1,0 +1,145 @@
+"""The terms of the ball's force on the floor, each a small pure function (paper §2.2–2.3).
+
+Every function takes the deflection δ (m) of the shell at the contact point, measured from
+first contact, and returns newtons. The printed Eqs. 3 and 4 of the paper are corrupted in
+transcription; the corrected forms used here are derived in each docstring.
+
+Extensions beyond the paper (damping, stiffening) are pytrees: a term is present only
+when the caller passes one ("model no more than a scene needs").
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import ArrayLike
+
+from .declare import NON_NEGATIVE, Parameter, check_declared
+
+#: Ambient (atmospheric) pressure p_a in Pa; the ball's vent hole makes p_0 = p_a (§2.2).
+AMBIENT_PRESSURE_Pa = 101_325.0
+#: Ratio of specific heats of air for the adiabatic cavity compression (§2.2).
+GAMMA_AIR = 1.4
+
+
+def reissner_stiffness_N_per_m(ball) -> jnp.ndarray:
+    """Reissner's point-load stiffness of a shallow spherical shell (paper Eqs. 1–3, corrected).
+
+    Eq. 1: F_B = 8B δ / (R h_r) with the plate bending stiffness B = E h³ / (12(1−ν²))
+    (Eq. 2). The printed Eq. 3, h_r = h √(12/(1−ν²)), is a transcription error: Reissner's
+    characteristic length of the shell is ℓ² = R h / √(12(1−ν²)) = R h_r, so
+
+        h_r = h / √(12(1−ν²))                                   (Eq. 3, corrected)
+
+    and F_B / δ = 8B / (R h_r) = 4 E h² / (R √(3(1−ν²))).
+    """
+    e, h, r, nu = ball.youngs_Pa, ball.wall_m, ball.radius_m, ball.poisson
+    bending = e * h**3 / (12.0 * (1.0 - nu**2))
+    reduced_wall = h / jnp.sqrt(12.0 * (1.0 - nu**2))
+    return 8.0 * bending / (r * reduced_wall)
+
+
+def cap_volume_m3(deflection_m, radius_m):
+    """Volume πδ²(3R−δ)/3 of the spherical cap of height δ that the flat floor cuts off."""
+    d = deflection_m
+    return jnp.pi * d**2 * (3.0 * radius_m - d) / 3.0
+
+
+def contact_area_m2(deflection_m, radius_m):
+    """Area πa² = πδ(2R−δ) of the flattened cap (a: the cap's base radius)."""
+    d = deflection_m
+    return jnp.pi * d * (2.0 * radius_m - d)
+
+
+def gas_force_N(deflection_m, ball, *, ambient_Pa=AMBIENT_PRESSURE_Pa, gamma=GAMMA_AIR):
+    """Force of the air squeezed adiabatically in the cavity (paper Eq. 4, corrected).
+
+    The cavity of volume V0 = 4πR³/3 loses the cap volume, V = V0 − πδ²(3R−δ)/3, so
+    V/V0 = 1 − (3 − δ/R)(δ/(2R))². Adiabatic compression from p_0 = p_a (vented ball, p_g = 0)
+    gives the over-pressure p_a((V0/V)^γ − 1), acting on the contact area πRδ(2 − δ/R):
+
+        F_G = p_a πR (2 − δ/R) δ [ (1 − (3 − δ/R)(δ/2R)²)^(−γ) − 1 ]     (Eq. 4, corrected)
+
+    The printed Eq. 4 has (2δ/R)² for (δ/2R)² and the exponent +γ for −γ (which would make
+    the cavity pull the ball into the floor). V0 uses the outer radius R as in Hubbard's
+    thin-shell model; for the thick rubber wall the real cavity is smaller, so this
+    underestimates the (already secondary) gas force.
+    """
+    r = ball.radius_m
+    d = deflection_m
+    volume_ratio = 1.0 - (3.0 - d / r) * (d / (2.0 * r)) ** 2
+    overpressure = ambient_Pa * (_power(volume_ratio, -gamma) - 1.0)
+    return overpressure * contact_area_m2(d, r)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(1,))
+def _power(x, a: float):
+    """x**a (constant a) whose derivative reuses the value, a·x^a/x: JAX's own rule evaluates
+    x^(a − 1), a second pow, in every tangent (forward-mode Jacobians, the ODE's adjoint)."""
+    return x**a
+
+
+@_power.defjvp
+def _power_jvp(a, primals, tangents):
+    (x,), (dx,) = primals, tangents
+    y = x**a
+    return y, a * y / x * dx
+
+
+def dynamic_mass_kg(deflection_m, ball):
+    """Mass M − M_c of the moving part, M_c = Mδ/(2R) the flattened cap at rest (Eq. 6)."""
+    return ball.mass_kg * (1.0 - deflection_m / (2.0 * ball.radius_m))
+
+
+def momentum_flux_N(velocity_m_per_s, ball):
+    """Rate (M/2R)δ̇² at which momentum is carried by mass joining or leaving the cap (Eq. 7)."""
+    return ball.mass_kg / (2.0 * ball.radius_m) * velocity_m_per_s**2
+
+
+# ----------------------------------------------------------------------------------------------
+# Stiffening: a pytree of its parameter (damping laws: ``rbjax.terms.damping``).
+
+
+class CubicStiffening(eqx.Module):
+    """Hardening of the shell at large deflection: F_B = kδ (1 + β (δ/h)²).
+
+    Attributes:
+        beta: dimensionless coefficient β ≥ 0 (0: Reissner's linear shell).
+    """
+
+    beta: ArrayLike
+    PARAMETERS: ClassVar = {"beta": Parameter("1", **NON_NEGATIVE, description="cubic stiffening β in kδ(1 + β(δ/h)²)")}
+
+    def __check_init__(self):
+        check_declared(self)
+
+
+def shell_force_N(deflection_m, ball, stiffening=None):
+    """F_B = kδ (Eq. 1 with the corrected Eq. 3), times (1 + β(δ/h)²) with stiffening."""
+    force = reissner_stiffness_N_per_m(ball) * deflection_m
+    if stiffening is not None:
+        force = force * (1.0 + stiffening.beta * (deflection_m / ball.wall_m) ** 2)
+    return force
+
+
+def contact_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
+    """Force between shell and floor, F_B + F_G + F_d (the right-hand side of Eq. 7).
+
+    ``internal`` holds the internal states of the model's damping terms, in their order.
+    """
+    force = shell_force_N(deflection_m, ball, model.stiffening)
+    if model.gas == "adiabatic":
+        force = force + gas_force_N(deflection_m, ball)
+    for term, z in zip(model.damping, model.split_internal(internal)):
+        force = force + term.force_N(deflection_m, velocity_m_per_s, z, ball)
+    return force
+
+
+def internal_rates(deflection_m, velocity_m_per_s, internal, ball, model):
+    """Time derivatives of the internal states of the model's damping terms (concatenated)."""
+    rates = [term.internal_rates(deflection_m, velocity_m_per_s, z, ball) for term, z in zip(model.damping, model.split_internal(internal))]
+    return jnp.concatenate([jnp.zeros(0), *rates])

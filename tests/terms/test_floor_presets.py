@@ -1,0 +1,315 @@
+"""Floor presets, material data, floor files and ``rbjax simulate --floor``.
+
+The impedances are checked against Z = 8√(B′m″) written out here with the cited material
+values; the issue's bars (a 150 mm concrete floor is the rigid floor to 0.05 dB in every
+octave band, OSB and chipboard floors lower the peak force and the restitution, the energy
+balance closes on OSB) run through the command line and ``rbjax.simulate`` with a single drop
+height, so that every infinite plate shares one compiled program.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import rbjax
+from rbjax import InfinitePlate, ModalFloor, Model, Rigid, energy_balance
+from rbjax.terms.floors.kinds import Dashpot
+from rbjax.terms.floors.materials import MATERIALS, Material, cross_laminated_youngs_Pa, material
+from rbjax.terms.floors.presets import (
+    FLOOR_PRESETS,
+    PLATE_PRESETS,
+    floor_preset,
+    load_floor,
+    load_named_floor,
+)
+
+from cli_runner import run_cli
+
+OCTAVES = ("31.5", "63", "125", "250", "500", "1000")
+
+#: (E in Pa, ρ in kg/m³, ν) as cited in rbjax.terms.floors.materials, written out independently.
+CITED = {
+    "concrete": (33.0e9, 2300.0, 0.2),  # EN 1992-1-1 Table 3.1 (C30/37), §3.1.3; EN ISO 10456
+    "steel": (210.0e9, 7850.0, 0.3),  # EN 1993-1-1 §3.2.6; EN 1991-1-1
+    "osb": (math.sqrt(3500e6 * 1400e6), 650.0, 0.3),  # EN 300 OSB/3 major/minor; EN ISO 10456
+    "chipboard": (2.5e9, 650.0, 0.3),  # EN 312 P4/P5 20-25 mm
+    "clt": (4.763e9, 470.0, 0.3),  # 5 C24 layers (EN 338), see test_clt_modulus
+}
+
+
+def plate_Z(t, E, rho, nu):
+    """Z = 8 √(B′ m″), B′ = E t³ / (12 (1 − ν²)), m″ = ρ t (Cremer, Heckl & Petersson, Eq. 5.46)."""
+    return 8.0 * math.sqrt(E * t**3 / (12.0 * (1.0 - nu * nu)) * rho * t)
+
+
+# ------------------------------------------------------------------------------ materials
+
+
+def test_materials_have_sources_and_valid_values():
+    assert {"concrete", "osb", "chipboard", "clt", "steel"} <= set(MATERIALS)
+    for name, m in MATERIALS.items():
+        assert m.name == name and m.source
+        assert m.youngs_Pa > 0 and m.density_kg_per_m3 > 0 and -1 < m.poisson <= 0.5
+    for name, (E, rho, nu) in CITED.items():
+        assert MATERIALS[name].youngs_Pa == pytest.approx(E, rel=1e-3)
+        assert (MATERIALS[name].density_kg_per_m3, MATERIALS[name].poisson) == (rho, nu)
+
+
+def test_clt_modulus():
+    # one layer: the board's own orthotropy, √(E_0 E_90); five equal C24 layers (E_0 = 11 GPa,
+    # E_90 = 0.37 GPa): per unit layer thickness the layers along x have I = 3/12 + 2² + 2², across 2/12 + 1 + 1
+    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 1) == pytest.approx(math.sqrt(11e9 * 0.37e9), rel=1e-12)
+    along, across = 3 / 12 + 8.0, 2 / 12 + 2.0
+    ex = (11e9 * along + 0.37e9 * across) / (along + across)
+    ey = (11e9 * across + 0.37e9 * along) / (along + across)
+    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 5) == pytest.approx(math.sqrt(ex * ey), rel=1e-12)
+    with pytest.raises(ValueError, match="layers=4"):
+        cross_laminated_youngs_Pa(11e9, 0.37e9, 4)
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        (dict(youngs_Pa=0.0), ["youngs_Pa", "0.0", "(0, inf)"]),
+        (dict(density_kg_per_m3=-1.0), ["density_kg_per_m3", "-1.0", "(0, inf)"]),
+        (dict(poisson=0.6), ["poisson", "0.6", "(-1, 0.5]"]),
+    ],
+)
+def test_material_validates(kwargs, words):
+    base = dict(name="x", youngs_Pa=1e9, density_kg_per_m3=500.0, poisson=0.3, source="test")
+    with pytest.raises(ValueError) as err:
+        Material(**{**base, **kwargs})
+    assert all(w in str(err.value) for w in words)
+    with pytest.raises(ValueError, match="'marble'.*concrete"):
+        material("marble")
+
+
+# ------------------------------------------------------------------------------ presets
+
+
+def test_presets_have_the_impedance_of_the_formula():
+    assert {"rigid", "concrete-140mm", "concrete-150mm", "chipboard-22mm", "osb-15mm", "clt-140mm", "steel-10mm"} <= set(FLOOR_PRESETS)
+    assert isinstance(floor_preset("rigid"), Rigid)
+    for name, (mat, t) in PLATE_PRESETS.items():
+        floor = floor_preset(name)
+        assert isinstance(floor, InfinitePlate)
+        if mat in CITED:
+            assert float(floor.impedance_Ns_per_m) == pytest.approx(plate_Z(t, *CITED[mat]), rel=1e-3), name
+    z150 = float(floor_preset("concrete-150mm").impedance_Ns_per_m)
+    assert 3e5 < z150 < 6e5  # of order 4e5 N s/m
+    assert z150 == pytest.approx(plate_Z(0.15, 33e9, 2300.0, 0.2), rel=1e-12)
+    # lightweight floors are ~300-700 times softer than a concrete slab
+    assert float(floor_preset("osb-15mm").impedance_Ns_per_m) < float(floor_preset("chipboard-22mm").impedance_Ns_per_m) < 2e3
+
+
+def test_unknown_preset_lists_the_valid_names():
+    with pytest.raises(ValueError) as err:
+        floor_preset("marble-20mm")
+    assert "marble-20mm" in str(err.value) and "concrete-150mm" in str(err.value) and "osb-15mm" in str(err.value)
+    with pytest.raises(ValueError, match="neither a floor preset nor a floor file.*rigid"):
+        load_floor("marble-20mm")
+
+
+@pytest.mark.parametrize(
+    "field, value, words",
+    [
+        ("plate_thickness_m", 0.0, ["plate_thickness_m", "0.0", "(0, inf)"]),
+        ("plate_thickness_m", -0.1, ["plate_thickness_m", "-0.1", "(0, inf)"]),
+        ("plate_youngs_Pa", -1e9, ["plate_youngs_Pa", "(0, inf)"]),
+        ("plate_density_kg_per_m3", 0.0, ["plate_density_kg_per_m3", "(0, inf)"]),
+        ("plate_poisson", 0.7, ["plate_poisson", "0.7", "(-1, 0.5]"]),
+    ],
+)
+def test_infinite_plate_rejects_values_out_of_range(field, value, words):
+    kwargs = dict(plate_thickness_m=0.1, plate_youngs_Pa=3e9, plate_density_kg_per_m3=650.0, plate_poisson=0.3)
+    with pytest.raises(ValueError) as err:
+        InfinitePlate(**{**kwargs, field: value})
+    assert all(w in str(err.value) for w in words)
+
+
+# ------------------------------------------------------------------------------ files
+
+
+def test_example_floor_file_loads():
+    from pathlib import Path
+
+    path = Path(rbjax.__file__).parent / "examples" / "floors" / "floating-screed.toml"
+    name, floor = load_named_floor(path)
+    assert name == "floating-screed" and isinstance(floor, ModalFloor)
+    assert floor.num_modes == 9 and set(floor.mass_kg) == {500.0} and set(floor.loss_factor) == {0.1}
+
+
+FILES = {
+    "plate-material": {"type": "infinite-plate", "material": "osb", "thickness_m": 0.015},
+    "plate-explicit": {"type": "infinite-plate", "thickness_m": 0.15, "youngs_Pa": 33e9, "density_kg_per_m3": 2300.0, "poisson": 0.2},
+    "plate-override": {"type": "infinite-plate", "material": "concrete", "thickness_m": 0.15, "density_kg_per_m3": 2400.0},
+    "dashpot": {"type": "dashpot", "impedance_Ns_per_m": 5e4, "name": "my dashpot", "description": "a test"},
+    "modal": {"type": "modal", "mass_kg": [200.0, 150.0], "frequency_Hz": [0.0, 40.0], "loss_factor": [0.0, 0.05]},
+    "rigid": {"type": "rigid"},
+}
+
+
+def _toml(table: dict) -> str:
+    def value(v):
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+        return repr(float(v))
+
+    return "".join(f"{k} = {value(v)}\n" for k, v in table.items())
+
+
+@pytest.mark.parametrize("suffix", [".toml", ".json"])
+@pytest.mark.parametrize("key", list(FILES))
+def test_floor_file_round_trip(tmp_path, key, suffix):
+    table = FILES[key]
+    path = tmp_path / f"{key}{suffix}"
+    path.write_text(_toml(table) if suffix == ".toml" else json.dumps(table))
+    name, floor = load_named_floor(path)
+    assert name == table.get("name", key)
+    if key.startswith("plate"):
+        mat = MATERIALS.get(table.get("material", ""))
+        E = table.get("youngs_Pa", mat.youngs_Pa if mat else None)
+        rho = table.get("density_kg_per_m3", mat.density_kg_per_m3 if mat else None)
+        nu = table.get("poisson", mat.poisson if mat else None)
+        assert float(floor.impedance_Ns_per_m) == pytest.approx(plate_Z(table["thickness_m"], E, rho, nu), rel=1e-12)
+    elif key == "dashpot":
+        assert isinstance(floor, Dashpot) and float(floor.impedance_Ns_per_m) == 5e4
+    elif key == "modal":
+        assert floor.mass_kg == (200.0, 150.0) and floor.frequency_Hz == (0.0, 40.0) and floor.loss_factor == (0.0, 0.05)
+    else:
+        assert isinstance(floor, Rigid)
+    assert load_floor(str(path)) == floor
+
+
+@pytest.mark.parametrize(
+    "table, words",
+    [
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.0}, ["thickness_m", "0.0", "(0, inf)"]),
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": -0.02}, ["thickness_m", "-0.02", "(0, inf)"]),
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "density_kg_per_m3": 0.0}, ["density_kg_per_m3", "(0, inf)"]),
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "youngs_Pa": -3e9}, ["youngs_Pa", "-3000000000.0", "(0, inf)"]),
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "poisson": 0.6}, ["poisson", "0.6", "(-1, 0.5]"]),
+        ({"type": "infinite-plate", "material": "osb", "thickness_m": "thin"}, ["thickness_m", "'thin'", "not a number"]),
+        ({"type": "infinite-plate", "material": "marble", "thickness_m": 0.02}, ["material", "'marble'", "concrete"]),
+        ({"type": "infinite-plate", "thickness_m": 0.02, "youngs_Pa": 3e9}, ["material", "density_kg_per_m3", "poisson"]),
+        ({"type": "infinite-plate", "material": "osb"}, ["thickness_m"]),
+        ({"type": "modal", "mass_kg": [100.0, 0.0], "frequency_Hz": [10.0, 20.0], "loss_factor": 0.1}, ["mass_kg[1]", "0.0", "(0, inf)"]),
+        ({"type": "modal", "mass_kg": [100.0], "frequency_Hz": [10.0], "loss_factor": -0.1}, ["loss_factor", "-0.1", "[0, inf)"]),
+        ({"type": "modal", "mass_kg": [100.0], "frequency_Hz": [-10.0], "loss_factor": 0.1}, ["frequency_Hz[0]", "-10.0", "[0, inf)"]),
+        ({"type": "modal", "mass_kg": [100.0, 50.0], "frequency_Hz": [10.0], "loss_factor": 0.1}, ["one value per mode"]),
+        ({"type": "modal", "mass_kg": [], "frequency_Hz": [], "loss_factor": 0.1}, ["mass_kg", "empty"]),
+        ({"type": "dashpot", "impedance_Ns_per_m": 0.0}, ["impedance_Ns_per_m", "0.0", "(0, inf)"]),
+        ({"type": "dashpot", "impedance_Ns_per_m": 1e4, "mass_kg": 3.0}, ["'mass_kg'", "dashpot", "impedance_Ns_per_m"]),
+        ({"type": "trampoline"}, ["type", "'trampoline'", "infinite-plate", "modal"]),
+        ({"thickness_m": 0.1}, ["type", "None", "rigid"]),
+    ],
+)
+def test_bad_floor_files_name_the_key(tmp_path, table, words):
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(table))
+    with pytest.raises(ValueError) as err:
+        load_floor(path)
+    message = str(err.value)
+    assert "bad.json" in message
+    assert all(w in message for w in words), message
+
+
+def test_unreadable_floor_files(tmp_path):
+    (tmp_path / "broken.toml").write_text("type = = 'rigid'\n")
+    (tmp_path / "list.json").write_text("[1, 2]")
+    (tmp_path / "floor.yaml").write_text("type: rigid\n")
+    with pytest.raises(ValueError, match="broken.toml.*cannot be parsed"):
+        load_floor(tmp_path / "broken.toml")
+    with pytest.raises(ValueError, match="list.json.*one table"):
+        load_floor(tmp_path / "list.json")
+    with pytest.raises(ValueError, match="suffix '.yaml'; valid: .toml, .json"):
+        load_floor(tmp_path / "floor.yaml")
+    with pytest.raises(ValueError, match="does not exist"):
+        load_floor(tmp_path / "missing.toml")
+
+
+# ------------------------------------------------------------------------------ the bars
+
+
+@pytest.fixture(scope="module")
+def concrete_rows():
+    code, out, err = run_cli(["simulate", "--height-m", "1.0", "--floor", "concrete-150mm", "--json"])
+    assert code == 0, err
+    return json.loads(out)
+
+
+def test_cli_floor_json_keys(concrete_rows):
+    (row,) = concrete_rows
+    base = {"height_m", "contact_time_s", "peak_force_N", "restitution", "lfe_total_dB", "lfe_octave_dB", "lfe_third_octave_dB", "conformance", "status", "method"}
+    assert set(row) == base | {"floor", "floor_energy_J", "lfe_ratio_dB"}
+    assert row["floor"] == "concrete-150mm" and row["status"] == "ok" and row["method"] == "ode"
+    assert tuple(row["lfe_ratio_dB"]) == OCTAVES
+    assert 0.0 < row["floor_energy_J"] < 0.01 * 0.5 * 2.5 * 2 * 9.80665  # < 1 % of the impact energy
+
+
+def test_concrete_150mm_is_the_rigid_floor_to_0_05_dB(concrete_rows):
+    ratio = concrete_rows[0]["lfe_ratio_dB"]
+    assert max(abs(ratio[b]) for b in OCTAVES) < 0.05, ratio
+
+
+def test_cli_floor_file_and_ratio_agree_with_simulate(tmp_path, concrete_rows):
+    path = tmp_path / "slab.toml"
+    path.write_text('name = "slab"\ntype = "infinite-plate"\nmaterial = "concrete"\nthickness_m = 0.15\n')
+    code, out, err = run_cli(["simulate", "--height-m", "1.0", "--floor", str(path), "--json"])
+    assert code == 0, err
+    (row,) = json.loads(out)
+    assert row["floor"] == "slab"
+    for key in ("peak_force_N", "restitution", "floor_energy_J"):
+        assert row[key] == pytest.approx(concrete_rows[0][key], rel=1e-12)
+    # the ratio is the difference of the two L_FE computed directly
+    floor = floor_preset("concrete-150mm")
+    on_floor = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0, floor=floor).force_N, 44_100.0))
+    blocked = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0).force_N, 44_100.0))
+    np.testing.assert_allclose([row["lfe_ratio_dB"][b] for b in OCTAVES], on_floor - blocked, atol=1e-9)
+
+
+def test_cli_rigid_floor_keeps_the_blocked_force_keys():
+    code, out, err = run_cli(["simulate", "--height-m", "1.0", "--floor", "rigid", "--json"])
+    assert code == 0, err
+    (row,) = json.loads(out)
+    assert not {"floor", "floor_energy_J", "lfe_ratio_dB"} & set(row)
+    assert row["method"] == "quadrature"
+
+
+@pytest.mark.parametrize(
+    "floor, words",
+    [("marble-20mm", ["--floor", "marble-20mm", "concrete-150mm"]), ("/nonexistent/floor.toml", ["/nonexistent/floor.toml", "does not exist"])],
+)
+def test_cli_bad_floor_exits_2_with_one_line(floor, words):
+    code, out, err = run_cli(["simulate", "--height-m", "1", "--floor", floor])
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and err.startswith("rbjax: error:")
+    assert all(w in err for w in words if w != "--floor"), err
+
+
+def test_cli_help_lists_the_floor_presets():
+    code, out, err = run_cli(["simulate", "--help"])
+    assert code == 0 and "--floor NAME|FILE" in out
+    assert all(name in out for name in FLOOR_PRESETS)
+
+
+def test_lightweight_floors_lower_peak_force_and_restitution():
+    rigid = rbjax.simulate(1.0, method="ode")
+    for name in ("osb-15mm", "chipboard-22mm"):
+        on = rbjax.simulate(1.0, floor=floor_preset(name))
+        assert str(on.status_name) == "ok"
+        assert float(on.peak_force_N) < 0.9 * float(rigid.peak_force_N), name
+        assert float(on.restitution) < 0.8 * float(rigid.restitution), name
+
+
+def test_energy_balance_closes_on_osb():
+    balance = energy_balance(1.0, model=Model(blocked_force="momentum", floor=floor_preset("osb-15mm")))
+    assert int(balance.status) == 0
+    assert abs(float(balance.residual_J)) / float(balance.impact_energy_J) < 1e-8
+    assert float(balance.floor_energy_J) > 0.3 * float(balance.impact_energy_J)
