@@ -178,3 +178,19 @@ def test_auto_under_jit_uses_the_quadrature():
     tc = np.asarray(fn(jnp.asarray(HEIGHTS)))
     ref = reference_scalars(HEIGHTS, BALL)["contact_time_s"]
     assert np.max(_rel(tc, ref)) <= 1e-9
+
+
+def test_a_model_is_the_one_calling_convention():
+    """simulate(h, ball, model) (README "Using it"): the keywords are a shortcut that builds the
+    same Model; giving both is refused by name."""
+    model = rbjax.Model(gas="none", blocked_force="momentum", damping=rbjax.KelvinVoigt(30.0))
+    by_model = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model)
+    by_keywords = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, gas="none", blocked_force="momentum", damping=rbjax.KelvinVoigt(30.0))
+    assert by_model.model == by_keywords.model
+    assert float(by_model.contact_time_s) == float(by_keywords.contact_time_s)
+    elastic = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, rbjax.Model(gas="none"))
+    assert abs(float(elastic.contact_time_s) - float(by_model.contact_time_s)) > 1e-5  # the model is used
+    with pytest.raises(ValueError, match="keyword options \\['gas'\\]"):
+        rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model, gas="none")
+    with pytest.raises(ValueError, match="model="):
+        rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, "kelvin-voigt")

@@ -54,3 +54,12 @@ def _as_float64(x):
     if isinstance(x, (jax.Array, jax.core.Tracer)):
         return x if x.dtype == jnp.float64 else jnp.asarray(x, dtype=jnp.float64)
     return np.asarray(x, dtype=np.float64)
+
+
+def as_arrays(tree):
+    """Every array-like leaf of ``tree`` as a float64 array (NumPy where concrete: an eager
+    ``jnp.asarray`` per leaf costs more than the whole solve of a small batch), the rest kept,
+    so that new values reuse a compiled program instead of retracing it (shared by the fast
+    paths)."""
+    arrays, static = eqx.partition(tree, eqx.is_array_like)
+    return eqx.combine(jax.tree_util.tree_map(_as_float64, arrays), static)

@@ -43,7 +43,7 @@ from jaxtyping import ArrayLike
 from .._validate import check_range
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
-from .inputs import PAPER_RATE_Hz, _as_float64, broadcast_inputs, check_inputs
+from .inputs import PAPER_RATE_Hz, as_arrays, broadcast_inputs, check_inputs
 from .ode import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
 
@@ -203,10 +203,7 @@ def _sampled_program(height_m, ball, model, rate_Hz, num_samples: int, substeps:
 def sampled_solve(height_m, ball: Ball, model: Model, rate_Hz, num_samples: int, substeps: int) -> Trajectory:
     """``sampled_history`` after its checks, with ``time_s`` the 1-D sample grid (not repeated
     per impact)."""
-    # every value an array (NumPy where concrete), so that new values reuse the compiled program
-    arrays, static = eqx.partition((height_m, ball, model, rate_Hz), eqx.is_array_like)
-    arrays = jax.tree_util.tree_map(_as_float64, arrays)
-    height, ball, model, rate = eqx.combine(arrays, static)
+    height, ball, model, rate = as_arrays((height_m, ball, model, rate_Hz))
     times, (d, v, f, inside, status) = _sampled_program(height, ball, model, rate, num_samples, substeps)
     return Trajectory(time_s=times, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside, status=status)
 

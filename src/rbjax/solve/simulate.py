@@ -22,7 +22,7 @@ from .angle import angle_unsupported
 from .inputs import (
     PAPER_DURATION_S,
     PAPER_RATE_Hz,
-    _as_float64,
+    as_arrays,
     broadcast_inputs,
     check_inputs,
 )
@@ -291,11 +291,7 @@ def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
         from .quadrature import DEFAULT_NODES, _check
 
         _check(height_m, ball, model, DEFAULT_NODES)
-    # every value an array, so that new values reuse the compiled program (NumPy for concrete
-    # values: an eager jnp.asarray per leaf costs more than the whole solve of a small batch)
-    arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
-    arrays = jax.tree_util.tree_map(_as_float64, arrays)
-    height, out = _fast_program(path, *eqx.combine(arrays, static))
+    height, out = _fast_program(path, *as_arrays((height_m, ball, model)))
     if not fallback or is_traced(out.status):
         return height, out, path
     failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
