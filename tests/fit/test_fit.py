@@ -245,7 +245,7 @@ def program_cache(tmp_path, monkeypatch):
     """The command line's caches in a temporary folder (restored afterwards)."""
     import jax
 
-    from rbjax import program_store
+    from rbjax.fit import program_store
 
     before = jax.config.jax_compilation_cache_dir
     monkeypatch.setenv("RBJAX_CACHE_DIR", str(tmp_path / "cache"))
@@ -260,8 +260,7 @@ def test_cli_fit_json_and_outputs(tmp_path, program_cache, monkeypatch):
     # the fit's program was exported beside the compilation cache; a new process reads it back
     # instead of tracing the model again, and gets the same fit
     assert len(list((program_cache / "rbjax-programs").glob("*.jaxexport"))) == 1
-    from rbjax import program_store
-    from rbjax.fit import program
+    from rbjax.fit import program, program_store
 
     monkeypatch.setattr(program_store, "_LOADED", {})
     monkeypatch.setattr(program, "compiled", lambda *a: pytest.fail("traced again despite the stored program"))

@@ -3,13 +3,15 @@
 The reference for every value is the same computation in NumPy.
 """
 
+from pathlib import Path
+
 import jax
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
 import pytest
 
-from rbjax import program_store
+from rbjax.fit import program_store
 
 
 def _program():
@@ -105,3 +107,14 @@ def test_a_program_run_before_without_a_store_is_still_exported(store):
     fn = program_store.load_or_export("toy-after-plain", _program, args)
     assert len(list(store.glob("*.jaxexport"))) == 1
     np.testing.assert_allclose(fn(*args)["y"], _expected(*args)["y"], rtol=1e-14)
+
+
+def test_the_key_covers_the_source_of_every_layer():
+    """A stored program is the whole model's: an edit to a term or a solve path must change its
+    key, not only an edit to the fit package that holds the store."""
+    import rbjax
+
+    root = Path(rbjax.__file__).parent
+    files = {p.relative_to(root).as_posix() for p in program_store.source_files()}
+    assert {"terms/forces.py", "solve/ode.py", "solve/record_samples.py", "fit/program.py", "__init__.py"} <= files
+    assert files == {p.relative_to(root).as_posix() for p in root.rglob("*.py")}

@@ -16,8 +16,8 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from rbjax import band_kernel  # noqa: E402
 from rbjax import spectrum as S  # noqa: E402
+from rbjax.spectrum import band_kernel  # noqa: E402
 
 RATE = 44100.0  # Hz
 N_1S = 44100  # the paper's 1 s record

@@ -16,7 +16,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from rbjax import standards as ST  # noqa: E402
+from rbjax.spectrum import standards as ST  # noqa: E402
 from rbjax.spectrum.bands import OCTAVE_BANDS  # noqa: E402
 
 # label: (nominal dB, ± dB), as printed

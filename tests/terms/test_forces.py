@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import quad
 
 import rbjax
-from rbjax import forces
+from rbjax.terms import forces
 
 P_A, GAMMA = 101_325.0, 1.4
 JIS = rbjax.JIS_RUBBER_BALL

@@ -15,7 +15,7 @@ import pytest
 
 import rbjax
 from rbjax import JIS_RUBBER_BALL, AbstractDamping, KelvinVoigt, Model, Parameter, Zener
-from rbjax import parameters as params
+from rbjax.terms import parameters as params
 from rbjax.terms.model import superset_model
 
 from scipy_reference import reference_impact

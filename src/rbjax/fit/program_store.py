@@ -29,13 +29,20 @@ import jax
 _LOADED: dict[str, Callable] = {}
 
 
+PACKAGE_ROOT = Path(__file__).parents[1]
+
+
+def source_files() -> list[Path]:
+    """Every source file of the installed ``rbjax`` package (all layers), sorted."""
+    return sorted(PACKAGE_ROOT.rglob("*.py"))
+
+
 @functools.cache
 def source_digest() -> str:
     """SHA-256 over the source files of the installed ``rbjax`` package (sorted by path)."""
-    root = Path(__file__).parent
     h = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        h.update(str(path.relative_to(root)).encode())
+    for path in source_files():
+        h.update(str(path.relative_to(PACKAGE_ROOT)).encode())
         h.update(path.read_bytes())
     return h.hexdigest()
 

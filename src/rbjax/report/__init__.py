@@ -2,6 +2,7 @@
 ``report.md`` and ``results.json``), with the values the paper reports and rbjax's comparison
 with them in :mod:`~rbjax.report.paper`."""
 
+from .paper import DEFAULT_HEIGHTS_M, GAS, PAPER, STANDARD_HEIGHT_M, printed_eq4_limit_m
 from .reproduce import reproduce
 
-__all__ = ["reproduce"]
+__all__ = ["DEFAULT_HEIGHTS_M", "GAS", "PAPER", "STANDARD_HEIGHT_M", "printed_eq4_limit_m", "reproduce"]

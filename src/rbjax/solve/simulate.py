@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -35,6 +36,16 @@ from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
 METHODS = ("auto", "ode", "quadrature", "angle")
 
 
+
+
+class _Unset:
+    """The default of a keyword option not given (``None`` is a value some options refuse)."""
+
+    def __repr__(self) -> str:
+        return "<not given>"
+
+
+UNSET: Any = _Unset()
 
 
 def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None) -> Model:
@@ -185,11 +196,11 @@ def simulate(
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
     *,
-    gas: str | None = None,
-    blocked_force: str | None = None,
+    gas: str = UNSET,
+    blocked_force: str = UNSET,
     damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
     stiffening: CubicStiffening | None = None,
-    max_deflection_ratio: float | None = None,
+    max_deflection_ratio: float = UNSET,
     ball_mode: BallMode | None = None,
     floor: AbstractFloor | None = None,
     solver: Solver | None = None,
@@ -233,7 +244,7 @@ def simulate(
         "gas": gas, "blocked_force": blocked_force, "damping": damping, "stiffening": stiffening,
         "max_deflection_ratio": max_deflection_ratio, "ball_mode": ball_mode, "floor": floor,
     }
-    given = {k: v for k, v in options.items() if v is not None}
+    given = {k: v for k, v in options.items() if v is not UNSET and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor"))}
     if model is None:
         model = make_model(**given)
     elif not isinstance(model, Model):
