@@ -1,10 +1,15 @@
-"""Wall time of `rbjax fit` on the bundled recordings, cold (empty compilation cache) and warm.
+"""Wall time of `rbjax fit` on the bundled recordings, cold (empty compilation cache) and warm,
+beside what a scipy user would write (``scipy_fit.py``), and the cost of one LM evaluation.
 
 Runs the command line in subprocesses with ``RBJAX_CACHE_DIR`` pointing at a fresh folder, so
 the first run compiles and the second reads JAX's persistent compilation cache; prints a
 table and writes ``results/fit_time.json`` (with the full selection's table, printed as
-Markdown for the README). Settings: the full selection (no ``--model``) and
-``--model zener --blocked-force momentum``. Pass ``--quick`` for the single-model rows only.
+Markdown for the README). Settings: ``--model hunt-crossley+ball-mode --blocked-force
+momentum``, ``--model kelvin-voigt --blocked-force momentum`` and the full selection (no
+``--model``). Then, in this process: the scipy fits of the same two models (time, cost ½Σr²
+of the scipy residuals, rms) and rbjax's optimum's cost under the same residuals; the time of
+one LM evaluation (residuals and Jacobian of all records) against the forward histories of
+the same records. Pass ``--quick`` to leave out the full selection.
 Cold and warm runs are separate processes; the first reads nothing from any cache.
 """
 
@@ -69,25 +74,90 @@ def selection_markdown(sel: dict) -> str:
     return "\n".join(lines)
 
 
+def lm_evaluation_ratio(model: str) -> dict:
+    """Median time of one evaluation of the fit's program (residuals and the Jacobian of all
+    records, the optimiser stopped after it) against the forward histories of the same records
+    on the same path (``record_forces`` alone, jitted)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from rbjax import JIS_RUBBER_BALL
+    from rbjax.fit import prepare_data
+    from rbjax.fit.layout import model_from_name
+    from rbjax.fit.problem import Problem, fit_solver
+    from rbjax.fit.record_forces import record_forces
+
+    from _common import time_call
+
+    data = prepare_data(examples_dir())
+    m = model_from_name(model, blocked_force="momentum", values={"alpha_s_per_m": 0.05})
+    problem = Problem(data, JIS_RUBBER_BALL, m, fit_solver(None), height_error=False, decimate=1, scale="noise")
+    lay = problem.layout
+    theta = lay.theta(JIS_RUBBER_BALL, m, data.onset_s)
+    free = np.zeros(len(lay.names), bool)
+    weights = problem.weights(np.ones(data.n_records, bool))
+    constants = lay.constant_values(JIS_RUBBER_BALL, m)
+    evaluation = time_call(lambda: problem.run(theta, free, weights, constants)["r"])
+    s = problem.structure
+    forward = jax.jit(lambda th: record_forces(s, th, jnp.asarray(constants), jnp.asarray(problem.arrays["heights"])))
+    histories = time_call(lambda: forward(jnp.asarray(theta)))
+    return {"model": model, "records": int(data.n_records), "samples": int(data.n_samples), "columns": len(lay.names),
+            "evaluation_ms": 1e3 * evaluation["median_s"], "forward_ms": 1e3 * histories["median_s"],
+            "ratio": evaluation["median_s"] / histories["median_s"]}
+
+
+def scipy_anchor(model: str, rbjax_out: dict) -> dict:
+    """The scipy user's fit of ``model`` (momentum) and rbjax's optimum under its residuals."""
+    from rbjax.fit import prepare_data
+
+    from scipy_fit import MODELS, cost_at, fit
+
+    data = prepare_data(examples_dir())
+    ref = fit(model, data)
+    names = MODELS[model][0]
+    params = {n: rbjax_out["parameters"][n]["value"] for n in names}
+    rbjax_cost = cost_at(ref.pop("residuals"), names, params, rbjax_out["onset_shift_s"])
+    return {**ref, "rbjax_cost_under_scipy_residuals": rbjax_cost, "rbjax_parameters": params}
+
+
 def main() -> None:
     quick = "--quick" in sys.argv
     data = str(examples_dir())
-    settings = {"zener/momentum": ["fit", data, "--model", "zener", "--blocked-force", "momentum", "--json", "--quiet"]}
+    settings = {
+        "hunt-crossley+ball-mode/momentum": ["fit", data, "--model", "hunt-crossley+ball-mode", "--blocked-force", "momentum", "--json", "--quiet"],
+        "kelvin-voigt/momentum": ["fit", data, "--model", "kelvin-voigt", "--blocked-force", "momentum", "--json", "--quiet"],
+    }
     if not quick:
         settings["full selection"] = ["fit", data, "--json", "--quiet"]
     info = machine_info()
     rows = []
+    outs = {}
     for label, argv in settings.items():
         with tempfile.TemporaryDirectory() as cache:
             cold, rc1, out = timed(argv, cache)
             warm, rc2, _ = timed(argv, cache)
+        outs[label] = out
         rows.append({"setting": label, "cold_s": cold, "warm_s": warm, "exit_codes": [rc1, rc2], "selection": _selection_summary(out),
-                     "selection_table": selection_markdown(out["selection"]) if out.get("selection") else None})
-        print(f"{label:18s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}", flush=True)
+                     "recommended": (out.get("model_name"), out.get("blocked_force")), "residual_rms_N": out.get("residual_rms_N"),
+                     "message": out.get("message"), "selection_table": selection_markdown(out["selection"]) if out.get("selection") else None})
+        print(f"{label:34s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}   rms {out.get('residual_rms_N')}", flush=True)
+    anchors = []
+    for model in ("kelvin-voigt", "hunt-crossley+ball-mode"):
+        a = scipy_anchor(model, outs[f"{model}/momentum"])
+        warm = next(r["warm_s"] for r in rows if r["setting"] == f"{model}/momentum")
+        a["rbjax_warm_s"] = warm
+        a["speedup_warm"] = a["time_s"] / warm
+        anchors.append(a)
+        print(f"scipy {model:26s} {a['time_s']:7.1f} s ({a['evaluations']} evaluations + FD Jacobians), cost {a['cost']:.6g}, rms {a['rms_N']:.2f} N; "
+              f"rbjax's optimum under the same residuals: cost {a['rbjax_cost_under_scipy_residuals']:.6g}; rbjax warm {warm:.1f} s: {a['speedup_warm']:.1f}×", flush=True)
+    ratios = [lm_evaluation_ratio(m) for m in ("hunt-crossley", "hunt-crossley+ball-mode")]
+    for r in ratios:
+        print(f"one LM evaluation, {r['model']}: {r['evaluation_ms']:.1f} ms vs forward histories {r['forward_ms']:.1f} ms: {r['ratio']:.2f}×", flush=True)
     for row in rows:
         if row["selection_table"]:
             print(row["selection_table"])
-    out = {"machine": finish_machine_info(info), "rows": rows}
+    out = {"machine": finish_machine_info(info), "rows": rows, "scipy_anchor": anchors, "lm_evaluation": ratios}
     name = "fit_time_quick.json" if quick else "fit_time.json"
     (HERE / "results" / name).write_text(json.dumps(out, indent=2))
 

@@ -25,7 +25,7 @@ from rbjax.spectrum.levels import lfe_octave_dB
 from scipy_reference import reference_impact
 
 # the modules (``rbjax.simulate`` the attribute is the function)
-sim = importlib.import_module("rbjax.simulate")
+sim = importlib.import_module("rbjax.solve.simulate")
 sh = importlib.import_module("rbjax.solve.sampled")
 BALL = rbjax.JIS_RUBBER_BALL
 RATE_Hz = 44_100.0

@@ -95,6 +95,8 @@ def register(subparsers) -> None:
     p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
     p.add_argument("--optimizer", choices=("lm", "gauss-newton"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")
+    p.add_argument("--method", choices=("auto", "samples", "ode"), default="auto",
+                   help="the prediction: samples (the force at the records' own samples by fixed steps; auto's choice) or ode (the diffrax ODE with its events, the reference)")
     p.add_argument("--out", default=None, metavar="DIR", help="write fit.json and plots (histories, L_FE bands, correlations) into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=run)
@@ -135,7 +137,7 @@ def run(args) -> int:
 
         forces = BLOCKED_FORCES if args.blocked_force is None else (args.blocked_force,)
         progress("no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)")
-        selection = select_model(data, blocked_forces=forces, gas=args.gas, fix=fix, optimizer=args.optimizer, progress=not args.quiet)
+        selection = select_model(data, blocked_forces=forces, gas=args.gas, fix=fix, optimizer=args.optimizer, method=args.method, progress=not args.quiet)
         result = selection.recommended.fit
         progress(f"recommended: {selection.recommended.label}")
     else:
@@ -146,6 +148,7 @@ def run(args) -> int:
             gas=args.gas,
             fix=fix,
             optimizer=args.optimizer,
+            method=args.method,
             progress=not args.quiet,
         )
     out = result.to_dict()

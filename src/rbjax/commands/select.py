@@ -27,7 +27,7 @@ examples:
 def register(subparsers) -> None:
     p = add_command(subparsers, "select", help="choose the impact model by cross-validation over drop heights", description=DESCRIPTION)
     add_data_options(p)
-    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener)")
+    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode)")
     p.add_argument("--blocked-force", choices=("paper", "momentum", "both"), default="both", help="blocked-force definitions to compare (default both)")
     p.add_argument("--hold-out", default=None, metavar="HEIGHTS", help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them")
     p.add_argument("--out", default=None, metavar="DIR", help="write selection.json into DIR")

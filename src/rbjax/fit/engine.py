@@ -28,6 +28,7 @@ uncertainties, the held-out records' alignment and the per-height table.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 
@@ -41,11 +42,13 @@ from ..terms.model import GAS_OPTIONS, Model, Solver
 from ..terms.parameters import replace
 from . import uncertainty as unc
 from .layout import CONSTANT_PARAMETERS, fitted_parameter_names
+from .physical import at_bounds, ball_mode_structure
 from .problem import (
     STEPS_PER_ROUND,
     Problem,
     candidate_model,
     embed,
+    fit_path,
     fit_solver,
     per_height_rows,
     realign,
@@ -115,6 +118,99 @@ def validate_fix(names, fix):
     return out
 
 
+def alternative_starts(model: Model, given: set[str]) -> list[dict]:
+    """The starts of a fit of ``model``: ``{}`` (the start values), then one per alternative
+    value of a parameter whose fit has several minima, as its term declares them
+    (``START_ALTERNATIVES``; e.g. the ball mode's frequency), unless the caller gave or held it."""
+    starts: list[dict] = [{}]
+    terms = [*model.damping, model.stiffening, model.ball_mode]
+    for term in terms:
+        for name, values in getattr(type(term), "START_ALTERNATIVES", {}).items():
+            if name not in given:
+                starts += [{name: float(v)} for v in values]
+    return starts
+
+
+@dataclasses.dataclass(eq=False)
+class Lane:
+    """One start's way through the optimiser (see :func:`optimise`)."""
+
+    theta: np.ndarray
+    out: dict
+    steps: int = 0
+    done: bool = False
+    converged: bool = False
+    message: str = ""
+
+    @property
+    def cost(self) -> float:
+        r = self.out["r"]
+        return 0.5 * float(r @ r) if np.all(np.isfinite(r)) else math.inf
+
+
+def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask, *, weights_of, optimizer, max_steps, progress, label, shown) -> list[Lane]:
+    """Rounds of the compiled optimiser for every start at once (one call per round, the starts
+    in lockstep), each round in the whitened frame of that start's current point, until each
+    start's remaining Gauss–Newton step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps
+    are spent, or its prediction fails. A start that is done is only evaluated again."""
+    lay = problem.layout
+    n = len(lay.names)
+    weights = [weights_of(o["r"]) for o in outs]
+    lanes = [Lane(th, o) for th, o in zip(thetas, problem.run_batch(thetas, np.zeros(n, bool), weights, constants))]
+    for rounds in range(MAX_ROUNDS + 1):
+        phi_c, w, atol, weights = [], [], [], []
+        for i, lane in enumerate(lanes):
+            phi = lay.to_phi(lane.theta)
+            phi_c.append(phi)
+            weights.append(weights_of(lane.out["r"]))
+            w.append(np.eye(n))
+            atol.append(math.inf)
+            if lane.done:
+                continue
+            r = lane.out["r"]
+            jac_phi = lane.out["jac_theta"][:, free_idx] * lay.from_phi(phi)[1][free_idx][None, :]
+            tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
+            values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
+            start = f" start {i}" if len(lanes) > 1 else ""
+            say(f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}", enabled=progress)
+            if not np.all(np.isfinite(r)):
+                lane.done, lane.message = True, "the model's prediction is not finite at these parameters (a failed solve)"
+                continue
+            remaining = unc.step_in_sigma(r, jac_phi, tau)
+            if remaining < unc.STEP_TOLERANCE_SIGMA:
+                lane.done, lane.converged = True, True
+                lane.message = f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
+                continue
+            if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
+                lane.done = True
+                lane.message = lane.message or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+                continue
+            w[-1] = np.zeros((n, n))
+            w[-1][np.ix_(free_idx, free_idx)] = unc.whitening(jac_phi, full=True)
+            atol[-1] = unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
+        if all(lane.done for lane in lanes):
+            break
+        results = problem.run_batch([lane.theta for lane in lanes], free, weights, constants, optimizer=optimizer, phi_c=np.stack(phi_c), w=np.stack(w), atol=atol)
+        for lane, phi, wi, res in zip(lanes, phi_c, w, results):
+            if lane.done:
+                continue
+            lane.steps += int(res["steps"])
+            new_theta = np.where(free, lay.from_phi(phi + wi @ res["u"])[0], lane.theta)
+            if not np.all(np.isfinite(new_theta)):
+                lane.done, lane.message = True, "the optimiser produced non-finite parameters"
+                continue
+            lane.theta, lane.out = new_theta, res
+            if not res["successful"]:
+                lane.message = f"not converged after {lane.steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
+    return lanes
+
+
+def pick_best(lanes: list[Lane]) -> Lane:
+    """The converged start of least cost; the least-cost start if none converged."""
+    converged = [lane for lane in lanes if lane.converged]
+    return min(converged or lanes, key=lambda lane: lane.cost)
+
+
 def _height_mask(data: FitData, heights) -> np.ndarray:
     if heights is None:
         return np.ones(data.n_records, dtype=bool)
@@ -149,6 +245,7 @@ def fit(
     progress: bool = True,
     solver: Solver | None = None,
     superset: Model | None = None,
+    method: str = "auto",
 ) -> FitResult:
     """Fit E, ν and the parameters of ``model``'s terms to force histories of all records.
 
@@ -181,7 +278,12 @@ def fit(
         max_steps: optimiser steps in all (default 40 per round, at most 8 rounds; 0 evaluates
             the start only).
         progress: print one line per optimiser round to stderr.
-        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``).
+        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then runs
+            on the diffrax ODE.
+        method: ``auto`` (default: the force at the records' own samples by fixed steps,
+            :mod:`rbjax.fit.record_forces`, where the model allows it; the diffrax ODE with its
+            events for moving floors or when a ``solver`` is given, the reason in the notes),
+            ``samples`` or ``ode`` (the reference).
         superset: a model containing every term of ``model`` (e.g.
             ``rbjax.terms.model.superset_model``): the fit runs in its compiled program with the
             terms ``model`` lacks held at their values, so fits of different models share one
@@ -224,7 +326,9 @@ def fit(
     ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
     fit_mask = _height_mask(data, fit_heights)
     structure = embed(candidate, superset, ball)
-    problem = Problem(data, ball, structure, fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale)
+    path, why_ode = fit_path(method, structure, solver)
+    problem = Problem(data, ball, structure, fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale, path=path,
+                      feature_rows=any(w > 0 for w in (extra_weights or {}).values()))
     lay = problem.layout
     constants = lay.constant_values(ball, structure)
 
@@ -256,15 +360,27 @@ def fit(
             if k in fittable:
                 theta[lay.index(k)] = v
     label = f"fit {model_name}/{candidate.blocked_force}"
+    if why_ode:
+        say(f"{label}: on the diffrax ODE ({why_ode})", enabled=progress)
     free_none = np.zeros(len(lay.names), dtype=bool)
 
     def evaluate(th, mask=fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
         return problem.run(th, free_none, problem.weights(mask, extra, prior), constants)
 
-    # 1. first evaluation: align the onsets (and rescale E from the contact times)
-    out = evaluate(theta)
-    theta = realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=auto_start, fit_mask=fit_mask)
-    out = evaluate(theta)
+    # 1. the starts (alternatives for parameters whose fit has several minima), each evaluated,
+    # its onsets aligned (and E rescaled from the contact times): all starts in one call
+    starts = [{}] if (warm is not None or isinstance(model, Model)) else alternative_starts(candidate, set(fixed) | set(start_map))
+    thetas = []
+    for alt in starts:
+        th = theta.copy()
+        for k, v in alt.items():
+            th[lay.index(k)] = v
+        thetas.append(th)
+    everything = np.ones(data.n_records, bool)
+    outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
+    thetas = [realign(problem, th, o["features"], everything, rescale_E=auto_start, fit_mask=fit_mask) for th, o in zip(thetas, outs)]
+    outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
+    theta, out = thetas[0], outs[0]
 
     # 2. identifiability from the Jacobian with ν free
     physical_free = [n for n in fittable if n not in fixed]
@@ -274,7 +390,7 @@ def fit(
     jac_hist = problem.history_jacobian(out["jac_theta"], fit_mask)
     ident_msg, nu_flagged, cos_e_nu = unc.identifiability(jac_hist, ie, inu, cols)
     prior_held = False
-    notes = []
+    notes = [f"Predicted on the diffrax ODE: {why_ode}."] if why_ode else []
     if "poisson" in physical_free and "youngs_Pa" not in physical_free:
         notes.append("E held as given; ν alone sets the stiffness and is fitted.")
     elif "poisson" in physical_free and poisson_prior is None:
@@ -322,48 +438,24 @@ def fit(
         unit = math.sqrt(unc.integrated_autocorrelation(hist) * float(np.sum(hist**2)) / max(hist.size, 1))
         return (poisson_prior[0], poisson_prior[1], unit)
 
-    # 3. optimise: rounds of LM in the whitened frame of the round's start
+    # 3. optimise every start: rounds of LM in the whitened frame of each round's start, all
+    # starts in one call per round; the best converged start is kept
     extra = dict(extra_weights or {})
+    for th in thetas:
+        th[inu] = theta[inu]
+    lanes = optimise(
+        problem, thetas, outs, free, free_idx, constants, fit_mask,
+        weights_of=lambda r: problem.weights(fit_mask, extra, prior_row(r)),
+        optimizer=optimizer, max_steps=max_steps, progress=progress, label=label,
+        shown=[n for n in physical_free],
+    )
+    best = pick_best(lanes)
+    theta, out, steps, converged, message = best.theta, best.out, best.steps, best.converged, best.message
     prior = prior_row(out["r"])
-    out = evaluate(theta, extra=extra, prior=prior)
-    steps, rounds, converged, message = 0, 0, False, ""
-    while True:
-        r, jac_theta = out["r"], out["jac_theta"]
-        phi_c = lay.to_phi(theta)
-        slope = lay.from_phi(phi_c)[1]
-        jac_phi = jac_theta[:, free_idx] * slope[free_idx][None, :]
-        hist = problem.history_rows(r, fit_mask)
-        tau = unc.integrated_autocorrelation(hist)
-        remaining = unc.step_in_sigma(r, jac_phi, tau)
-        cost = 0.5 * float(r @ r)
-        shown = ", ".join(f"{n}={theta[lay.index(n)]:.5g}" for n in physical_free)
-        say(f"{label} round {rounds}: cost {cost:.9g}, rms {problem.history_rms_N(out['force'], fit_mask):.3g} N, {shown}", enabled=progress)
-        if not np.all(np.isfinite(r)):
-            converged, message = False, "the model's prediction is not finite at these parameters (a failed solve)"
-            break
-        if remaining < unc.STEP_TOLERANCE_SIGMA:
-            converged, message = True, f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
-            break
-        if steps >= max_steps or rounds >= MAX_ROUNDS:
-            converged = False
-            message = message or f"not converged after {steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
-            break
-        w = np.zeros((len(lay.names), len(lay.names)))
-        w[np.ix_(free_idx, free_idx)] = unc.whitening(jac_phi, full=True)
-        sigma_u = math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
-        res = problem.run(theta, free, problem.weights(fit_mask, extra, prior), constants, optimizer=optimizer,
-                          phi_c=phi_c, w=w, atol=unc.STEP_TOLERANCE_SIGMA * sigma_u)
-        rounds += 1
-        steps += int(res["steps"])
-        phi = phi_c + w @ res["u"]
-        new_theta = np.where(free, lay.from_phi(phi)[0], theta)
-        if not np.all(np.isfinite(new_theta)):
-            converged, message = False, "the optimiser produced non-finite parameters"
-            break
-        theta, out = new_theta, res
-        if not res["successful"]:
-            message = f"not converged after {steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
-        prior = prior_row(out["r"])
+    if len(lanes) > 1:
+        n_ok = sum(lane.converged for lane in lanes)
+        origin = ", ".join(f"{k}={v:g}" for k, v in starts[lanes.index(best)].items()) or "the start values"
+        message += f"; {n_ok} of {len(lanes)} starts converged, the best from {origin}"
 
     # 4. held-out records: align their onsets with the fitted model (nothing else is fitted)
     if not np.all(fit_mask):
@@ -430,6 +522,9 @@ def fit(
 
     values = {n: float(theta[lay.index(n)]) for n in fittable}
     _, fitted_ball, fitted_model = replace(values, 1.0, ball, candidate)
+    reading = " ".join(x for x in (ball_mode_structure(fitted_ball, fitted_model), at_bounds({n: values[n] for n in physical_free})) if x)
+    if reading:
+        ident += " " + reading
     return FitResult(
         model_name=model_name,
         blocked_force=candidate.blocked_force,
@@ -457,4 +552,6 @@ def fit(
         in_fit=fit_mask,
         onset_shift_s=theta[lay.shift_slice].copy(),
         theta=theta,
+        n_starts=len(lanes),
+        n_converged_starts=sum(lane.converged for lane in lanes),
     )

@@ -10,7 +10,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from ..terms.parameters import replace
 from .layout import fitted_parameter_names
-from .problem import Problem, aligned, candidate_model, fit_solver, per_height_rows
+from .problem import Problem, aligned, candidate_model, fit_path, fit_solver, per_height_rows
 from .records import prepare_data
 from .result import Prediction
 
@@ -57,7 +57,8 @@ def model_histories(
         raise ValueError(f"params: missing {missing} for model {model!r}")
     data = prepare_data(data)
     _, ball, candidate = replace({n: float(params[n]) for n in names}, 1.0, ball, candidate)
-    problem = Problem(data, ball, candidate, fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    problem = Problem(data, ball, candidate, fit_solver(solver), height_error=False, decimate=1, scale="noise",
+                      path=fit_path("auto", candidate, solver)[0])
     lay = problem.layout
     shifts = np.broadcast_to(np.asarray(onset_shift_s, dtype=float), (data.n_records,))
     theta = lay.theta(ball, candidate, shifts)

@@ -10,18 +10,26 @@ import math
 
 import numpy as np
 
+from .._validate import check_choice
+from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model, Solver
 from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
-from .layout import FitLayout, model_from_name, parse_model_name
+from .layout import FIT_RANGES, FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program
 from .records import FitData, prepare_data, record_features
 from .result import _plain
 
 #: Optimiser steps per compiled call (a static size of the program).
 STEPS_PER_ROUND = 40
+
+
+#: The paths of the fit's prediction: ``auto`` (``samples`` where the model allows it, else
+#: ``ode`` with the reason shown), ``samples`` (the force at the record's samples by fixed steps,
+#: :mod:`rbjax.fit.record_forces`), ``ode`` (the diffrax ODE with its events, the reference).
+FIT_METHODS = ("auto", "samples", "ode")
 
 
 def fit_solver(solver):
@@ -32,10 +40,45 @@ def fit_solver(solver):
     return solver if solver.adjoint == "forward" else dataclasses.replace(solver, adjoint="forward")
 
 
+def fit_path(method: str, model: Model, solver) -> tuple[str, str | None]:
+    """(path, why the ODE) of a fit of ``model``: the sampled path unless the model needs the
+    ODE's events (a moving floor), a ``Solver`` is given, or ``method="ode"``."""
+    check_choice("method", method, FIT_METHODS)
+    reason = record_samples_unsupported(model)
+    if method == "samples" and reason is not None:
+        raise ValueError(f"method='samples' cannot fit this model: {reason}")
+    if method == "ode":
+        return "ode", None
+    if method == "auto" and solver is not None:
+        return "ode", "a Solver was given"
+    return ("samples", None) if reason is None else ("ode", reason)
+
+
+def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
+    """Runge–Kutta steps per sample of the sampled path for every value a fit of ``model`` can
+    reach: the fastest rate of the vector field at first contact (its Jacobian's spectral
+    radius), at the model's values and with each ``FIT_RANGES`` parameter at its upper bound."""
+    import jax
+
+    from ..solve.ode import _RESTITUTION, _initial_state
+    from ..solve.outcome import impact_velocity_m_per_s
+
+    names = set(parameter_names(1.0, ball, model))
+    corner = {n: hi for n, (_, hi) in FIT_RANGES.items() if n in names}
+    fastest = 0.0
+    for values in ({}, corner):
+        _, b, m = replace(values, 1.0, ball, model) if values else (1.0, ball, model)
+        y0 = _initial_state(impact_velocity_m_per_s(5.0), b, m)
+        jac = np.asarray(jax.jacfwd(lambda y: _RESTITUTION(0.0, y, (b, m)))(y0))
+        fastest = max(fastest, float(np.max(np.abs(np.linalg.eigvals(jac)))))
+    return substeps_for_rate(fastest, rate_Hz)
+
+
 class Problem:
     """The data, the layout and the compiled program of one fit (runtime masks aside)."""
 
-    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str):
+    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str,
+                 path: str = "samples", feature_rows: bool = False):
         self.data = data
         self.ball = ball
         self.structure_model = structure_model
@@ -50,8 +93,9 @@ class Problem:
             treedef=treedef, physical_positions=lay.physical_positions, constant_positions=lay.constant_positions,
             specs=lay.specs, n_records=data.n_records, n_samples=data.n_samples, rate_Hz=float(data.rate_Hz),
             filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
-            solver=solver,
+            solver=solver, path=path, feature_rows=feature_rows, substeps=fit_substeps(ball, structure_model, float(data.rate_Hz)) if path == "samples" else 0,
         )
+        self.path = path
         self.measured = record_features(data.force_N, data.rate_Hz)
         feats = np.stack(
             [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1
@@ -75,6 +119,8 @@ class Problem:
 
     def weights(self, fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
         extra = extra or {}
+        if any(float(v) > 0 for v in extra.values()) and not self.structure.feature_rows:
+            raise ValueError("extra weights need a Problem built with feature_rows=True (their Jacobian rows)")
         return {
             "fit_mask": np.asarray(fit_mask, dtype=bool),
             "record": self.record_weights,
@@ -84,15 +130,30 @@ class Problem:
             "prior": np.asarray(prior, dtype=float),
         }
 
-    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
+    def run_batch(self, thetas, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None):
+        """The compiled program on B lanes at once (``thetas`` (B, n); ``weights`` a list of B
+        weight dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, default: an
+        evaluation at θ): one output dict per lane."""
         lay = self.layout
-        n = len(lay.names)
-        phi_c = lay.to_phi(theta) if phi_c is None else phi_c
-        w = np.eye(n) if w is None else w
-        return run_program(
-            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=theta, constants=constants,
-            data=self.arrays, weights=weights, atol=atol,
+        thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
+        b, n = thetas.shape
+        phi_c = np.stack([lay.to_phi(th) for th in thetas]) if phi_c is None else np.asarray(phi_c)
+        w = np.broadcast_to(np.eye(n), (b, n, n)) if w is None else np.asarray(w)
+        atol = np.full(b, math.inf) if atol is None else np.asarray(atol, dtype=float)
+        lanes = weights if isinstance(weights, list) else [weights] * b
+        stacked = {k: np.stack([np.asarray(x[k]) for x in lanes]) for k in lanes[0]}
+        out = run_program(
+            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=thetas, constants=constants,
+            data=self.arrays, weights=stacked, atol=atol,
         )
+        return [{k: v[i] for k, v in out.items()} for i in range(b)]
+
+    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
+        """The compiled program on one lane (see :meth:`run_batch`)."""
+        return self.run_batch(
+            np.asarray(theta)[None], free, [weights], constants, optimizer=optimizer,
+            phi_c=None if phi_c is None else np.asarray(phi_c)[None], w=None if w is None else np.asarray(w)[None], atol=[atol],
+        )[0]
 
     def history_rows(self, r, fit_mask):
         """(rows of the fitted records' history residuals) as (n_fit, n_per_record)."""
@@ -183,7 +244,7 @@ def aligned(data, ball: Ball, model: Model, solver, superset=None):
     """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
     data = prepare_data(data)
     model = embed(model, superset, ball)
-    problem = Problem(data, ball, model, fit_solver(solver), height_error=False, decimate=1, scale="noise")
+    problem = Problem(data, ball, model, fit_solver(solver), height_error=False, decimate=1, scale="noise", path=fit_path("auto", model, solver)[0])
     lay = problem.layout
     delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
     theta = lay.theta(ball, model, data.onset_s - delay)

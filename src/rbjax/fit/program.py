@@ -25,7 +25,6 @@ once) and returns J_u du; J_θ also comes back as auxiliary output for the uncer
 from __future__ import annotations
 
 import functools
-import math
 
 import equinox as eqx
 import jax
@@ -36,6 +35,7 @@ import optimistix as optx
 
 from ..spectrum.filters import sosfilt_jax
 from .program_store import load_or_export
+from .record_forces import record_forces
 from .records import _features
 
 OPTIMIZERS = ("lm", "gauss-newton")
@@ -74,6 +74,13 @@ class Structure(eqx.Module):
     decimate: int = eqx.field(static=True)
     poisson_index: int = eqx.field(static=True)
     solver: object = eqx.field(static=True)
+    #: ``"samples"``: the force at the record's samples by fixed steps (:mod:`rbjax.fit.record_forces`);
+    #: ``"ode"``: the diffrax ODE with its events, every column carried through it (moving floors).
+    path: str = eqx.field(static=True, default="samples")
+    substeps: int = eqx.field(static=True, default=2)
+    #: False when no extra weight is given: the feature rows are then 0 and their Jacobian is
+    #: not computed (the features are still returned, for the onsets and the report).
+    feature_rows: bool = eqx.field(static=True, default=True)
 
 
 def _unpack(s: Structure, theta, constants):
@@ -91,12 +98,16 @@ def _unpack(s: Structure, theta, constants):
 
 def predict(s: Structure, theta, constants, data):
     """(force (K, N) through the measuring chain, features (K, 3 + 6)) at θ."""
-    ball, model, shifts, dh = _unpack(s, theta, constants)
-    times = jnp.arange(s.n_samples) / s.rate_Hz
-    force = jax.vmap(lambda h, sh: sample_force(h, times - sh, s.rate_Hz, ball, model, s.solver))(data["heights"] + dh, shifts)
+    if s.path == "samples":
+        force = record_forces(s, theta, constants, data["heights"])
+    else:
+        ball, model, shifts, dh = _unpack(s, theta, constants)
+        times = jnp.arange(s.n_samples) / s.rate_Hz
+        force = jax.vmap(lambda h, sh: sample_force(h, times - sh, s.rate_Hz, ball, model, s.solver))(data["heights"] + dh, shifts)
     if s.filtered:
         force = sosfilt_jax(data["sos"], force)
-    return force, _features(force, s.rate_Hz, int(round(s.rate_Hz)))
+    feats = _features(force if s.feature_rows else jax.lax.stop_gradient(force), s.rate_Hz, int(round(s.rate_Hz)))
+    return force, feats
 
 
 def residuals(s: Structure, theta, constants, data, weights):
@@ -186,11 +197,15 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
         r, jac, force, feats = sol.aux
         return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
 
-    return jax.jit(run)
+    # Several starts (or fits) of one structure in lockstep: every argument but the free mask,
+    # the constants and the data has a leading batch axis.
+    return jax.jit(jax.vmap(run, in_axes=(0, 0, None, 0, None, None, 0, 0)))
 
 
-def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free, held, constants, data, weights, atol=math.inf):
-    """Call the compiled program; NumPy in, NumPy out (``successful`` and ``max_steps_reached`` flags added)."""
+def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free, held, constants, data, weights, atol):
+    """Call the compiled program on a batch of B lanes (``phi_c``, ``w``, ``held``, ``atol``
+    and every weight with a leading axis B); NumPy in, NumPy out, each output with its leading
+    axis B (``successful`` and ``max_steps_reached`` flags added per lane)."""
     import numpy as np
 
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
@@ -200,7 +215,7 @@ def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free,
     fn = load_or_export(("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args)
     out = fn(*args)
     out = {k: np.asarray(v) for k, v in out.items()}
-    code = int(out.pop("result"))
+    code = out.pop("result")
     # optimistix declares RESULTS.successful as a str; at run time it is an enumeration item
     # whose _value is the integer code.
     out["successful"] = code == int(optx.RESULTS.successful._value)  # type: ignore[attr-defined]

@@ -46,6 +46,9 @@ class FitResult:
         aic, bic: information criteria of the history residuals (see :func:`fit`).
         time_s, measured_N, predicted_N, heights_m, in_fit: the records, for plots and checks.
         theta: the full internal parameter vector (natural units; warm starts).
+        n_starts, n_converged_starts: the starts tried (alternatives for parameters whose fit
+            has several minima, in one compiled program) and how many converged; the result is
+            the converged start of least cost.
     """
 
     model_name: str
@@ -74,6 +77,8 @@ class FitResult:
     in_fit: np.ndarray = dataclasses.field(repr=False)
     onset_shift_s: np.ndarray = dataclasses.field(repr=False)
     theta: np.ndarray = dataclasses.field(repr=False)
+    n_starts: int = 1
+    n_converged_starts: int = 1
 
     @property
     def name(self) -> str:
@@ -107,6 +112,7 @@ class FitResult:
             "aic": self.aic,
             "bic": self.bic,
             "onset_shift_s": self.onset_shift_s.tolist(),
+            "starts": {"tried": int(self.n_starts), "converged": int(self.n_converged_starts)},
         }
 
     def summary(self) -> str:

@@ -69,6 +69,10 @@ class BallMode(eqx.Module):
         """μ = 0: the mode is not driven and stays at rest (frequency and loss then do nothing)."""
         return cls(0.0, 500.0, 0.1)
 
+    #: Other start values a fit tries beside ``start``'s (in the same compiled program): the fit
+    #: of f has several minima (one per mode of the pulse's ringing it can lock onto).
+    START_ALTERNATIVES: ClassVar = {"mode_frequency_Hz": (300.0, 1200.0)}
+
     @classmethod
     def start(cls, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
         """Start values for fitting: a light contact zone (μ = 20) ringing near 600 Hz, η = 0.2."""

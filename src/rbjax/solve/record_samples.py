@@ -1,0 +1,145 @@
+"""The floor force at a record's own sample times, for a contact that starts at any time s on
+the record's time axis: fixed steps from sample to sample, the onset as a partial first step.
+
+A force-plate record samples t_i = i/rate; the model's contact starts at t = s (the onset
+shift, fitted). The fit compares the model with the record sample by sample, so it needs
+F(t_i − s) at every sample, continuous in s and in the parameters. Here (Δ = 1/rate):
+
+* the sample n₀ = ⌊s/Δ + ½⌋ is the one whose interval [t − Δ/2, t + Δ/2] holds the contact
+  start. Damped models and the ``momentum`` blocked force jump at first contact (c·v0,
+  (M/2R)v0²), so that sample takes the in-contact fraction a = n₀ + ½ − s/Δ ∈ (0, 1] of its
+  interval times the force at the midpoint of the in-contact part, τ = aΔ/2 (the box average
+  of the jump; the rule of ``rbjax.fit.program.sample_force`` and of the records made for the
+  tests), and every later sample n₀ + j is the point value F(τ_j), τ_j = (a + j − ½)Δ;
+* the state is stepped by classic fourth-order Runge–Kutta (``substeps`` steps per interval):
+  0 → aΔ/2 → (a + ½)Δ, then Δ at a time, on the restitution vector field of ``ode.py`` (its
+  momentum-flux thrust acts only while δ̇ < 0, so one field serves both phases, and the ball
+  mode's states ride along);
+* the contact ends at the first sample where δ ≤ 0 or (damped models) the contact force ≤ 0;
+  from there the force is 0. At the true end the force is 0 (δ = 0 or F_c = 0), so a sample
+  leaving the contact as the parameters move changes the residual continuously;
+* with the force, each sample carries dF/ds = −Ḟ(τ) (Ḟ = ∂F/∂y · ẏ along the solution; for the
+  first sample −F(aΔ/2)/Δ − a Ḟ(aΔ/2)/2): the onset-shift columns of the fit's Jacobian come
+  from the model's own time derivative, not from tangents carried through the solve.
+
+Statuses as the other paths (``outcome.STATUS_CODES``): ``solver_failed`` for a non-finite
+state, ``mass_singularity`` for δ ≥ 0.999·2R; a failed impact gives NaN samples. A contact
+still going at the end of the record is not a failure here (the record is a window).
+
+The number of samples and ``substeps`` are static; everything else is a runtime value, and the
+function works under ``jax.jit``, ``jax.vmap`` and ``jax.jacfwd``. Moving floors are not
+handled (``record_samples_unsupported``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+
+from ..terms.model import Model
+from .ode import _RESTITUTION, _contact_force, _initial_state, floor_force_N
+from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s
+
+#: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate of the
+#: model (a ball mode's ω or its damping ηω, a Zener relaxation 1/τ): well inside RK4's
+#: stability limit |λh| ≈ 2.8, with a local error (λh)⁵/120 ≈ 3e-4 of that component per step
+#: for the fastest one (such fast components are overdamped and decay within a few steps; the
+#: contact's own motion, ~1/100 of that rate, is resolved to ~1e-9 of the peak force).
+MAX_RATE_STEP = 0.5
+
+
+def record_samples_unsupported(model: Model) -> str | None:
+    """Why ``record_samples`` cannot solve ``model``; None if it can (rigid floor, any damping
+    law, the ball mode included)."""
+    if not model.floor.rigid:
+        return f"the floor ({model.floor.name}) moves under the force: its states need the ODE's events"
+    return None
+
+
+def substeps_for_rate(fastest_rate_per_s: float, rate_Hz: float) -> int:
+    """Runge–Kutta steps per sample so that |λ|·h ≤ ``MAX_RATE_STEP`` for the fastest rate λ of
+    the model (at least 2: the contact's own oscillation then has ≥ 1 600 steps per period at
+    44.1 kHz, ~1e-9 of the peak force)."""
+    if not (math.isfinite(fastest_rate_per_s) and fastest_rate_per_s > 0):
+        return 2
+    return max(2, math.ceil(fastest_rate_per_s / (MAX_RATE_STEP * rate_Hz)))
+
+
+def _rk4(y, h, args, substeps: int):
+    """``substeps`` classic Runge–Kutta steps of h/substeps from y (a loop: one copy of the
+    vector field in the compiled program, whatever ``substeps``)."""
+
+    def f(yy):
+        return _RESTITUTION(0.0, yy, args)
+
+    step = h / substeps
+
+    def one(_, y):
+        k1 = f(y)
+        k2 = f(y + 0.5 * step * k1)
+        k3 = f(y + 0.5 * step * k2)
+        k4 = f(y + step * k3)
+        return y + (step / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+    return jax.lax.fori_loop(0, substeps, one, y) if substeps > 1 else one(0, y)
+
+
+def _force_and_rate(y, ball, model):
+    """(F, Ḟ, in contact) at state y: Ḟ = ∂F/∂y · ẏ (one forward-mode pass)."""
+    ydot = _RESTITUTION(0.0, y, (ball, model))
+    force, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (ydot,))
+    inside = y[0] > 0.0
+    if model.velocity_dependent:
+        inside = inside & (_contact_force(y, ball, model) > 0.0)
+    return force, rate, inside
+
+
+def record_samples(height_m, shift_s, ball, model: Model, rate_Hz: float, num_samples: int, substeps: int):
+    """(force (N,), dforce/dshift (N,), status) of one impact at the record's samples
+    t_i = i/rate_Hz, i < ``num_samples``, the contact starting at ``shift_s`` (see the module
+    docstring)."""
+    dt = 1.0 / rate_Hz
+    x = shift_s * rate_Hz + 0.5
+    n0 = jnp.floor(x)
+    a = n0 + 1.0 - x  # in-contact fraction of the first sample's interval, (0, 1]
+    args = (ball, model)
+    y0 = _initial_state(impact_velocity_m_per_s(height_m), ball, model)
+    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+    # Sample j of the contact is reached by a step of h_j from the previous one: aΔ/2 to the
+    # first sample's in-contact midpoint, (a + 1)Δ/2 to the second sample, Δ after that. The
+    # first sample's value is a·F and its shift derivative −F/Δ − (a/2)Ḟ; the others' F and −Ḟ.
+    # One loop for all of them: one copy of the vector field in the compiled program.
+    j = jnp.arange(num_samples)
+    h = jnp.where(j == 0, 0.5 * a * dt, jnp.where(j == 1, 0.5 * (a + 1.0) * dt, dt))
+    scale = jnp.where(j == 0, a, 1.0)
+    value_rate = jnp.where(j == 0, 1.0 / dt, 0.0)
+    rate_rate = jnp.where(j == 0, 0.5 * a, 1.0)
+
+    def step(carry, x):
+        y, going, bad, singular_hit = carry
+        h_j, c_j, d_j, e_j = x
+        y_new = _rk4(y, h_j, args, substeps)
+        f, r, inside = _force_and_rate(y_new, ball, model)
+        too_close = y_new[0] >= singular
+        broken = ~(jnp.all(jnp.isfinite(y_new)) & jnp.isfinite(f) & jnp.isfinite(r)) | too_close
+        singular_hit = singular_hit | (going & too_close)
+        bad = bad | (going & broken)
+        going = going & inside & ~broken
+        out = (jnp.where(going, c_j * f, 0.0), jnp.where(going, -(d_j * f + e_j * r), 0.0))
+        return (jnp.where(going, y_new, y), going, bad, singular_hit), out
+
+    false = jnp.asarray(False)
+    (_, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(step, (y0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate))
+
+    # place the contact-relative samples j at record samples n0 + j
+    i = jnp.arange(num_samples)
+    j = i - n0.astype(jnp.int32)
+    valid = (j >= 0) & (j < num_samples)
+    jj = jnp.clip(j, 0, num_samples - 1)
+    force = jnp.where(valid, hist_f[jj], 0.0)
+    d_shift = jnp.where(valid, hist_d[jj], 0.0)
+    status = jnp.where(singular_hit, STATUS_CODES["mass_singularity"], jnp.where(bad, STATUS_CODES["solver_failed"], STATUS_CODES["ok"])).astype(jnp.int32)
+    failed = status != 0
+    return jnp.where(failed, jnp.nan, force), jnp.where(failed, jnp.nan, d_shift), status

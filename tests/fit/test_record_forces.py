@@ -1,0 +1,157 @@
+"""The fit's sampled path (README "Fitting measured force histories"): the force at a record's
+own samples by fixed steps (``rbjax.solve.record_samples``) and the fit's Jacobian built from
+it (``rbjax.fit.record_forces``), against the independent scipy references (paper Eq. 7 and
+the two-degree-of-freedom ball-mode impact, DOP853 at rtol 1e-12), against the diffrax ODE
+path of the fit, and against central differences; the choice of path and the starts."""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+import pytest
+
+import rbjax
+from rbjax import JIS_RUBBER_BALL, BallMode, HuntCrossley, KelvinVoigt, Zener
+from rbjax.fit import model_histories
+from rbjax.fit.engine import Lane, alternative_starts, pick_best
+from rbjax.fit.layout import model_from_name
+from rbjax.fit.problem import fit_path
+from rbjax.solve.record_samples import record_samples
+
+from scipy_ball_mode_reference import reference_ball_mode_impact
+from scipy_reference import reference_impact
+from synthetic_records import HEIGHTS_M, RATE_HZ, SOS, sampled_force, synthetic_data
+
+N = 1323  # 30 ms at 44.1 kHz, the fit's default window
+MODE = BallMode(20.0, 800.0, 0.3)
+CASES = {
+    "paper": (rbjax.Model(), lambda h, b: reference_impact(h, b, rtol=1e-12)),
+    "kelvin-voigt/momentum": (
+        rbjax.Model(blocked_force="momentum", damping=KelvinVoigt(40.0)),
+        lambda h, b: reference_impact(h, b, damping=KelvinVoigt(40.0), blocked_force="momentum", rtol=1e-12),
+    ),
+    "zener/momentum": (
+        rbjax.Model(blocked_force="momentum", damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3)),
+        lambda h, b: reference_impact(h, b, damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3), blocked_force="momentum", rtol=1e-12),
+    ),
+    "hunt-crossley+ball-mode/momentum": (
+        rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), ball_mode=MODE),
+        lambda h, b: reference_ball_mode_impact(h, b, 20.0, 800.0, 0.3, damping=HuntCrossley(0.05), blocked_force="momentum", rtol=1e-12),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("shift_s", [0.0100, 0.01034567])
+def test_samples_match_the_scipy_reference_at_every_sample(case, shift_s):
+    """≤ 1e-6 of the peak force at every sample (README: the sampled path agrees to ~1e-9),
+    the first sample by the box rule of the fit, on and off the sample grid."""
+    model, reference = CASES[case]
+    t = np.arange(N) / RATE_HZ
+    for h in (0.1, 1.6):
+        force, _, status = jax.jit(record_samples, static_argnums=(4, 5, 6))(h, shift_s, JIS_RUBBER_BALL, model, RATE_HZ, N, 3)
+        expected = sampled_force(reference(h, JIS_RUBBER_BALL), t - shift_s)
+        assert int(status) == 0
+        assert np.max(np.abs(np.asarray(force) - expected)) <= 1e-6 * np.max(expected), (case, h)
+
+
+@pytest.mark.parametrize("case", ["kelvin-voigt/momentum", "hunt-crossley+ball-mode/momentum"])
+def test_shift_derivative_is_the_negative_force_rate(case):
+    """dF(t − s)/ds from −Ḟ (no tangent through the solve) against central differences in s."""
+    model, _ = CASES[case]
+    f = jax.jit(lambda s: record_samples(1.0, s, JIS_RUBBER_BALL, model, RATE_HZ, N, 3))
+    s, step = 0.01034567, 1e-8
+    _, d_shift, _ = f(s)
+    fd = (np.asarray(f(s + step)[0]) - np.asarray(f(s - step)[0])) / (2 * step)
+    assert np.max(np.abs(np.asarray(d_shift) - fd)) <= 1e-6 * np.max(np.abs(fd))
+
+
+@pytest.fixture(scope="module")
+def ball_mode_data():
+    return synthetic_data(JIS_RUBBER_BALL, HuntCrossley(0.05), "momentum", seed=11)
+
+
+TRUE = {"youngs_Pa": 1.7e6, "poisson": 0.5, "alpha_s_per_m": 0.05, "mode_mass_ratio": 20.0, "mode_frequency_Hz": 800.0, "mode_loss_factor": 0.3}
+
+
+def test_sampled_and_ode_paths_of_the_fit_agree(ball_mode_data):
+    """The fit's residual model on both paths (README: ≤ 1e-6 of the peak force at every sample),
+    and their Jacobians (the ODE's carried through diffrax and its events)."""
+    data = ball_mode_data
+    shifts = data.onset_s - 3.7e-4
+    kw = dict(blocked_force="momentum")
+    f_s, j_s, names = model_histories(data, "hunt-crossley+ball-mode", TRUE, shifts, **kw)
+    f_o, j_o, names_o = model_histories(data, "hunt-crossley+ball-mode", TRUE, shifts, solver=rbjax.Solver(rtol=1e-11, atol=1e-13), **kw)
+    assert names == names_o
+    assert np.max(np.abs(f_s - f_o)) <= 1e-6 * np.max(np.abs(f_o))
+    for i, name in enumerate(names):
+        scale = np.max(np.abs(j_o[..., i]))
+        if scale > 0:
+            assert np.max(np.abs(j_s[..., i] - j_o[..., i])) <= 1e-5 * scale, name
+
+
+def test_ball_mode_jacobian_matches_finite_differences_of_the_reference(ball_mode_data):
+    """The mode's columns and one shift column against central differences of the independent
+    two-degree-of-freedom reference through scipy's filter."""
+    import scipy.signal
+
+    data = ball_mode_data
+    shifts = data.onset_s - 3.7e-4
+    force, jac, names = model_histories(data, "hunt-crossley+ball-mode", TRUE, shifts, blocked_force="momentum")
+    t = data.time_s
+
+    def reference(p, shift):
+        rows = []
+        for k, h in enumerate(HEIGHTS_M):
+            ref = reference_ball_mode_impact(h, JIS_RUBBER_BALL.replace(youngs_Pa=p["youngs_Pa"]), p["mode_mass_ratio"], p["mode_frequency_Hz"],
+                                             p["mode_loss_factor"], damping=HuntCrossley(p["alpha_s_per_m"]), blocked_force="momentum", rtol=1e-12)
+            rows.append(scipy.signal.sosfilt(SOS, sampled_force(ref, t - shift[k])))
+        return np.array(rows)
+
+    base = reference(TRUE, shifts)
+    assert np.max(np.abs(force - base)) <= 1e-6 * np.max(np.abs(base))
+    for name in ("mode_mass_ratio", "mode_frequency_Hz", "mode_loss_factor", "shift[3]"):
+        i = names.index(name)
+        if name.startswith("shift"):
+            step = 1e-7
+            up, down = shifts.copy(), shifts.copy()
+            up[3] += step
+            down[3] -= step
+            fd = (reference(TRUE, up) - reference(TRUE, down)) / (2 * step)
+        else:
+            step = 1e-4 * TRUE[name]
+            fd = (reference({**TRUE, name: TRUE[name] + step}, shifts) - reference({**TRUE, name: TRUE[name] - step}, shifts)) / (2 * step)
+        assert np.max(np.abs(jac[..., i] - fd)) <= 2e-4 * np.max(np.abs(fd)), name
+
+
+def test_path_choice_and_its_reason():
+    elastic = rbjax.Model()
+    floor = rbjax.Model(floor=rbjax.Dashpot(2000.0))
+    assert fit_path("auto", elastic, None) == ("samples", None)
+    assert fit_path("auto", rbjax.Model(ball_mode=MODE), None) == ("samples", None)
+    assert fit_path("auto", elastic, rbjax.Solver()) == ("ode", "a Solver was given")
+    assert fit_path("ode", elastic, None) == ("ode", None)
+    path, why = fit_path("auto", floor, None)
+    assert path == "ode" and "floor" in why and "moves" in why
+    with pytest.raises(ValueError, match="method='samples' cannot fit this model: the floor"):
+        fit_path("samples", floor, None)
+    with pytest.raises(ValueError, match="method='rk4'"):
+        fit_path("rk4", elastic, None)
+
+
+def test_the_mode_frequency_gets_several_starts_unless_given():
+    mode_model = model_from_name("hunt-crossley+ball-mode", blocked_force="momentum")
+    starts = alternative_starts(mode_model, set())
+    assert starts[0] == {} and {s.get("mode_frequency_Hz") for s in starts[1:]} == {300.0, 1200.0}
+    assert alternative_starts(mode_model, {"mode_frequency_Hz"}) == [{}]
+    assert alternative_starts(model_from_name("zener"), set()) == [{}]
+
+
+def test_the_best_converged_start_is_kept():
+    def lane(cost, converged):
+        return Lane(theta=np.zeros(1), out={"r": np.array([np.sqrt(2 * cost)])}, converged=converged)
+
+    lanes = [lane(5.0, True), lane(1.0, False), lane(3.0, True)]
+    assert pick_best(lanes) is lanes[2]  # the cheapest start that did not converge is not taken
+    none = [lane(5.0, False), lane(4.0, False)]
+    assert pick_best(none) is none[1]  # none converged: the least cost, reported as not converged
