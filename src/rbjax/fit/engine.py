@@ -64,6 +64,9 @@ EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
 NON_NEGATIVE_FIX = ("mode_mass_ratio", "mode_loss_factor")
 #: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
+#: A start still going after two rounds at a cost this many times that of a converged start is
+#: abandoned (its lane would keep the others' batch running; it is reported as not converged).
+ABANDON_FACTOR = 1.5
 
 
 def _start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
@@ -180,6 +183,11 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
             if remaining < unc.STEP_TOLERANCE_SIGMA:
                 lane.done, lane.converged = True, True
                 lane.message = f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
+                continue
+            best = min((other.cost for other in lanes if other.converged), default=math.inf)
+            if rounds >= 2 and lane.cost > ABANDON_FACTOR * best:
+                lane.done = True
+                lane.message = f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× that of a converged start ({best:.4g})"
                 continue
             if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
                 lane.done = True

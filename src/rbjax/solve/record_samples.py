@@ -42,12 +42,12 @@ from ..terms.model import Model
 from .ode import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s
 
-#: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate of the
-#: model (a ball mode's ω or its damping ηω, a Zener relaxation 1/τ): well inside RK4's
-#: stability limit |λh| ≈ 2.8, with a local error (λh)⁵/120 ≈ 3e-4 of that component per step
-#: for the fastest one (such fast components are overdamped and decay within a few steps; the
-#: contact's own motion, ~1/100 of that rate, is resolved to ~1e-9 of the peak force).
-MAX_RATE_STEP = 0.5
+#: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate λ of the
+#: model over its fit range (a ball mode's damping ηω at η = 4, f = 2.5 kHz; a Zener
+#: relaxation 1/τ): inside RK4's stability limit |λh| ≈ 2.8 with a margin of ~3. Components
+#: that fast are overdamped and gone within a few steps; the contact's own motion, ~1/100 of
+#: that rate, is resolved to ~1e-9 of the peak force (tests/fit/test_record_forces.py).
+MAX_RATE_STEP = 1.0
 
 
 def record_samples_unsupported(model: Model) -> str | None:

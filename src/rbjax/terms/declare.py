@@ -12,6 +12,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._validate import check_range
 
@@ -50,31 +51,44 @@ class Parameter:
 
     def to_unconstrained(self, value):
         """φ with ``from_unconstrained(φ) = value`` (values on a closed bound are moved inside by 1e-12)."""
-        value = jnp.asarray(value, dtype=jnp.float64)
+        xp = _namespace(value)
+        value = xp.asarray(value, dtype=xp.float64)
         if self.transform == "log":
-            return jnp.log(jnp.maximum(value, 1e-300))
+            return xp.log(xp.maximum(value, 1e-300))
         if self.transform == "interval":
-            s = jnp.clip((value - self.lower) / (self.upper - self.lower), 1e-12, 1.0 - 1e-12)
-            return jnp.log(s) - jnp.log1p(-s)
+            s = xp.clip((value - self.lower) / (self.upper - self.lower), 1e-12, 1.0 - 1e-12)
+            return xp.log(s) - xp.log1p(-s)
         return value
 
     def from_unconstrained(self, phi):
-        phi = jnp.asarray(phi, dtype=jnp.float64)
+        xp = _namespace(phi)
+        phi = xp.asarray(phi, dtype=xp.float64)
         if self.transform == "log":
-            return jnp.exp(phi)
+            return xp.exp(phi)
         if self.transform == "interval":
-            return self.lower + (self.upper - self.lower) * jax.nn.sigmoid(phi)
+            return self.lower + (self.upper - self.lower) * _sigmoid(xp, phi)
         return phi
 
     def slope(self, phi):
         """dθ/dφ of :meth:`from_unconstrained` at φ."""
-        phi = jnp.asarray(phi, dtype=jnp.float64)
+        xp = _namespace(phi)
+        phi = xp.asarray(phi, dtype=xp.float64)
         if self.transform == "log":
-            return jnp.exp(phi)
+            return xp.exp(phi)
         if self.transform == "interval":
-            s = jax.nn.sigmoid(phi)
+            s = _sigmoid(xp, phi)
             return (self.upper - self.lower) * s * (1.0 - s)
-        return jnp.ones_like(phi)
+        return xp.ones_like(phi)
+
+
+def _namespace(x):
+    """jax.numpy for JAX arrays and tracers (jit, grad), NumPy for host values (the fit's driver
+    converts θ ↔ φ on the host every round: NumPy there, not one dispatched JAX op per entry)."""
+    return jnp if isinstance(x, (jax.Array, jax.core.Tracer)) else np
+
+
+def _sigmoid(xp, x):
+    return jax.nn.sigmoid(x) if xp is jnp else 0.5 * (1.0 + np.tanh(0.5 * x))
 
 
 POSITIVE: dict[str, Any] = dict(lower=0.0, transform="log")
