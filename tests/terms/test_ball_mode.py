@@ -155,7 +155,7 @@ def test_jacfwd_of_contact_time_matches_finite_differences(reference_fd):
 
 
 @pytest.mark.xfail(strict=True, raises=Exception, reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
-                   "event's linear solve (impact.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses")
+                   "event's linear solve (solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses")
 def test_grad_of_contact_time_matches_finite_differences(reference_fd):
     g = np.asarray(jax.grad(_grad_outputs)(jnp.asarray(GRAD[1:])))
     np.testing.assert_allclose(g, reference_fd[0], rtol=1e-4)

@@ -173,13 +173,16 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
             r = lane.out["r"]
             jac_phi = lane.out["jac_theta"][:, free_idx] * lay.from_phi(phi)[1][free_idx][None, :]
             tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
+            # a parameter pressed onto a bound of its fit range has a vanishing column in φ
+            # (φ → ±∞): the remaining step is judged on the others
+            inside = ~on_bound(lay, phi, free_idx)
             values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
             start = f" start {i}" if len(lanes) > 1 else ""
             say(f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}", enabled=progress)
             if not np.all(np.isfinite(r)):
                 lane.done, lane.message = True, "the model's prediction is not finite at these parameters (a failed solve)"
                 continue
-            remaining = unc.step_in_sigma(r, jac_phi, tau)
+            remaining = unc.step_in_sigma(r, jac_phi[:, inside], tau)
             if remaining < unc.STEP_TOLERANCE_SIGMA:
                 lane.done, lane.converged = True, True
                 lane.message = f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
@@ -194,7 +197,8 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
                 lane.message = lane.message or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
                 continue
             w[-1] = np.zeros((n, n))
-            w[-1][np.ix_(free_idx, free_idx)] = unc.whitening(jac_phi, full=True)
+            moving = free_idx[inside]  # a parameter on a bound is held there for the round
+            w[-1][np.ix_(moving, moving)] = unc.whitening(jac_phi[:, inside], full=True)
             atol[-1] = unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
         if all(lane.done for lane in lanes):
             break
@@ -211,6 +215,21 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
             if not res["successful"]:
                 lane.message = f"not converged after {lane.steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
     return lanes
+
+
+#: An ``interval`` parameter counts as on a bound when its transform's relative slope
+#: σ(φ)(1 − σ(φ)) is below this (θ within ~1e-4 of the range from the bound).
+ON_BOUND_SLOPE = 1e-4
+
+
+def on_bound(lay, phi, free_idx) -> np.ndarray:
+    """Which of the free parameters ``free_idx`` sit on a bound of an ``interval`` range."""
+    out = np.zeros(len(free_idx), dtype=bool)
+    for j, i in enumerate(free_idx):
+        spec = lay.specs[i]
+        if spec.transform == "interval":
+            out[j] = float(spec.slope(phi[i])) / (spec.upper - spec.lower) < ON_BOUND_SLOPE
+    return out
 
 
 def pick_best(lanes: list[Lane]) -> Lane:

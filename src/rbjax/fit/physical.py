@@ -8,8 +8,8 @@ import math
 
 from .layout import FIT_RANGES
 
-#: How close (relative to the range) a value must be to a bound to be reported as on it.
-BOUND_TOLERANCE = 1e-3
+#: How close (relative to the range: 1 %) a value must be to a bound to be reported as on it.
+BOUND_TOLERANCE = 1e-2
 
 
 def ball_mode_structure(ball, model) -> str:

@@ -444,7 +444,7 @@ def impact_quadrature(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFA
     d/dδ[F + (M/2R)u_c] = F′(δ) − 2F(δ)/(2R − δ), it is largest there while F′(2R − δ) ≥ 2F on
     [0, δ_max]. That holds over the valid range δ ≤ 2h of the JIS ball with the gas force or with
     stiffening; for the bare linear shell it needs δ_max ≤ 2R/3 (59 mm for the JIS ball), beyond
-    which the true maximum lies slightly before δ_max. As in the ODE path (``impact.py``) the
+    which the true maximum lies slightly before δ_max. As in the ODE path (``ode.py``) the
     reported peak is max(F(δ_max), floor force at first contact (M/2R)v0²), and the peak time is
     the compression time (or 0 if the first-contact value is larger).
     """

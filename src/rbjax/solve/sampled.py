@@ -8,7 +8,7 @@ the floor force at every sample inside the loop:
 * the classic fourth-order Runge–Kutta method, ``substeps`` steps of 1/(rate·substeps) per
   sample (default one step per sample: ~1e-10 of the peak force against the scipy reference
   at 44.1 kHz for the JIS ball, benchmarks/RESULTS.md "Histories sampled inside the solve");
-* the vector field is impact.py's restitution field, valid in both phases: its momentum-flux
+* the vector field is ode.py's restitution field, valid in both phases: its momentum-flux
   thrust (M/2R)δ̇² acts only while δ̇ < 0, so no phase switch is needed; it is continuous
   with its first derivative at δ̇ = 0 (the thrust is quadratic in δ̇);
 * contact starts at t = 0 with δ = 0, δ̇ = √(2 g h) and ends at the first time δ returns to 0
@@ -17,7 +17,7 @@ the floor force at every sample inside the loop:
   sample itself (an excursion that ends and comes back between two samples is not seen). Once
   a lane has ended it is frozen: force 0, ``in_contact`` False, the state no longer advanced.
 
-Status per impact, with impact.py's codes: ``mass_singularity`` (δ ≥ 0.999·2R),
+Status per impact, with the codes of outcome.py: ``mass_singularity`` (δ ≥ 0.999·2R),
 ``deflection_limit`` (δ_max > ``max_deflection_ratio``·h; δ_max from the cubic Hermite
 interpolant of the two samples around maximum compression), ``solver_failed`` (a non-finite
 state or force), and ``step_limit`` when the contact is still going after the last computed
