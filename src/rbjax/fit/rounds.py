@@ -1,0 +1,184 @@
+"""The starts of a fit and its rounds of the optimiser, one driver step each (see :func:`rbjax.fit.engine.fit`):
+
+- :func:`start_values`: physically motivated start values from the records;
+- :func:`alternative_starts`: the other starts of parameters whose fit has several minima;
+- :func:`optimise`: rounds of the compiled optimiser for every start at once, each in the
+  whitened frame of its current point, until the remaining Gauss–Newton step is below
+  ``STEP_TOLERANCE_SIGMA`` σ (a parameter pressed onto a bound of its fit range held there);
+- :func:`pick_best`: the converged start of least cost.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .._progress import progress as say
+from .._validate import as_float
+from ..solve.outcome import G_N_PER_KG
+from ..terms.ball import Ball
+from ..terms.model import Model
+from . import uncertainty as unc
+from .problem import (
+    Problem,
+)
+
+#: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
+MAX_ROUNDS = 8
+
+
+#: A start still going after two rounds at a cost this many times that of a converged start is
+#: abandoned (its lane would keep the others' batch running; it is reported as not converged).
+ABANDON_FACTOR = 1.5
+
+
+def start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
+    """Physically motivated start values from the measured records.
+
+    Stiffness from the contact time of the lowest fitted height (least gas force):
+    t_c ≈ π√(M/k) (a linear spring-mass half period), k → E by Eqs. 1–3; each damping law's
+    own ``start`` rule from the restitution read off the impulse, e = ∫F dt/(M v0) − 1 (Eq. 10).
+    """
+    from ..terms.forces import reissner_stiffness_N_per_m
+
+    d = problem.data
+    meas = problem.measured
+    k_idx = np.flatnonzero(ref_mask)
+    lowest = k_idx[np.argmin(d.height_m[k_idx])]
+    tc = float(meas["contact_time_s"][lowest])
+    mass = as_float(ball.mass_kg)
+    k_spring = mass * (math.pi / tc) ** 2
+    e_young = k_spring * as_float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * as_float(ball.wall_m) ** 2)
+    v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
+    impulse = d.force_N.sum(axis=1) / d.rate_Hz
+    e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
+    values = {"youngs_Pa": e_young, "poisson": nu}
+    k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
+    for law in model.damping:
+        values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
+    if model.stiffening is not None:
+        values["beta"] = 0.05
+    if model.ball_mode is not None:
+        values.update(type(model.ball_mode).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
+    return values
+
+
+def alternative_starts(model: Model, given: set[str]) -> list[dict]:
+    """The starts of a fit of ``model``: ``{}`` (the start values), then one per alternative
+    value of a parameter whose fit has several minima, as its term declares them
+    (``START_ALTERNATIVES``; e.g. the ball mode's frequency), unless the caller gave or held it."""
+    starts: list[dict] = [{}]
+    terms = [*model.damping, model.stiffening, model.ball_mode]
+    for term in terms:
+        for name, values in getattr(type(term), "START_ALTERNATIVES", {}).items():
+            if name not in given:
+                starts += [{name: float(v)} for v in values]
+    return starts
+
+
+@dataclasses.dataclass(eq=False)
+class Lane:
+    """One start's way through the optimiser (see :func:`optimise`)."""
+
+    theta: np.ndarray
+    out: dict
+    steps: int = 0
+    done: bool = False
+    converged: bool = False
+    message: str = ""
+
+    @property
+    def cost(self) -> float:
+        r = self.out["r"]
+        return 0.5 * float(r @ r) if np.all(np.isfinite(r)) else math.inf
+
+
+def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask, *, weights_of, optimizer, max_steps, progress, label, shown) -> list[Lane]:
+    """Rounds of the compiled optimiser for every start at once (one call per round, the starts
+    in lockstep), each round in the whitened frame of that start's current point, until each
+    start's remaining Gauss–Newton step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps
+    are spent, or its prediction fails. A start that is done is only evaluated again."""
+    lay = problem.layout
+    n = len(lay.names)
+    weights = [weights_of(o["r"]) for o in outs]
+    lanes = [Lane(th, o) for th, o in zip(thetas, problem.run_batch(thetas, np.zeros(n, bool), weights, constants))]
+    for rounds in range(MAX_ROUNDS + 1):
+        phi_c, w, atol, weights = [], [], [], []
+        for i, lane in enumerate(lanes):
+            phi = lay.to_phi(lane.theta)
+            phi_c.append(phi)
+            weights.append(weights_of(lane.out["r"]))
+            w.append(np.eye(n))
+            atol.append(math.inf)
+            if lane.done:
+                continue
+            r = lane.out["r"]
+            jac_phi = lane.out["jac_theta"][:, free_idx] * lay.from_phi(phi)[1][free_idx][None, :]
+            tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
+            # a parameter pressed onto a bound of its fit range has a vanishing column in φ
+            # (φ → ±∞): the remaining step is judged on the others
+            inside = ~on_bound(lay, phi, free_idx)
+            values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
+            start = f" start {i}" if len(lanes) > 1 else ""
+            say(f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}", enabled=progress)
+            if not np.all(np.isfinite(r)):
+                lane.done, lane.message = True, "the model's prediction is not finite at these parameters (a failed solve)"
+                continue
+            remaining = unc.step_in_sigma(r, jac_phi[:, inside], tau)
+            if remaining < unc.STEP_TOLERANCE_SIGMA:
+                lane.done, lane.converged = True, True
+                lane.message = f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
+                continue
+            best = min((other.cost for other in lanes if other.converged), default=math.inf)
+            if rounds >= 2 and lane.cost > ABANDON_FACTOR * best:
+                lane.done = True
+                lane.message = f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× that of a converged start ({best:.4g})"
+                continue
+            if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
+                lane.done = True
+                lane.message = lane.message or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+                continue
+            w[-1] = np.zeros((n, n))
+            moving = free_idx[inside]  # a parameter on a bound is held there for the round
+            w[-1][np.ix_(moving, moving)] = unc.whitening(jac_phi[:, inside], full=True)
+            atol[-1] = unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
+        if all(lane.done for lane in lanes):
+            break
+        results = problem.run_batch([lane.theta for lane in lanes], free, weights, constants, optimizer=optimizer, phi_c=np.stack(phi_c), w=np.stack(w), atol=atol)
+        for lane, phi, wi, res in zip(lanes, phi_c, w, results):
+            if lane.done:
+                continue
+            lane.steps += int(res["steps"])
+            new_theta = np.where(free, lay.from_phi(phi + wi @ res["u"])[0], lane.theta)
+            if not np.all(np.isfinite(new_theta)):
+                lane.done, lane.message = True, "the optimiser produced non-finite parameters"
+                continue
+            lane.theta, lane.out = new_theta, res
+            if not res["successful"]:
+                lane.message = f"not converged after {lane.steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
+    return lanes
+
+
+#: An ``interval`` parameter counts as on a bound when its transform's relative slope
+#: σ(φ)(1 − σ(φ)) is below this (θ within ~1e-4 of the range from the bound).
+ON_BOUND_SLOPE = 1e-4
+
+
+def on_bound(lay, phi, free_idx) -> np.ndarray:
+    """Which of the free parameters ``free_idx`` sit on a bound of an ``interval`` range."""
+    out = np.zeros(len(free_idx), dtype=bool)
+    for j, i in enumerate(free_idx):
+        spec = lay.specs[i]
+        if spec.transform == "interval":
+            out[j] = float(spec.slope(phi[i])) / (spec.upper - spec.lower) < ON_BOUND_SLOPE
+    return out
+
+
+def pick_best(lanes: list[Lane]) -> Lane:
+    """The converged start of least cost; the least-cost start if none converged."""
+    converged = [lane for lane in lanes if lane.converged]
+    return min(converged or lanes, key=lambda lane: lane.cost)
+
+
