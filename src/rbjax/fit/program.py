@@ -18,8 +18,12 @@ Residuals r(θ) (all rows always present; rows of records outside the fit are 0)
 The optimiser works in whitened coordinates u: φ = φ_c + W u, θ = where(free, T(φ), θ_held)
 with T the per-parameter transforms (log, interval, identity) and W chosen on the host from
 the Jacobian at φ_c. The residual function is a ``custom_jvp`` whose tangent rule computes the
-whole Jacobian J_θ once by ``jax.jacfwd`` through diffrax and its events (the model is traced
-once) and returns J_u du; J_θ also comes back as auxiliary output for the uncertainties.
+whole Jacobian J_θ once by ``jax.jacfwd`` (the model is traced once) and returns J_u du; J_θ
+also comes back as auxiliary output for the uncertainties. The predicted forces come from the
+sampled path (:mod:`rbjax.fit.record_forces`: fixed steps at the records' own samples, only the
+physical columns carried through the solve) or, with ``Structure.path == "ode"``, from the
+diffrax ODE with its events (:func:`sample_force`). The optimiser runs on a batch of lanes
+(starts) in lockstep (``jax.vmap``).
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ import optimistix as optx
 
 from ..spectrum.filters import sosfilt_jax
 from .program_store import load_or_export
-from .record_forces import record_forces
+from .record_forces import ball_and_model, record_forces
 from .records import _features
 
 OPTIMIZERS = ("lm", "gauss-newton")
@@ -84,13 +88,8 @@ class Structure(eqx.Module):
 
 
 def _unpack(s: Structure, theta, constants):
-    n_all = len(s.physical_positions) + len(s.constant_positions) + 1
-    values = jnp.zeros(n_all)
-    values = values.at[jnp.array(s.physical_positions)].set(theta[: len(s.physical_positions)])
-    if s.constant_positions:
-        values = values.at[jnp.array(s.constant_positions)].set(constants)
-    _, ball, model = jax.tree_util.tree_unflatten(s.treedef, [values[i] for i in range(n_all)])
     p, k = len(s.physical_positions), s.n_records
+    ball, model = ball_and_model(s, theta[:p], constants)
     shifts = theta[p : p + k]
     dh = theta[p + k : p + 2 * k] if s.height_error else jnp.zeros(k)
     return ball, model, shifts, dh

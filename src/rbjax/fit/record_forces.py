@@ -21,7 +21,7 @@ import jax.numpy as jnp
 from ..solve.record_samples import record_samples
 
 
-def _ball_and_model(s, physical, constants):
+def ball_and_model(s, physical, constants):
     """The (ball, model) of the structure ``s`` with the physical values given."""
     n_all = len(s.physical_positions) + len(s.constant_positions) + 1
     values = jnp.zeros(n_all)
@@ -37,7 +37,7 @@ def record_forces(s, theta, constants, heights_m):
     p, k = len(s.physical_positions), s.n_records
 
     def one(physical, height, shift):
-        ball, model = _ball_and_model(s, physical, constants)
+        ball, model = ball_and_model(s, physical, constants)
         force, d_shift, _ = record_samples(height, shift, ball, model, s.rate_Hz, s.n_samples, s.substeps)
         return force, d_shift
 
