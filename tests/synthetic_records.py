@@ -53,3 +53,16 @@ def synthetic_data(ball, damping, blocked_force, seed):
         for h, f in zip(HEIGHTS_M, forces)
     ]
     return prepare_data(recs)
+
+
+def central_difference(reference, params: dict, shifts, name: str):
+    """d reference(params, shifts)/d name by central differences: a parameter by a relative
+    step of 1e-4, an onset ``shift[k]`` by 1e-7 s."""
+    if name.startswith("shift["):
+        k, step = int(name[6:-1]), 1e-7
+        up, down = np.array(shifts, dtype=float), np.array(shifts, dtype=float)
+        up[k] += step
+        down[k] -= step
+        return (reference(params, up) - reference(params, down)) / (2 * step)
+    step = 1e-4 * params[name]
+    return (reference({**params, name: params[name] + step}, shifts) - reference({**params, name: params[name] - step}, shifts)) / (2 * step)

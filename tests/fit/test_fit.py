@@ -32,6 +32,7 @@ from synthetic_records import (
     HEIGHTS_M,
     NOISE_N,
     SOS,
+    central_difference,
     sampled_force,
     synthetic_data,
 )
@@ -147,15 +148,7 @@ def test_jacobian_matches_finite_differences_of_the_scipy_reference():
     assert np.max(np.abs(force - base)) <= 1e-6 * np.max(np.abs(base))
     for name in ("youngs_Pa", "poisson", "alpha_s_per_m", "shift[2]"):
         i = names.index(name)
-        if name.startswith("shift"):
-            step = 1e-7
-            up, down = shifts.copy(), shifts.copy()
-            up[2] += step
-            down[2] -= step
-            fd = (reference(true, up) - reference(true, down)) / (2 * step)
-        else:
-            step = 1e-4 * true[name]
-            fd = (reference({**true, name: true[name] + step}, shifts) - reference({**true, name: true[name] - step}, shifts)) / (2 * step)
+        fd = central_difference(reference, true, shifts, name)
         err = np.max(np.abs(jac[..., i] - fd)) / np.max(np.abs(fd))
         assert err < 2e-4, (name, err)
 
