@@ -97,35 +97,23 @@ def load_ball_and_model(args):
         changes["gas"] = args.gas
     if args.blocked_force is not None:
         changes["blocked_force"] = args.blocked_force
-    if changes:
-        model = make_model(
-            gas=changes.get("gas", model.gas),
-            blocked_force=changes.get("blocked_force", model.blocked_force),
-            damping=model.damping,
-            stiffening=model.stiffening,
-            max_deflection_ratio=model.max_deflection_ratio,
-            ball_mode=model.ball_mode,
-            floor=changes.get("floor", model.floor),
-        )
-    return ball, model
+    return ball, (_rebuilt(model, **changes) if changes else model)
+
+
+def _rebuilt(model, **changes):
+    """``model`` with some of its options (gas, blocked_force, floor) replaced (validated)."""
+    from ..solve.simulate import make_model
+
+    options = dict(gas=model.gas, blocked_force=model.blocked_force, damping=model.damping, stiffening=model.stiffening,
+                   max_deflection_ratio=model.max_deflection_ratio, ball_mode=model.ball_mode, floor=model.floor)
+    return make_model(**(options | changes))
 
 
 def _simulate(heights, ball, model, method: str, floor=None):
     """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
     from ..solve import simulate
 
-    return simulate(
-        heights,
-        ball,
-        gas=model.gas,
-        blocked_force=model.blocked_force,
-        damping=model.damping,
-        stiffening=model.stiffening,
-        max_deflection_ratio=model.max_deflection_ratio,
-        ball_mode=model.ball_mode,
-        floor=model.floor if floor is None else floor,
-        method=method,
-    )
+    return simulate(heights, ball, model if floor is None else _rebuilt(model, floor=floor), method=method)
 
 
 def _octave_lfe(result):

@@ -97,7 +97,6 @@ class Problem:
             filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
             solver=solver, path=path, feature_rows=feature_rows, substeps=fit_substeps(ball, structure_model, float(data.rate_Hz)) if path == "samples" else 0,
         )
-        self.path = path
         self.measured = record_features(data.force_N, data.rate_Hz)
         feats = np.stack(
             [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1

@@ -67,28 +67,30 @@ def substeps_for_rate(fastest_rate_per_s: float, rate_Hz: float) -> int:
     return max(2, math.ceil(fastest_rate_per_s / (MAX_RATE_STEP * rate_Hz)))
 
 
-def _rk4(y, h, args, substeps: int):
-    """``substeps`` classic Runge–Kutta steps of h/substeps from y (a loop: one copy of the
-    vector field in the compiled program, whatever ``substeps``)."""
+def _rk4(y, k1, h, args, substeps: int):
+    """``substeps`` classic Runge–Kutta steps of h/substeps from y, with k1 = dy/dt at y given;
+    returns the new state and dy/dt there (the next step's k1, and ẏ for Ḟ at the sample: the
+    vector field is evaluated four times a substep, never twice at one state). A loop: one copy
+    of the vector field in the compiled program, whatever ``substeps``."""
 
     def f(yy):
         return _RESTITUTION(0.0, yy, args)
 
     step = h / substeps
 
-    def one(_, y):
-        k1 = f(y)
+    def one(_, carry):
+        y, k1 = carry
         k2 = f(y + 0.5 * step * k1)
         k3 = f(y + 0.5 * step * k2)
         k4 = f(y + step * k3)
-        return y + (step / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        y = y + (step / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return y, f(y)
 
-    return jax.lax.fori_loop(0, substeps, one, y) if substeps > 1 else one(0, y)
+    return jax.lax.fori_loop(0, substeps, one, (y, k1)) if substeps > 1 else one(0, (y, k1))
 
 
-def _force_and_rate(y, ball, model):
-    """(F, Ḟ, in contact) at state y: Ḟ = ∂F/∂y · ẏ (one forward-mode pass)."""
-    ydot = _RESTITUTION(0.0, y, (ball, model))
+def _force_and_rate(y, ydot, ball, model):
+    """(F, Ḟ, in contact) at state y with ẏ given: Ḟ = ∂F/∂y · ẏ (one forward-mode pass)."""
     force, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (ydot,))
     inside = y[0] > 0.0
     if model.velocity_dependent:
@@ -118,20 +120,21 @@ def record_samples(height_m, shift_s, ball, model: Model, rate_Hz: float, num_sa
     rate_rate = jnp.where(j == 0, 0.5 * a, 1.0)
 
     def step(carry, x):
-        y, going, bad, singular_hit = carry
+        y, k, going, bad, singular_hit = carry
         h_j, c_j, d_j, e_j = x
-        y_new = _rk4(y, h_j, args, substeps)
-        f, r, inside = _force_and_rate(y_new, ball, model)
+        y_new, k_new = _rk4(y, k, h_j, args, substeps)
+        f, r, inside = _force_and_rate(y_new, k_new, ball, model)
         too_close = y_new[0] >= singular
         broken = ~(jnp.all(jnp.isfinite(y_new)) & jnp.isfinite(f) & jnp.isfinite(r)) | too_close
         singular_hit = singular_hit | (going & too_close)
         bad = bad | (going & broken)
         going = going & inside & ~broken
         out = (jnp.where(going, c_j * f, 0.0), jnp.where(going, -(d_j * f + e_j * r), 0.0))
-        return (jnp.where(going, y_new, y), going, bad, singular_hit), out
+        return (jnp.where(going, y_new, y), jnp.where(going, k_new, k), going, bad, singular_hit), out
 
     false = jnp.asarray(False)
-    (_, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(step, (y0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate))
+    k0 = _RESTITUTION(0.0, y0, args)
+    (_, _, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(step, (y0, k0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate))
 
     # place the contact-relative samples j at record samples n0 + j
     i = jnp.arange(num_samples)
