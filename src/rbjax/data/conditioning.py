@@ -18,7 +18,7 @@ import scipy.signal
 
 from ..spectrum.filters import butter_lowpass_sos
 from .crossings import _quiet, _rising_crossing, estimate_noise_rms_N
-from .errors import DataError, DataWarning
+from .errors import DataError, DataWarning, NoImpactError, RecordCutOffError
 from .recording import Recording
 from .shift import fractional_shift
 
@@ -131,7 +131,7 @@ def locate_onset(
     if impact is None:
         imps = find_impacts(x, rate_Hz)
         if not imps:
-            raise DataError(f"{source}: no impact found")
+            raise NoImpactError(f"{source}: no impact found")
         impact = imps[0]
     s, e, _ = impact
     ip = s + int(np.argmax(x[s:e]))
@@ -183,12 +183,19 @@ def condition(
        the window starts on the sample at or before ``onset - pre_onset_s``, and
        ``onset_s`` is in ``[pre_onset_s, pre_onset_s + 1/rate)``.
 
+    A raw record from a laboratory should go through :func:`rbjax.data.clean` first
+    (inverted sign, drift, mains hum). What was done is appended to ``log``:
+    ``impact_s``, ``further_impacts`` (``[{"time_s", "peak_N"}]``, e.g. the rebound),
+    ``offset_N``, ``lowpass_Hz``, ``window_start_s``, ``window_s``.
+
     The default window (50 ms) fits the shipped 0.1 s records (pre-trigger up to
     ~20 ms) and holds the ~21 ms contact with its ringing.
 
     Raises:
-      DataError: no impact (peak below threshold), the impact runs off the end, the
-        window would run past either end of the record or would cut the impact.
+      NoImpactError: no impact (peak below threshold).
+      RecordCutOffError: the impact runs off either end of the record, or the window
+        would run past either end.
+      DataError: the window would cut the impact.
     """
     src = recording.source
     rate = recording.rate_Hz
@@ -198,7 +205,7 @@ def condition(
     thr = _default_threshold(noise) if threshold_N is None else float(threshold_N)
     imps = find_impacts(x, rate, threshold_N=thr, min_separation_s=min_separation_s)
     if not imps:
-        raise DataError(
+        raise NoImpactError(
             f"{src}: no impact found: the largest force {float(np.max(x - level0)):.4g} N above the "
             f"baseline is below the threshold {thr:.4g} N (noise rms {noise:.3g} N); "
             "is the force sign compression-positive?"
@@ -217,8 +224,12 @@ def condition(
     else:
         raise ValueError(f"which={which!r}: use 'first', 'largest', 'last' or an index")
     s, e, _ = imps[k]
-    notes = list(recording.notes)
+    notes, log = list(recording.notes), list(recording.log)
     others = [imp for i, imp in enumerate(imps) if i != k]
+    log += [
+        ("impact_s", s / rate),
+        ("further_impacts", [{"time_s": i.start_index / rate, "peak_N": i.peak_N} for i in others]),
+    ]
     if others:
         msg = (
             f"{src}: {len(others)} further impact(s) found at {_describe_impacts(others, rate)}; "
@@ -227,12 +238,12 @@ def condition(
         warnings.warn(msg, DataWarning, stacklevel=2)
         notes.append(msg)
     if e >= n:
-        raise DataError(
+        raise RecordCutOffError(
             f"{src}: the impact at {s / rate:.4f} s runs off the end of the record (force still "
             f"above {thr:.4g} N at the last sample)"
         )
     if s == 0:
-        raise DataError(f"{src}: the impact starts at the first sample: no pre-trigger")
+        raise RecordCutOffError(f"{src}: the impact starts at the first sample: no pre-trigger")
 
     # --- baseline
     if baseline == "pretrigger":
@@ -249,6 +260,7 @@ def condition(
         base = float(np.mean(x[b0:b1]))
         x = x - base
         notes.append(f"baseline {base:+.4g} N subtracted (mean of samples {b0}..{b1 - 1})")
+        log.append(("offset_N", base))
     elif baseline != "none":
         raise ValueError(f"baseline={baseline!r}: use 'pretrigger' or 'none'")
 
@@ -279,13 +291,13 @@ def condition(
     i0 = int(math.floor(start_f + 1e-9))
     frac = start_f - i0
     if i0 < 0:
-        raise DataError(
+        raise RecordCutOffError(
             f"{src}: the pre-trigger ({onset_idx / rate * 1e3:.3f} ms before the onset) is shorter "
             f"than pre_onset_s={pre_onset_s * 1e3:.3g} ms"
         )
     need_end = i0 + m + (1 if align and frac > 0 else 0)
     if need_end > n:
-        raise DataError(
+        raise RecordCutOffError(
             f"{src}: the window of {window_s * 1e3:.4g} ms would run past the end of the record "
             f"(only {(n - onset_idx) / rate * 1e3:.4g} ms after the onset); pass a smaller window_s"
         )
@@ -315,4 +327,5 @@ def condition(
         f"window {i0 / rate:.6f} s + {m} samples of the input; onset at {onset_idx / rate:.6f} s "
         f"({onset_fraction:g} of peak)"
     )
-    return recording.replace(force_N=y, onset_s=onset_s, lowpass_Hz=lp_out, notes=tuple(notes))
+    log += [("lowpass_Hz", lp_out), ("window_start_s", i0 / rate), ("window_s", m / rate)]
+    return recording.replace(force_N=y, onset_s=onset_s, lowpass_Hz=lp_out, notes=tuple(notes), log=tuple(log))

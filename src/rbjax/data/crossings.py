@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import DataError
+from .errors import RecordCutOffError
 from .shift import _lagrange4
 
 
@@ -74,7 +74,7 @@ def _rising_crossing(x: np.ndarray, ip: int, level: float, source: str, start: i
         while j < ip and x[j] < level:
             j += 1
     if j == 0:
-        raise DataError(
+        raise RecordCutOffError(
             f"{source}: the impact is already above the onset level at the first sample: "
             "no pre-trigger, onset unknown"
         )

@@ -6,7 +6,7 @@ from importlib.resources import files
 from pathlib import Path
 
 from .errors import DataError
-from .readers import load
+from .loading import load
 from .recording import Recording
 
 __all__ = ["EXAMPLES_LOWPASS_HZ", "examples_dir", "load_examples"]

@@ -1,13 +1,12 @@
-"""Readers of force-plate recordings: CSV, WAV, NPY, and many files at once.
+"""Readers of force-plate recordings written as text or NumPy: :func:`read_csv`, :func:`read_npy`.
 
-:func:`read_csv`, :func:`read_wav` (``scipy.io.wavfile``), :func:`read_npy` read one
-file each; :func:`load` reads many files (or a directory) and resolves each drop
-height from an argument, a manifest CSV or the file name (``h100_d1.csv`` -> 1.00 m).
+The other formats have a module each (:mod:`.wav`, :mod:`.matlab`, :mod:`.uff`,
+:mod:`.tdms`); :func:`rbjax.data.load` (:mod:`.loading`) reads many files of any of them.
 
 Bad data raise :class:`DataError` (a ``ValueError``) naming the file, or warn with
 :class:`DataWarning`; nothing is silently repaired. Checked: empty or truncated files,
 missing/unknown columns, non-numeric values, NaN/inf, fewer than ``MIN_SAMPLES``
-samples, a non-uniform time column, clipping, mixed sample rates, an unknown drop height.
+samples, a non-uniform time column, clipping.
 """
 
 from __future__ import annotations
@@ -15,92 +14,21 @@ from __future__ import annotations
 import csv
 import io
 import os
-import re
-from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from .columns import _decimals, _infer_rate, _parse_column
 from .errors import DataError
-from .recording import Recording, _check_force, _check_height, _require_same_rate
+from .recording import Recording, _check_force, _check_height
 from .sources import _as_source, height_from_name
-from .wav import read_wav
 
-__all__ = ["height_from_name", "read_csv", "read_wav", "read_npy", "load"]
+__all__ = ["read_csv", "read_npy"]
 
 
 # --------------------------------------------------------------------------------------
 # CSV
 # --------------------------------------------------------------------------------------
-
-_TIME_NAMES = {"time": 1.0, "t": 1.0}
-_FORCE_NAMES = {"force": 1.0, "f": 1.0}
-_TIME_UNITS = {None: 1.0, "s": 1.0, "sec": 1.0, "ms": 1e-3}
-_FORCE_UNITS = {None: 1.0, "n": 1.0, "kn": 1e3}
-_COL_RE = re.compile(r"^\s*([a-z]+)\s*(?:[_\s]\s*([a-z]+)|[\[(]\s*([a-z]+)\s*[\])])?\s*$")
-
-
-def _parse_column(name: str):
-    """('time'|'force'|None, scale) for a header field such as ``time_s``, ``F [kN]``."""
-    m = _COL_RE.match(name.strip().lower())
-    if not m:
-        return None, None
-    base, unit = m.group(1), m.group(2) or m.group(3)
-    if base in _TIME_NAMES:
-        if unit not in _TIME_UNITS:
-            return "time?", unit
-        return "time", _TIME_UNITS[unit]
-    if base in _FORCE_NAMES:
-        if unit not in _FORCE_UNITS:
-            return "force?", unit
-        return "force", _FORCE_UNITS[unit]
-    return None, None
-
-
-def _decimals(s: str) -> int | None:
-    s = s.strip()
-    if "e" in s.lower():
-        return None
-    if "." not in s:
-        return 0
-    return len(s.split(".", 1)[1])
-
-
-def _infer_rate(t: np.ndarray, quantum_s: float, source: str) -> tuple[float, float, list[str]]:
-    """Uniform-sampling check of a time column; returns (rate_Hz, t0_s, notes)."""
-    dt_steps = np.diff(t)
-    if np.any(dt_steps <= 0):
-        k = int(np.argmax(dt_steps <= 0))
-        raise DataError(
-            f"{source}: time column is not strictly increasing (sample {k + 1}: "
-            f"{t[k + 1]!r} s after {t[k]!r} s)"
-        )
-    n = t.size
-    i = np.arange(n, dtype=np.float64)
-    dt, t0 = np.polyfit(i, t, 1)
-    resid = t - (t0 + dt * i)
-    tol = 0.5 * quantum_s * 1.01 + 0.01 * dt
-    worst = float(np.abs(resid).max())
-    if worst > tol:
-        k = int(np.argmax(np.abs(resid)))
-        raise DataError(
-            f"{source}: non-uniform time column: sample {k} is {resid[k] / dt:+.3f} samples off a "
-            f"uniform grid of {1 / dt:.6g} Hz (tolerance {tol / dt:.3f} samples); resample first"
-        )
-    notes = []
-    if quantum_s > 0.1 * dt:
-        notes.append(
-            f"time column resolution {quantum_s:g} s is coarse for {1 / dt:.6g} Hz sampling; "
-            "the rate comes from a fit over the whole column"
-        )
-    rate = 1.0 / dt
-    cand = float(round(rate))
-    if cand > 0:
-        t0c = float(np.mean(t - i / cand))
-        if np.abs(t - (t0c + i / cand)).max() <= tol:
-            rate, t0 = cand, t0c
-    return float(rate), float(t0), notes
-
 
 def read_csv(
     path,
@@ -261,11 +189,6 @@ def read_csv(
 
 
 # --------------------------------------------------------------------------------------
-# WAV
-# --------------------------------------------------------------------------------------
-
-
-# --------------------------------------------------------------------------------------
 # NPY
 # --------------------------------------------------------------------------------------
 
@@ -320,126 +243,3 @@ def read_npy(
     )
 
 
-# --------------------------------------------------------------------------------------
-# many files
-# --------------------------------------------------------------------------------------
-
-_SUFFIXES = (".csv", ".wav", ".npy")
-
-
-def _read_manifest(manifest) -> dict[str, dict]:
-    if isinstance(manifest, Mapping):
-        out = {}
-        for k, v in manifest.items():
-            out[Path(k).name] = dict(v) if isinstance(v, Mapping) else {"height_m": v}
-        return out
-    src = _as_source(manifest)
-    text = Path(manifest).read_text(encoding="utf-8-sig")
-    rows = [r for r in csv.reader(io.StringIO(text)) if any(c.strip() for c in r)]
-    if not rows:
-        raise DataError(f"manifest {src}: empty file")
-    header = [h.strip().lower() for h in rows[0]]
-    if "file" not in header or "height_m" not in header:
-        raise DataError(f"manifest {src}: needs columns file,height_m (found {rows[0]})")
-    known = {"file", "height_m", "calibration_n_per_fs", "rate_hz", "lowpass_hz"}
-    out = {}
-    for k, r in enumerate(rows[1:], start=2):
-        if len(r) != len(header):
-            raise DataError(f"manifest {src}: line {k} has {len(r)} fields, expected {len(header)}")
-        entry = {}
-        for h, v in zip(header, r):
-            if h == "file" or h not in known:
-                continue
-            v = v.strip()
-            if v == "":
-                continue
-            try:
-                entry[{"calibration_n_per_fs": "calibration_N_per_FS", "rate_hz": "rate_Hz",
-                       "lowpass_hz": "lowpass_Hz"}.get(h, h)] = float(v)
-            except ValueError:
-                raise DataError(f"manifest {src}: line {k}: {h}={v!r} is not a number") from None
-        out[Path(r[header.index("file")].strip()).name] = entry
-    return out
-
-
-def load(
-    paths_or_dir,
-    *,
-    height_m: float | None = None,
-    manifest=None,
-    rate_Hz: float | None = None,
-    calibration_N_per_FS: float | None = None,
-    lowpass_Hz: float | None = None,
-    channel: int | None = None,
-) -> list[Recording]:
-    """Read many recordings: files and/or directories (``*.csv``, ``*.wav``, ``*.npy``).
-
-    A directory expands to its ``*.csv``/``*.wav``/``*.npy`` files, sorted by name (a
-    ``manifest.csv`` inside it is used as the manifest, not read as a recording).
-
-    Drop height of each file, first found: the ``height_m`` argument (all files), the
-    manifest (a CSV with columns ``file,height_m`` and optionally
-    ``calibration_N_per_FS``, ``rate_Hz``, ``lowpass_Hz``, matched on the file name; or
-    a mapping ``{file name: height_m}``), the file name (``h100_d1.csv`` -> 1.00 m:
-    ``hNNN`` in centimetres). Manifest values of calibration/rate/lowpass override the
-    arguments for that file.
-
-    Raises:
-      DataError: a file cannot be read (see the readers), a height cannot be known,
-        the files have different sample rates, nothing to read.
-    """
-    if isinstance(paths_or_dir, (str, os.PathLike)):
-        items = [paths_or_dir]
-    else:
-        items = list(paths_or_dir)
-    files: list[Path] = []
-    for it in items:
-        p = Path(it)
-        if p.is_dir():
-            found = sorted(q for q in p.iterdir() if q.is_file() and q.suffix.lower() in _SUFFIXES)
-            mf = p / "manifest.csv"
-            if mf.is_file():
-                found = [q for q in found if q.name != "manifest.csv"]
-                if manifest is None:
-                    manifest = mf
-            if not found:
-                raise DataError(f"{p}: no *.csv, *.wav or *.npy recording in this directory")
-            files += found
-        elif p.is_file():
-            files.append(p)
-        else:
-            raise DataError(f"{p}: no such file or directory")
-    if not files:
-        raise DataError("load(): nothing to read")
-    table = _read_manifest(manifest) if manifest is not None else {}
-    if manifest is not None and not isinstance(manifest, Mapping):
-        files = [f for f in files if f.resolve() != Path(manifest).resolve()]
-
-    recs = []
-    for f in files:
-        entry = table.get(f.name, {})
-        h = height_m if height_m is not None else entry.get("height_m")
-        if h is None:
-            h = height_from_name(f.name)
-        if h is None:
-            raise DataError(
-                f"cannot know the drop height of {f.name}: pass height_m=, a manifest, "
-                "or name it hNNN_... (NNN in centimetres)"
-            )
-        rate = entry.get("rate_Hz", rate_Hz)
-        cal = entry.get("calibration_N_per_FS", calibration_N_per_FS)
-        lp = entry.get("lowpass_Hz", lowpass_Hz)
-        suf = f.suffix.lower()
-        if suf == ".csv":
-            r = read_csv(f, rate_Hz=rate, height_m=h, lowpass_Hz=lp)
-        elif suf == ".wav":
-            r = read_wav(f, calibration_N_per_FS=cal, height_m=h, channel=channel, lowpass_Hz=lp)
-        elif suf == ".npy":
-            if rate is None:
-                raise DataError(f"{f.name}: a .npy file has no time base: pass rate_Hz= or a manifest rate_Hz")
-            r = read_npy(f, rate_Hz=rate, height_m=h, lowpass_Hz=lp)
-        else:
-            raise DataError(f"{f.name}: unknown file type {f.suffix!r} (csv, wav, npy)")
-        recs.append(r)
-    _require_same_rate(recs)
-    return recs

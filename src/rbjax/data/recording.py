@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .crossings import _rising_crossing, _solve_crossing, estimate_noise_rms_N
-from .errors import DataError
+from .errors import ClippedRecordError, DataError
 from .shift import fractional_shift
 
 __all__ = ["Recording", "MIN_SAMPLES"]
@@ -40,6 +40,10 @@ class Recording:
       lowpass_Hz: cutoff of the causal low-pass the record went through (measuring chain
         or :func:`condition`), Hz, if known/declared; ``None`` if unknown.
       notes: human-readable warnings and processing notes, oldest first.
+      log: what conditioning did to the record, as ``(step, value)`` pairs in the order
+        done (:func:`~rbjax.data.clean`, :func:`~rbjax.data.condition`): ``polarity``,
+        ``drift_N_per_s``, ``hum``, ``offset_N``, ``impact_s``, ``further_impacts``...;
+        ``conditioning`` gives them as a dict.
     """
 
     source: str
@@ -50,6 +54,7 @@ class Recording:
     calibration_N_per_FS: float | None = None
     lowpass_Hz: float | None = None
     notes: tuple[str, ...] = ()
+    log: tuple[tuple[str, object], ...] = ()
 
     def __post_init__(self):
         rate = float(self.rate_Hz)
@@ -75,6 +80,7 @@ class Recording:
                     raise DataError(f"{self.source}: {name}={v!r} must be finite")
                 object.__setattr__(self, name, v)
         object.__setattr__(self, "notes", tuple(str(n) for n in self.notes))
+        object.__setattr__(self, "log", tuple((str(k), v) for k, v in self.log))
 
     # ----- derived quantities --------------------------------------------------------
     @property
@@ -101,6 +107,11 @@ class Recording:
     def noise_rms_N(self) -> float:
         """Robust rms of the noise, N (see :func:`estimate_noise_rms_N`)."""
         return estimate_noise_rms_N(self.force_N)
+
+    @property
+    def conditioning(self) -> dict:
+        """The log as a dict: step -> what was done (JSON-ready values)."""
+        return dict(self.log)
 
     def replace(self, **changes) -> Recording:
         """A copy with the given fields changed (``dataclasses.replace``)."""
@@ -179,7 +190,7 @@ def _check_force(force: np.ndarray, source: str, *, flat_top: bool = True) -> No
         mask = np.abs(force) >= amax * (1 - 1e-9)
         run, start = _longest_run(mask)
         if run >= 3:
-            raise DataError(
+            raise ClippedRecordError(
                 f"{source}: clipped: {run} consecutive samples (from sample {start}) sit at the "
                 f"maximum |force| {amax:.6g} (a flat top); the peak force is not known"
             )

@@ -3,7 +3,6 @@ calibration in N per full scale, and :func:`read_wav`."""
 
 from __future__ import annotations
 
-import math
 import re
 import struct
 import warnings
@@ -12,6 +11,7 @@ from pathlib import Path
 import numpy as np
 from scipy.io import wavfile
 
+from .channels import check_calibration, integer_newtons
 from .errors import DataError
 from .recording import Recording, _check_force, _check_height
 from .sources import _as_source, height_from_name
@@ -36,29 +36,12 @@ def _check_riff_header(path, source: str) -> None:
             )
 
 
-def _pcm_codes(samples: np.ndarray) -> tuple[np.ndarray, float, int, int]:
-    """Integer samples as ``scipy.io.wavfile`` returns them -> (codes, full scale, min code, max code).
-
-    8-bit PCM is unsigned (offset 128); wider PCM is signed and left-justified in its
-    container (24 bit in int32: the low byte of every sample is 0), so the largest code
-    is the container's maximum rounded down to the step every sample is a multiple of.
-    """
-    if samples.dtype == np.uint8:
-        codes, bits = samples.astype(np.int64) - 128, 8
-    else:
-        codes, bits = samples.astype(np.int64), 8 * samples.dtype.itemsize
-    full = 1 << (bits - 1)
-    used = int(np.bitwise_or.reduce(codes))
-    step = (used & -used) or 1
-    return codes, float(full), -full, full - step
-
-
 def read_wav(
     path,
     *,
     calibration_N_per_FS: float | None = None,
     height_m: float | None = None,
-    channel: int | None = None,
+    channel: int | str | None = None,
     lowpass_Hz: float | None = None,
 ) -> Recording:
     """Read a force record from a WAV file (``scipy.io.wavfile``).
@@ -106,29 +89,19 @@ def read_wav(
     ch = 1 if data.ndim == 1 else data.shape[1]
     if ch > 1 and channel is None:
         raise DataError(f"{source}: {ch} channels: pass channel= (0 to {ch - 1})")
+    if isinstance(channel, str) and not channel.isdigit():
+        raise DataError(f"{source}: channel={channel!r}: WAV channels have no names; pass a number 0 to {ch - 1}")
     c = 0 if channel is None else int(channel)
     if not 0 <= c < ch:
         raise DataError(f"{source}: channel={channel} out of range (file has {ch})")
     samples = data if data.ndim == 1 else data[:, c]
     if samples.dtype.kind in "iu":
-        if calibration_N_per_FS is None:
-            raise DataError(
-                f"{source}: integer PCM WAV: pass calibration_N_per_FS= "
-                "(newtons per full scale) to turn samples into newtons"
-            )
-        codes, fs, lo, hi = _pcm_codes(samples)
-        clipped = np.flatnonzero((codes <= lo) | (codes >= hi))
-        if clipped.size:
-            raise DataError(
-                f"{source}: clipped: {clipped.size} sample(s) at full scale (first at sample "
-                f"{int(clipped[0])}); the peak force is not known"
-            )
-        force = codes / fs * _check_calibration(calibration_N_per_FS, source)
+        force = integer_newtons(samples, calibration_N_per_FS, source, "PCM WAV")
         _check_force(force, source, flat_top=False)
     else:
         force = samples.astype(np.float64)
         if calibration_N_per_FS is not None:
-            force = force * _check_calibration(calibration_N_per_FS, source)
+            force = force * check_calibration(calibration_N_per_FS, source)
         _check_force(force, source)
     if height_m is None:
         height_m = height_from_name(source)
@@ -141,12 +114,3 @@ def read_wav(
         lowpass_Hz=lowpass_Hz,
         notes=tuple(notes),
     )
-
-
-def _check_calibration(calibration_N_per_FS, source: str) -> float:
-    cal = float(calibration_N_per_FS)
-    if not (math.isfinite(cal) and cal != 0):
-        raise DataError(f"{source}: calibration_N_per_FS={calibration_N_per_FS!r} must be finite and non-zero")
-    return cal
-
-

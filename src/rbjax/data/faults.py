@@ -1,0 +1,162 @@
+"""Faults of real force records mended before conditioning: :func:`clean` flips a force
+channel recorded with inverted sign, removes a slow drift of the baseline and mains hum
+(50 or 60 Hz and its 2nd and 3rd harmonics), and logs what it did (``Recording.log``).
+
+A record without these faults comes back unchanged: each repair is made only when the fault
+stands clear of the noise (thresholds below), so that a clean record is never altered.
+The baseline model (a line, plus the hum) is fitted by least squares to the record's quiet
+samples, those away from every impact; an offset is left to :func:`~rbjax.data.condition`,
+which subtracts the pre-trigger mean.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.optimize
+
+from .conditioning import _default_threshold, find_impacts
+from .crossings import _quiet, _segments_stats
+from .errors import DataWarning
+from .recording import Recording
+
+__all__ = ["clean", "MAINS_HZ"]
+
+#: Nominal mains frequencies searched for hum, Hz; each within ±``MAINS_TOLERANCE_HZ``.
+MAINS_HZ = (50.0, 60.0)
+MAINS_TOLERANCE_HZ = 0.5
+#: Harmonics of the mains frequency fitted together (1: the fundamental).
+HUM_HARMONICS = 3
+#: Hum is removed when its fundamental's amplitude exceeds this many times the rms of
+#: what remains of the quiet samples, and the quiet samples span this many periods.
+HUM_FACTOR = 2.0
+HUM_MIN_PERIODS = 2.0
+#: A drift is removed when the line's change over the record exceeds this many times the
+#: rms of the quiet samples about it.
+DRIFT_FACTOR = 3.0
+#: Samples kept out of the baseline fit around each impact: before its first sample above
+#: the threshold, after its last (the measuring chain's tail and the ball's ringing).
+QUIET_BEFORE_S = 0.005
+QUIET_AFTER_S = 0.020
+
+
+def _robust_trend(x: np.ndarray) -> np.ndarray:
+    """A line through the medians of the record's quiet segments (impacts do not pull it)."""
+    med, sig = _segments_stats(x)
+    if med.size < 2:
+        return np.full(x.size, float(np.median(x)))
+    seg = x.size // med.size
+    centres = (np.arange(med.size) + 0.5) * seg
+    s0 = float(np.median(np.sort(sig)[: max(1, sig.size // 4)]))
+    keep = sig <= 2.0 * s0 if s0 > 0 else sig <= s0
+    if keep.sum() < 2:
+        return np.full(x.size, float(np.median(med)))
+    slope, icpt = np.polyfit(centres[keep], med[keep], 1)
+    return icpt + slope * np.arange(x.size)
+
+
+def _quiet_mask(n: int, impacts, rate: float) -> np.ndarray:
+    mask = np.ones(n, dtype=bool)
+    before, after = int(round(QUIET_BEFORE_S * rate)), int(round(QUIET_AFTER_S * rate))
+    for s, e, _ in impacts:
+        mask[max(0, s - before) : min(n, e + after)] = False
+    return mask
+
+
+def _hum_columns(t: np.ndarray, f: float) -> np.ndarray:
+    w = 2 * np.pi * f * t
+    return np.column_stack([g(k * w) for k in range(1, HUM_HARMONICS + 1) for g in (np.cos, np.sin)])
+
+
+def _fit(base: np.ndarray, y: np.ndarray, extra: np.ndarray | None = None):
+    a = base if extra is None else np.hstack([base, extra])
+    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+    resid = y - a @ coef
+    return coef, float(np.sqrt(np.mean(resid**2)))
+
+
+def _best_hum(base, y, t, mains):
+    """(frequency, coefficients, residual rms) of the best hum near any mains frequency."""
+
+    def cost(f):
+        return _fit(base, y, _hum_columns(t, f))[1]
+
+    best = None
+    for f0 in mains:
+        grid = np.linspace(f0 - MAINS_TOLERANCE_HZ, f0 + MAINS_TOLERANCE_HZ, 21)
+        fg = float(grid[int(np.argmin([cost(f) for f in grid]))])
+        step = grid[1] - grid[0]
+        f = float(scipy.optimize.minimize_scalar(cost, bounds=(fg - step, fg + step), method="bounded",
+                                                 options={"xatol": 1e-4}).x)
+        coef, rms = _fit(base, y, _hum_columns(t, f))
+        if best is None or rms < best[2]:
+            best = (f, coef, rms)
+    return best
+
+
+def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None = None,
+          min_separation_s: float = 0.1) -> Recording:
+    """Mend the faults of a raw record that the fit must not see; log each one.
+
+    1. **Polarity.** A record whose largest excursion from its baseline is negative (more
+       than twice the largest positive one, and above the impact threshold) was recorded
+       with inverted sign: it is flipped, with a :class:`DataWarning`.
+    2. **Drift and hum.** A line (offset and drift) and, for each mains frequency in
+       ``mains_Hz`` searched within ±0.5 Hz, a hum of that frequency and its 2nd and 3rd
+       harmonics are fitted by least squares to the quiet samples (5 ms before to 20 ms
+       after every impact left out). The hum is removed when its fundamental's amplitude
+       exceeds twice the rms of the quiet samples about the fit, over at least two
+       periods; the drift when the line changes by more than three times that rms over the
+       record. The drift is removed as a line through zero at the first impact, so that
+       the offset there is left to :func:`~rbjax.data.condition`'s pre-trigger baseline.
+
+    ``Recording.log`` gains ``polarity`` (``"as recorded"`` or ``"inverted: sign
+    flipped"``), ``drift_N_per_s`` (the slope removed, or None) and ``hum`` (``{"frequency_Hz",
+    "amplitude_N"}`` of the fundamental removed, or None). A record with no impact is
+    returned with the polarity entry only (:func:`~rbjax.data.condition` refuses it).
+    """
+    x = np.array(recording.force_N, dtype=np.float64)
+    rate, n = recording.rate_Hz, recording.n_samples
+    notes, log = list(recording.notes), list(recording.log)
+    detrended = x - _robust_trend(x)
+    level, noise = _quiet(detrended)
+    thr = _default_threshold(noise) if threshold_N is None else float(threshold_N)
+    low, high = -float(np.min(detrended - level)), float(np.max(detrended - level))
+    if low >= thr and low > 2.0 * high:
+        x, detrended = -x, -detrended
+        msg = (f"{recording.source}: the force is negative ({-low:.4g} N at most, +{high:.4g} N the other way): "
+               "recorded with inverted sign; flipped")
+        warnings.warn(msg, DataWarning, stacklevel=2)
+        notes.append(msg)
+        log.append(("polarity", "inverted: sign flipped"))
+    else:
+        log.append(("polarity", "as recorded"))
+    impacts = find_impacts(detrended, rate, threshold_N=thr, min_separation_s=min_separation_s)
+    if not impacts:
+        return recording.replace(force_N=x, notes=tuple(notes), log=tuple(log))
+
+    t = np.arange(n) / rate
+    t_anchor = impacts[0].start_index / rate
+    quiet = _quiet_mask(n, impacts, rate)
+    tq, yq = t[quiet], x[quiet]
+    base = np.column_stack([np.ones(tq.size), tq - t_anchor]) if tq.size >= 2 else None
+    drift = hum = None
+    if base is not None:
+        coef, rms = _fit(base, yq)
+        span_s = (tq[-1] - tq[0]) if tq.size else 0.0
+        mains = [f for f in mains_Hz if span_s * (f - MAINS_TOLERANCE_HZ) >= HUM_MIN_PERIODS]
+        if mains:
+            f, hcoef, hrms = _best_hum(base, yq, tq, mains)
+            amplitude = float(np.hypot(hcoef[2], hcoef[3]))
+            if amplitude > HUM_FACTOR * hrms:
+                x = x - _hum_columns(t, f) @ hcoef[2:]
+                coef, rms = hcoef[:2], hrms
+                hum = {"frequency_Hz": f, "amplitude_N": amplitude}
+                notes.append(f"mains hum removed: {f:.3f} Hz, {amplitude:.3g} N (with harmonics 2 to {HUM_HARMONICS})")
+        if abs(coef[1]) * (n / rate) > DRIFT_FACTOR * rms:
+            drift = float(coef[1])
+            x = x - drift * (t - t_anchor)
+            notes.append(f"baseline drift of {drift:+.4g} N/s removed (zero at the first impact, {t_anchor:.4f} s)")
+    log += [("drift_N_per_s", drift), ("hum", hum)]
+    return recording.replace(force_N=x, notes=tuple(notes), log=tuple(log))
