@@ -32,7 +32,7 @@ examples:
 
 def add_data_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``fit`` and ``select`` for reading and conditioning the recordings."""
-    p.add_argument("paths", nargs="+", metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy) or directories of them")
+    p.add_argument("paths", nargs="+", metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy, *.mat, *.uff, *.unv, *.tdms) or directories of them")
     p.add_argument(
         "--lowpass-hz",
         default="auto",
@@ -43,6 +43,7 @@ def add_data_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--all-drops", action="store_true", help="fit every drop as its own record (default: the frequency-domain average per height)")
     p.add_argument("--gas", choices=("adiabatic", "none"), default="adiabatic", help="gas force F_G (Eq. 4, corrected); default adiabatic")
+    p.add_argument("--strict", action="store_true", help="refuse a clipped recording (default: leave it out, fit the others and say so in the report)")
 
 
 def parse_lowpass(value: str):
@@ -79,10 +80,12 @@ def load_fit_data(args):
     lowpass = parse_lowpass(args.lowpass_hz)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        recs = load_data([Path(p) for p in args.paths], lowpass_Hz=lowpass)
+        recs = load_data([Path(p) for p in args.paths], lowpass_Hz=lowpass, strict=args.strict)
         data = prepare_data(recs, average=not args.all_drops)
     for w in caught:
         progress(f"warning: {w.message}")
+    for e in data.excluded:
+        progress(f"excluded {e['source']}: {e['reason']}")
     chain = f"{data.lowpass_Hz:g} Hz low-pass" if data.lowpass_Hz else "no low-pass"
     progress(f"{len(recs)} recordings, {data.n_records} records at {', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})")
     return data
@@ -152,6 +155,8 @@ def run(args) -> int:
             progress=not args.quiet,
         )
     out = result.to_dict()
+    out["conditioning"] = list(data.conditioning)
+    out["excluded"] = list(data.excluded)
     if selection is not None:
         out["selection"] = selection.to_dict()
     if args.out is not None:
@@ -166,6 +171,7 @@ def run(args) -> int:
             print(selection.table())
             print()
         print(result.summary())
+        print(data.conditioning_report())
     if not result.converged:
         progress(f"the fit did not converge: {result.message}")
         return NOT_CONVERGED_EXIT

@@ -88,7 +88,8 @@ def read_file(
         if rate_Hz is not None and abs(float(rate_Hz) - rec.rate_Hz) > 1e-4 * rec.rate_Hz:
             raise DataError(f"{p.name}: rate_Hz={rate_Hz!r} disagrees with the WAV header ({rec.rate_Hz:g} Hz)")
         return rec
-    return READERS[suf](
+    reader = {".mat": read_mat, ".uff": read_uff, ".unv": read_uff, ".tdms": read_tdms}[suf]
+    return reader(
         p, channel=channel, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, lowpass_Hz=lowpass_Hz
     )
 
@@ -112,7 +113,7 @@ def _read_manifest(manifest) -> dict[str, dict]:
     for k, r in enumerate(rows[1:], start=2):
         if len(r) != len(header):
             raise DataError(f"manifest {src}: line {k} has {len(r)} fields, expected {len(header)}")
-        entry = {}
+        entry: dict[str, object] = {}
         for h, v in zip(header, r):
             if h == "file" or h not in known:
                 continue
@@ -207,7 +208,7 @@ def load(
                 f"cannot know the drop height of {f.name}: pass height_m=, a manifest, "
                 "or name it hNNN_... (NNN in centimetres)"
             )
-        kwargs = {"rate_Hz": rate_Hz, "lowpass_Hz": lowpass_Hz}
+        kwargs: dict = {"rate_Hz": rate_Hz, "lowpass_Hz": lowpass_Hz}
         if f.suffix.lower() not in _ONE_CHANNEL:  # the arguments apply to the files that take them
             kwargs.update(calibration_N_per_FS=calibration_N_per_FS, channel=channel)
         kwargs.update({k: v for k, v in entry.items() if k != "height_m"})

@@ -32,6 +32,11 @@ class FitData:
         n_drops: drops behind each record.
         lowpass_Hz: cutoff of the causal 4th-order Butterworth measuring chain the records
             went through (applied to the predictions too), or None (no filter).
+        conditioning: one dict per recording read (before averaging): ``source``,
+            ``height_m``, ``rate_Hz`` and what conditioning did to it (``Recording.conditioning``:
+            polarity, drift, hum, offset, the impact kept and the others cut, the window).
+        excluded: one dict per recording left out (``source``, ``height_m``, ``reason``),
+            e.g. a clipped file loaded with ``strict=False``.
     """
 
     sources: tuple
@@ -42,6 +47,8 @@ class FitData:
     noise_rms_N: np.ndarray
     n_drops: np.ndarray
     lowpass_Hz: float | None
+    conditioning: tuple = ()
+    excluded: tuple = ()
 
     @property
     def n_records(self) -> int:
@@ -63,28 +70,48 @@ class FitData:
     def replace(self, **changes) -> FitData:
         return dataclasses.replace(self, **changes)
 
+    def conditioning_report(self) -> str:
+        """What conditioning did to each recording, and the ones left out (text, a line each)."""
+        from ..data import describe_conditioning
 
-def load_data(paths_or_dir, *, lowpass_Hz="auto", **load_kwargs):
+        lines = [f"  {c['source']} ({c['height_m']:g} m): {describe_conditioning(c)}" for c in self.conditioning]
+        lines += [f"  {e['source']}: EXCLUDED: {e['reason']}" for e in self.excluded]
+        return "\n".join(["conditioning:"] + lines)
+
+
+def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_kwargs):
     """Read recordings with ``rbjax.data.load``; resolve the measuring chain's low-pass.
 
     ``lowpass_Hz="auto"``: the cutoff the recordings declare (all equal), else, for the
     shipped emulated recordings (``rbjax.data.examples_dir()``), their documented 1250 Hz;
     else none. A number or None overrides.
+
+    ``strict=False`` (the default): a clipped file is returned as ``rbjax.data.Excluded``
+    with its reason (:func:`prepare_data` leaves it out and reports it); ``strict=True``:
+    it is refused (``rbjax.data.ClippedRecordError``).
     """
     from .. import data
 
     items = [paths_or_dir] if isinstance(paths_or_dir, (str, Path)) else list(paths_or_dir)
-    recs = data.load(items, **load_kwargs)
+    recs = data.load(items, strict=strict, **load_kwargs)
     if lowpass_Hz == "auto":
-        declared = {r.lowpass_Hz for r in recs}
+        declared = {r.lowpass_Hz for r in recs if isinstance(r, data.Recording)}
         if declared == {None}:
             examples = data.examples_dir().resolve()
             files = [Path(p).resolve() for p in items]
             inside = all(p == examples or examples in p.parents for p in files)
             if inside:
-                recs = [r.replace(lowpass_Hz=data.EXAMPLES_LOWPASS_HZ) for r in recs]
+                return _with_lowpass(recs, data.EXAMPLES_LOWPASS_HZ)
         return recs
-    return [r.replace(lowpass_Hz=None if lowpass_Hz is None else float(lowpass_Hz)) for r in recs]
+    return _with_lowpass(recs, lowpass_Hz)
+
+
+def _with_lowpass(recs, lowpass_Hz):
+    """The recordings with the chain's cutoff set (excluded entries as they are)."""
+    from ..data import Recording
+
+    cutoff = None if lowpass_Hz is None else float(lowpass_Hz)
+    return [r.replace(lowpass_Hz=cutoff) if isinstance(r, Recording) else r for r in recs]
 
 
 def prepare_data(
@@ -97,8 +124,12 @@ def prepare_data(
 ) -> FitData:
     """Condition recordings for fitting (``rbjax.data.condition``) and stack them.
 
-    Each record keeps ``window_s`` seconds starting ``pre_onset_s`` before its onset
-    (baseline removed, sub-sample onset alignment). With ``average=True`` the drops of one
+    Each record is first mended (``rbjax.data.clean``: inverted sign, drift, mains hum),
+    then keeps ``window_s`` seconds starting ``pre_onset_s`` before its first impact's
+    onset (baseline removed, sub-sample onset alignment; a rebound is cut and reported);
+    what was done to each is in ``FitData.conditioning``. ``rbjax.data.Excluded`` entries
+    (clipped files read with ``strict=False``) are left out and listed in
+    ``FitData.excluded``. With ``average=True`` the drops of one
     height are averaged coherently in the frequency domain (``rbjax.data.average``, the
     paper's §3 averaging), one record per height; else every drop is a record.
 
@@ -116,9 +147,12 @@ def prepare_data(
     else:
         recs = list(recordings)
         if lowpass_Hz != "auto":
-            recs = [r.replace(lowpass_Hz=None if lowpass_Hz is None else float(lowpass_Hz)) for r in recs]
+            recs = _with_lowpass(recs, lowpass_Hz)
+    excluded = tuple(r.to_dict() for r in recs if isinstance(r, data.Excluded))
+    recs = [r for r in recs if not isinstance(r, data.Excluded)]
     if not recs:
-        raise data.DataError("no recordings to fit")
+        left_out = "; ".join(f"{e['source']}: {e['reason']}" for e in excluded)
+        raise data.DataError("no recordings to fit" + (f": every one was excluded ({left_out})" if excluded else ""))
     _check_positive("window_s", window_s)
     _check_positive("pre_onset_s", pre_onset_s)
     for r in recs:
@@ -129,8 +163,12 @@ def prepare_data(
         listing = ", ".join(f"{r.source}: {r.lowpass_Hz}" for r in recs)
         raise data.DataError(f"recordings declare different measuring-chain low-passes ({listing})")
     cutoff = cutoffs.pop()
-    noise = {id(r): r.noise_rms_N for r in recs}
-    conditioned = [(data.condition(r, window_s=window_s, pre_onset_s=pre_onset_s), noise[id(r)]) for r in recs]
+    cleaned = [data.clean(r) for r in recs]
+    conditioned = [(data.condition(r, window_s=window_s, pre_onset_s=pre_onset_s), r.noise_rms_N) for r in cleaned]
+    log = tuple(
+        {"source": rec.source, "height_m": rec.height_m, "rate_Hz": rec.rate_Hz, **rec.conditioning}
+        for rec, _ in conditioned
+    )
     rows = []
     if average:
         groups: dict[float, list] = {}
@@ -156,6 +194,8 @@ def prepare_data(
         noise_rms_N=np.array([r[3] for r in rows], dtype=float),
         n_drops=np.array([r[4] for r in rows], dtype=int),
         lowpass_Hz=cutoff,
+        conditioning=log,
+        excluded=excluded,
     )
 
 
