@@ -23,24 +23,26 @@ RECORD_S = 0.06
 CONTACT_START_S = 0.010
 
 
-def sampled_force(ref, tau_s):
+def sampled_force(ref, tau_s, rate_Hz=RATE_HZ):
     """Point samples of the reference floor force; the sample whose interval holds the first
     contact takes the in-contact fraction times the force at the in-contact midpoint."""
-    half = 0.5 / RATE_HZ
-    inside = np.clip((tau_s + half) * RATE_HZ, 0.0, 1.0)
+    half = 0.5 / rate_Hz
+    inside = np.clip((tau_s + half) * rate_Hz, 0.0, 1.0)
     mid = 0.5 * (np.maximum(tau_s - half, 0.0) + tau_s + half)
     return inside * ref.force_N(np.maximum(mid, 0.0))
 
 
-def reference_records(ball, damping, blocked_force, starts_s, noise_N=0.0, seed=0):
-    """Measured-like records (no chain applied yet is not an option: always filtered)."""
+def reference_records(ball, damping, blocked_force, starts_s, noise_N=0.0, seed=0, *, rate_Hz=RATE_HZ, record_s=RECORD_S):
+    """Measured-like records (no chain applied yet is not an option: always filtered), sampled
+    at ``rate_Hz`` (the chain's Butterworth designed at that rate), ``record_s`` long."""
     rng = np.random.default_rng(seed)
-    t = np.arange(int(round(RECORD_S * RATE_HZ))) / RATE_HZ
+    sos = SOS if rate_Hz == RATE_HZ else scipy.signal.butter(4, CUTOFF_HZ, fs=rate_Hz, output="sos")
+    t = np.arange(int(round(record_s * rate_Hz))) / rate_Hz
     out = []
     for h, t0 in zip(HEIGHTS_M, starts_s):
         ref = reference_impact(h, ball, damping=damping, blocked_force=blocked_force, rtol=1e-11)
-        force = sampled_force(ref, t - t0) + rng.normal(0.0, noise_N, t.size)
-        out.append(scipy.signal.sosfilt(SOS, force))
+        force = sampled_force(ref, t - t0, rate_Hz) + rng.normal(0.0, noise_N, t.size)
+        out.append(scipy.signal.sosfilt(sos, force))
     return t, out
 
 
@@ -66,3 +68,39 @@ def central_difference(reference, params: dict, shifts, name: str):
         return (reference(params, up) - reference(params, down)) / (2 * step)
     step = 1e-4 * params[name]
     return (reference({**params, name: params[name] + step}, shifts) - reference({**params, name: params[name] - step}, shifts)) / (2 * step)
+
+
+#: The drops behind the fault tests (tests/data/test_faults.py, tests/fit/test_fit_faults.py):
+#: Kelvin–Voigt damping, the momentum blocked force, 1 s records as a laboratory keeps them.
+FAULT_BALL_E_PA = 1.9e6
+FAULT_DAMPING_NS_PER_M = 40.0
+FAULT_START_S = 0.1
+FAULT_RECORD_S = 1.0
+
+
+def long_records(rate_Hz=RATE_HZ, seed=3):
+    """(t, forces) of the six drops, 1 s long, contact at 0.1 s (+ a fraction of a sample),
+    noise of the same density at every rate (0.8 N per sample at 44.1 kHz)."""
+    from rbjax import JIS_RUBBER_BALL, KelvinVoigt
+
+    ball = JIS_RUBBER_BALL.replace(youngs_Pa=FAULT_BALL_E_PA)
+    starts = FAULT_START_S + np.random.default_rng(seed + 100).uniform(0, 1 / rate_Hz, len(HEIGHTS_M))
+    noise = NOISE_N * np.sqrt(rate_Hz / RATE_HZ)
+    return reference_records(ball, KelvinVoigt(FAULT_DAMPING_NS_PER_M), "momentum", starts, noise, seed,
+                             rate_Hz=rate_Hz, record_s=FAULT_RECORD_S)
+
+
+def with_faults(t, force, *, offset_N=0.0, drift_N_per_s=0.0, hum=None, inverted=False, rebound_after_s=None):
+    """A clean record with the faults of a real one added after the measuring chain.
+
+    hum: (frequency_Hz, amplitude_N): the fundamental, plus a third harmonic of a quarter of
+    its amplitude; rebound_after_s: a second impact, half the first, that much later."""
+    x = np.array(force, dtype=float)
+    if rebound_after_s is not None:
+        k = int(round(rebound_after_s / (t[1] - t[0])))
+        x[k:] += 0.5 * force[: x.size - k]
+    x += offset_N + drift_N_per_s * t
+    if hum is not None:
+        f, a = hum
+        x += a * np.sin(2 * np.pi * f * t + 0.4) + 0.25 * a * np.sin(2 * np.pi * 3 * f * t + 1.1)
+    return -x if inverted else x

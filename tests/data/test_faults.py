@@ -1,0 +1,147 @@
+"""Faults of real force records (rbjax.data.clean, condition, load): each one built from a clean
+simulated 1 s record (tests/synthetic_records.py) with a known, injected fault, and the
+outcome checked against what was injected: the fault is mended and logged (the conditioned
+window then matches the clean one's to a small fraction of the noise), or refused by name.
+The fit on a set of such records is tests/fit/test_fit_faults.py."""
+
+from __future__ import annotations
+
+import wave
+
+import numpy as np
+import pytest
+
+import rbjax.data as D
+
+from synthetic_records import CUTOFF_HZ, FAULT_START_S, HEIGHTS_M, RATE_HZ, long_records, with_faults
+
+H = 4  # the 1.0 m drop
+WINDOW = {"window_s": 0.03, "pre_onset_s": 0.003}
+
+
+@pytest.fixture(scope="module")
+def drop():
+    t, forces = long_records()
+    rec = D.Recording(source="h100.csv", height_m=HEIGHTS_M[H], rate_Hz=RATE_HZ, force_N=forces[H], lowpass_Hz=CUTOFF_HZ)
+    return t, rec, D.condition(D.clean(rec), **WINDOW)
+
+
+def conditioned(rec, force):
+    return D.condition(D.clean(rec.replace(force_N=force)), **WINDOW)
+
+
+def test_a_clean_record_is_left_as_it_is(drop):
+    _, rec, clean = drop
+    out = D.clean(rec)
+    np.testing.assert_array_equal(out.force_N, rec.force_N)
+    log = clean.conditioning
+    assert log["polarity"] == "as recorded" and log["drift_N_per_s"] is None and log["hum"] is None
+    assert log["further_impacts"] == [] and abs(log["offset_N"]) < 0.05
+    # and so are the shipped emulated recordings (noise and all)
+    for r in D.load_examples():
+        np.testing.assert_array_equal(D.clean(r).force_N, r.force_N)
+
+
+def test_offset_and_drift_are_removed_and_logged(drop):
+    t, rec, clean = drop
+    out = conditioned(rec, with_faults(t, rec.force_N, offset_N=25.0, drift_N_per_s=12.0))
+    log = out.conditioning
+    assert log["drift_N_per_s"] == pytest.approx(12.0, rel=0.01)
+    # the drift is removed as a line through zero at the impact: the offset there remains
+    assert log["offset_N"] == pytest.approx(25.0 + 12.0 * FAULT_START_S + clean.conditioning["offset_N"], abs=0.05)
+    assert np.abs(out.force_N - clean.force_N).max() < 0.01  # noise rms ~0.19 N
+
+
+@pytest.mark.parametrize("mains_Hz, amplitude_N", [(50.02, 3.0), (59.97, 4.0)])
+def test_mains_hum_is_removed_and_logged(drop, mains_Hz, amplitude_N):
+    t, rec, clean = drop
+    out = conditioned(rec, with_faults(t, rec.force_N, hum=(mains_Hz, amplitude_N)))
+    hum = out.conditioning["hum"]
+    assert hum["frequency_Hz"] == pytest.approx(mains_Hz, abs=0.005)
+    assert hum["amplitude_N"] == pytest.approx(amplitude_N, rel=0.02)
+    assert out.conditioning["drift_N_per_s"] is None
+    resid = out.force_N - clean.force_N
+    assert np.sqrt(np.mean(resid**2)) < 0.03 and np.abs(resid).max() < 0.08  # of a 3-4 N hum
+
+
+def test_inverted_sign_is_flipped_with_a_warning(drop):
+    t, rec, clean = drop
+    with pytest.warns(D.DataWarning, match="inverted sign; flipped"):
+        out = conditioned(rec, with_faults(t, rec.force_N, inverted=True))
+    assert out.conditioning["polarity"] == "inverted: sign flipped"
+    np.testing.assert_array_equal(out.force_N, clean.force_N)
+
+
+def test_the_rebound_is_cut_and_reported(drop):
+    t, rec, clean = drop
+    with pytest.warns(D.DataWarning, match="1 further impact"):
+        out = conditioned(rec, with_faults(t, rec.force_N, rebound_after_s=0.7))
+    (rebound,) = out.conditioning["further_impacts"]
+    first = clean.conditioning["impact_s"]
+    assert out.conditioning["impact_s"] == first
+    assert rebound["time_s"] == pytest.approx(first + 0.7, abs=2e-3)
+    assert rebound["peak_N"] == pytest.approx(0.5 * rec.force_N.max(), rel=0.02)
+    np.testing.assert_allclose(out.force_N, clean.force_N, atol=1e-9)
+    assert "0.8" in D.describe_conditioning(out.conditioning) and "cut" in D.describe_conditioning(out.conditioning)
+
+
+def test_every_fault_at_once(drop):
+    t, rec, clean = drop
+    faulty = with_faults(t, rec.force_N, offset_N=-40.0, drift_N_per_s=-8.0, hum=(50.0, 2.5), inverted=True, rebound_after_s=0.7)
+    with pytest.warns(D.DataWarning):
+        out = conditioned(rec, faulty)
+    log = out.conditioning
+    assert log["polarity"] != "as recorded" and log["hum"] and len(log["further_impacts"]) == 1
+    assert log["drift_N_per_s"] == pytest.approx(-8.0, rel=0.02)
+    assert np.sqrt(np.mean((out.force_N - clean.force_N) ** 2)) < 0.03
+
+
+def test_cut_off_and_no_impact_records_are_named_errors(drop):
+    t, rec, _ = drop
+    cut = rec.replace(force_N=rec.force_N[: int((FAULT_START_S + 0.008) * RATE_HZ)])  # mid-contact
+    with pytest.raises(D.RecordCutOffError, match=r"h100\.csv: the impact at 0\.1\d+ s runs off the end"):
+        D.condition(D.clean(cut), **WINDOW)
+    late = rec.replace(force_N=rec.force_N[: int((FAULT_START_S + 0.025) * RATE_HZ)])  # contact over, window not
+    with pytest.raises(D.RecordCutOffError, match="would run past the end of the record"):
+        D.condition(D.clean(late), **WINDOW)
+    quiet = rec.replace(force_N=rec.force_N[: int(0.09 * RATE_HZ)])  # the pre-trigger only
+    with pytest.raises(D.NoImpactError, match=r"h100\.csv: no impact found"):
+        D.condition(D.clean(quiet), **WINDOW)
+    assert issubclass(D.RecordCutOffError, D.DataError) and issubclass(D.NoImpactError, D.DataError)
+
+
+def write_int_wav(path, force_N, bits, full_scale_N, rate=RATE_HZ):
+    """A PCM WAV of ``bits`` written by the standard library's wave module."""
+    full = 2 ** (bits - 1)
+    codes = np.clip(np.round(force_N / full_scale_N * full), -full, full - 1).astype(np.int64)
+    raw = codes.astype("<i4").view(np.uint8).reshape(-1, 4)[:, : bits // 8].tobytes()
+    with wave.open(str(path), "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(bits // 8)
+        w.setframerate(int(rate))
+        w.writeframes(raw)
+
+
+@pytest.mark.parametrize("bits", [16, 24, 32])
+def test_integer_wav_with_a_calibration(tmp_path, drop, bits):
+    _, rec, _ = drop
+    p = tmp_path / f"h100_{bits}bit.wav"
+    write_int_wav(p, rec.force_N, bits, 5000.0)
+    back = D.load(p, calibration_N_per_FS=5000.0)[0]
+    assert back.rate_Hz == RATE_HZ and back.height_m == 1.0
+    step = 5000.0 / 2 ** (bits - 1)
+    np.testing.assert_allclose(back.force_N, rec.force_N, rtol=0, atol=0.5 * step * (1 + 1e-9))
+    with pytest.raises(D.DataError, match="integer PCM WAV: pass calibration_N_per_FS="):
+        D.load(p)
+
+
+def test_a_clipped_record_among_good_ones(tmp_path, drop):
+    _, rec, _ = drop
+    write_int_wav(tmp_path / "h100_a.wav", rec.force_N, 16, 5000.0)
+    write_int_wav(tmp_path / "h100_b.wav", rec.force_N, 16, 1000.0)  # the peak (1.6 kN) is off the scale
+    (tmp_path / "manifest.csv").write_text("file,height_m,calibration_N_per_FS\nh100_a.wav,1.0,5000\nh100_b.wav,1.0,1000\n")
+    with pytest.raises(D.ClippedRecordError, match=r"h100_b\.wav: clipped: \d+ sample\(s\) at full scale"):
+        D.load(tmp_path)
+    good, left_out = D.load(tmp_path, strict=False)
+    assert isinstance(good, D.Recording) and good.source == "h100_a.wav"
+    assert isinstance(left_out, D.Excluded) and left_out.source == "h100_b.wav" and "clipped" in left_out.reason
