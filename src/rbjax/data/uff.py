@@ -92,7 +92,10 @@ def read_uff(
     found = [s for s in sets if s.get("type") == 58]
     if not found:
         types = sorted({int(s.get("type", 0)) for s in sets})
-        raise DataError(f"{source}: no dataset 58 (a function at a node) in this file (dataset types found: {types})")
+        raise DataError(
+            f"{source}: no dataset 58 (a function at a node): not a Universal File Format file of time "
+            f"responses (dataset types found: {types})"
+        )
     notes: list[str] = []
     channels = [_channel(ds, source, notes) for ds in found]
     ch = pick_channel(channels, channel, source)
