@@ -6,6 +6,8 @@ the records then pass through rbjax.data like measured files."""
 
 from __future__ import annotations
 
+import wave
+
 import numpy as np
 import scipy.signal
 
@@ -104,3 +106,54 @@ def with_faults(t, force, *, offset_N=0.0, drift_N_per_s=0.0, hum=None, inverted
         f, a = hum
         x += a * np.sin(2 * np.pi * f * t + 0.4) + 0.25 * a * np.sin(2 * np.pi * 3 * f * t + 1.1)
     return -x if inverted else x
+
+
+# ----------------------------------------------------------------------------------------------
+# the records written as the files laboratories export, each by its own library
+
+
+def write_int_wav(path, force_N, bits, full_scale_N, rate=RATE_HZ):
+    """A PCM WAV of ``bits`` written by the standard library's wave module."""
+    full = 2 ** (bits - 1)
+    codes = np.clip(np.round(force_N / full_scale_N * full), -full, full - 1).astype(np.int64)
+    raw = codes.astype("<i4").view(np.uint8).reshape(-1, 4)[:, : bits // 8].tobytes()
+    with wave.open(str(path), "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(bits // 8)
+        w.setframerate(int(rate))
+        w.writeframes(raw)
+
+
+def write_mat_v73(path, variables):
+    """An HDF5 file laid out as MATLAB's v7.3 (512-byte user block with the MAT header;
+    arrays stored transposed, MATLAB being column-major)."""
+    import h5py
+
+    with h5py.File(path, "w", userblock_size=512) as f:
+        for name, value in variables.items():
+            f[name] = np.asarray(value).T
+            f[name].attrs["MATLAB_class"] = np.bytes_("double")
+    with open(path, "r+b") as fh:
+        fh.write(b"MATLAB 7.3 MAT-file, written by the rbjax tests".ljust(116, b" "))
+
+
+def write_uff(path, channels):
+    """Dataset 58 time responses, one per (id1, samples, unit), written by pyuff (ASCII)."""
+    import pyuff
+
+    t = np.arange(len(channels[0][1])) / RATE_HZ
+    sets = [
+        dict(type=58, binary=0, func_type=1, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3,
+             orddenom_spec_data_type=0, abscissa_spacing=1, ordinate_axis_units_lab=unit, data=x, x=t)
+        for name, x, unit in channels
+    ]
+    pyuff.UFF(str(path)).write_sets(sets, mode="overwrite")
+
+
+def write_tdms(path, channels, group="plate"):
+    """One group of channels (name, samples, properties), written by npTDMS."""
+    from nptdms import ChannelObject, GroupObject, TdmsWriter
+
+    objs = [GroupObject(group)] + [ChannelObject(group, n, x, properties=p) for n, x, p in channels]
+    with TdmsWriter(str(path)) as w:
+        w.write_segment(objs)

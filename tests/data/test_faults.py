@@ -6,14 +6,20 @@ The fit on a set of such records is tests/fit/test_fit_faults.py."""
 
 from __future__ import annotations
 
-import wave
-
 import numpy as np
 import pytest
 
 import rbjax.data as D
 
-from synthetic_records import CUTOFF_HZ, FAULT_START_S, HEIGHTS_M, RATE_HZ, long_records, with_faults
+from synthetic_records import (
+    CUTOFF_HZ,
+    FAULT_START_S,
+    HEIGHTS_M,
+    RATE_HZ,
+    long_records,
+    with_faults,
+    write_int_wav,
+)
 
 H = 4  # the 1.0 m drop
 WINDOW = {"window_s": 0.03, "pre_onset_s": 0.003}
@@ -108,18 +114,6 @@ def test_cut_off_and_no_impact_records_are_named_errors(drop):
     with pytest.raises(D.NoImpactError, match=r"h100\.csv: no impact found"):
         D.condition(D.clean(quiet), **WINDOW)
     assert issubclass(D.RecordCutOffError, D.DataError) and issubclass(D.NoImpactError, D.DataError)
-
-
-def write_int_wav(path, force_N, bits, full_scale_N, rate=RATE_HZ):
-    """A PCM WAV of ``bits`` written by the standard library's wave module."""
-    full = 2 ** (bits - 1)
-    codes = np.clip(np.round(force_N / full_scale_N * full), -full, full - 1).astype(np.int64)
-    raw = codes.astype("<i4").view(np.uint8).reshape(-1, 4)[:, : bits // 8].tobytes()
-    with wave.open(str(path), "wb") as w:
-        w.setnchannels(1)
-        w.setsampwidth(bits // 8)
-        w.setframerate(int(rate))
-        w.writeframes(raw)
 
 
 @pytest.mark.parametrize("bits", [16, 24, 32])

@@ -7,17 +7,14 @@ from __future__ import annotations
 
 import importlib
 
-import h5py
 import numpy as np
 import pytest
-import pyuff
 import scipy.io
-from nptdms import ChannelObject, GroupObject, TdmsWriter
 
 import rbjax.data as D
 from rbjax.fit import prepare_data
 
-from synthetic_records import HEIGHTS_M, RATE_HZ, long_records
+from synthetic_records import HEIGHTS_M, RATE_HZ, long_records, write_mat_v73, write_tdms, write_uff
 
 N = 8820  # 0.2 s of each 1 s drop: the impact at 0.1 s and its surroundings
 
@@ -30,35 +27,6 @@ def forces():
 def write_csv(path, x):
     t = np.arange(x.size) / RATE_HZ
     path.write_text("time_s,force_N\n" + "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), x.tolist())) + "\n")
-
-
-def write_mat_v73(path, variables):
-    """An HDF5 file laid out as MATLAB's v7.3 (512-byte user block with the MAT header;
-    arrays stored transposed, MATLAB being column-major)."""
-    with h5py.File(path, "w", userblock_size=512) as f:
-        for name, value in variables.items():
-            f[name] = np.asarray(value).T
-            f[name].attrs["MATLAB_class"] = np.bytes_("double")
-    with open(path, "r+b") as fh:
-        fh.write(b"MATLAB 7.3 MAT-file, written by the rbjax tests".ljust(116, b" "))
-
-
-def write_uff(path, channels):
-    """Dataset 58 time responses, one per (id1, samples, unit), written by pyuff (ASCII)."""
-    t = np.arange(len(channels[0][1])) / RATE_HZ
-    sets = [
-        dict(type=58, binary=0, func_type=1, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3,
-             orddenom_spec_data_type=0, abscissa_spacing=1, ordinate_axis_units_lab=unit, data=x, x=t)
-        for name, x, unit in channels
-    ]
-    pyuff.UFF(str(path)).write_sets(sets, mode="overwrite")
-
-
-def write_tdms(path, channels, group="plate"):
-    """One group of channels (name, samples, properties), written by npTDMS."""
-    objs = [GroupObject(group)] + [ChannelObject(group, n, x, properties=p) for n, x, p in channels]
-    with TdmsWriter(str(path)) as w:
-        w.write_segment(objs)
 
 
 WRITERS = {

@@ -1,0 +1,154 @@
+"""The fit on real-looking recordings (rbjax.fit, rbjax fit): the six simulated 1 s drops of
+tests/synthetic_records.py fitted clean, then written as the files laboratories export with
+the faults real force plates produce, one set of files holding every fault class, and fitted
+again: E within 1 % and the damping within 2σ of the clean fit, what conditioning did in the
+report, the clipped file excluded (refused with --strict). The same drops recorded at 48 and
+25.6 kHz condition to the records of 44.1 kHz (a fit at another rate compiles another
+program, ~25 s here: measured by benchmarks/other_rates.py instead, figures in the README).
+
+Fits are costly: the clean and the faulty set share one compiled program (same shapes).
+The per-fault checks without a fit are tests/data/test_faults.py.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+import scipy.io
+
+import rbjax.data as D
+from rbjax.fit import fit, load_data, prepare_data, record_features
+
+from cli_runner import run_cli
+from synthetic_records import (
+    CUTOFF_HZ,
+    FAULT_BALL_E_PA,
+    FAULT_DAMPING_NS_PER_M,
+    HEIGHTS_M,
+    RATE_HZ,
+    long_records,
+    with_faults,
+    write_int_wav,
+    write_tdms,
+    write_uff,
+)
+
+MODEL = {"model": "kelvin-voigt", "blocked_force": "momentum", "progress": False}
+
+
+def recordings(forces, rate_Hz):
+    return [
+        D.Recording(source=f"h{int(round(h * 100)):03d}.csv", height_m=h, rate_Hz=rate_Hz, force_N=f, lowpass_Hz=CUTOFF_HZ)
+        for h, f in zip(HEIGHTS_M, forces)
+    ]
+
+
+def write_faulty_set(folder, t, forces):
+    """Each drop in another format with other faults; a clipped copy of the 1.6 m drop."""
+    x = dict(zip(HEIGHTS_M, forces))
+    write_int_wav(folder / "h010.wav", with_faults(t, x[0.1], offset_N=25.0, drift_N_per_s=12.0), 16, 5000.0)
+    write_int_wav(folder / "h020.wav", with_faults(t, x[0.2], hum=(50.02, 3.0)), 24, 5000.0)
+    write_int_wav(folder / "h040.wav", with_faults(t, x[0.4], inverted=True), 32, 5000.0)
+    scipy.io.savemat(folder / "h080.mat", {"fs": RATE_HZ, "force_N": with_faults(t, x[0.8], offset_N=-10.0, hum=(59.97, 4.0))})
+    write_uff(folder / "h100.uff", [("force", with_faults(t, x[1.0], hum=(49.98, 2.0), rebound_after_s=0.7), "N")])
+    everything = with_faults(t, x[1.6], offset_N=-40.0, drift_N_per_s=-8.0, hum=(60.0, 2.5), inverted=True)
+    write_tdms(folder / "h160.tdms", [("force", everything, {"wf_increment": 1 / RATE_HZ, "unit_string": "N"})])
+    write_int_wav(folder / "h160_clipped.wav", x[1.6], 16, 1000.0)  # the 2 kN peak is off the 1 kN scale
+    (folder / "manifest.csv").write_text(
+        "file,height_m,calibration_N_per_FS\n"
+        + "".join(f"{n},{h},{c}\n" for n, h, c in [("h010.wav", 0.1, 5000), ("h020.wav", 0.2, 5000), ("h040.wav", 0.4, 5000),
+                                                  ("h160_clipped.wav", 1.6, 1000)])
+    )
+
+
+@pytest.fixture(scope="module")
+def drops():
+    return long_records()
+
+
+@pytest.fixture(scope="module")
+def clean_fit(drops):
+    return fit(prepare_data(recordings(drops[1], RATE_HZ)), **MODEL)
+
+
+@pytest.fixture(scope="module")
+def faulty(drops, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("faulty")
+    write_faulty_set(folder, *drops)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", D.DataWarning)  # the flips and the rebound (checked in tests/data)
+        data = prepare_data(load_data(folder, lowpass_Hz=CUTOFF_HZ))
+    return folder, data, fit(data, **MODEL)
+
+
+def assert_same_fit(result, reference):
+    assert result.converged, result.message
+    e, e0 = result.parameters["youngs_Pa"].value, reference.parameters["youngs_Pa"].value
+    assert abs(e - e0) <= 0.01 * e0
+    c, c0 = result.parameters["damping_Ns_per_m"].value, reference.parameters["damping_Ns_per_m"]
+    assert abs(c - c0.value) <= 2 * c0.std, (c, c0)
+
+
+def test_the_clean_fit_recovers_the_simulated_drops(clean_fit):
+    # the reference the faulty fits are held to is itself right
+    assert clean_fit.parameters["youngs_Pa"].value == pytest.approx(FAULT_BALL_E_PA, rel=1e-3)
+    assert clean_fit.parameters["damping_Ns_per_m"].value == pytest.approx(FAULT_DAMPING_NS_PER_M, rel=1e-3)
+
+
+def test_every_fault_class_at_once_gives_the_clean_fit(faulty, clean_fit):
+    _, data, result = faulty
+    assert_same_fit(result, clean_fit)
+
+
+def test_the_report_says_what_conditioning_did(faulty):
+    _, data, _ = faulty
+    log = {c["source"]: c for c in data.conditioning}
+    assert sorted(log) == ["h010.wav", "h020.wav", "h040.wav", "h080.mat", "h100.uff", "h160.tdms"]
+    assert log["h010.wav"]["drift_N_per_s"] == pytest.approx(12.0, rel=0.02)
+    assert log["h010.wav"]["offset_N"] == pytest.approx(25.0 + 12.0 * 0.1, abs=0.2)
+    assert log["h020.wav"]["hum"]["frequency_Hz"] == pytest.approx(50.02, abs=0.005)
+    assert log["h040.wav"]["polarity"] == "inverted: sign flipped"
+    assert log["h080.mat"]["hum"]["frequency_Hz"] == pytest.approx(59.97, abs=0.005)
+    assert log["h080.mat"]["offset_N"] == pytest.approx(-10.0, abs=0.2)
+    assert [round(r["time_s"], 2) for r in log["h100.uff"]["further_impacts"]] == [0.8]
+    tdms = log["h160.tdms"]
+    # flipped first, so the drift and offset are those injected before the sign was inverted
+    assert tdms["polarity"] != "as recorded" and tdms["hum"] and tdms["drift_N_per_s"] == pytest.approx(-8.0, rel=0.02)
+    assert all(c["rate_Hz"] == RATE_HZ for c in data.conditioning)
+    (excluded,) = data.excluded
+    assert excluded["source"] == "h160_clipped.wav" and "clipped" in excluded["reason"]
+    text = data.conditioning_report()
+    assert "h160_clipped.wav: EXCLUDED: h160_clipped.wav: clipped" in text
+    assert "h100.uff (1 m): 44100 Hz; sign as recorded" in text and "impact at 0.8" in text
+
+
+def test_fit_json_and_text_report_hold_the_conditioning(faulty, tmp_path):
+    folder, data, result = faulty
+    argv = ["fit", str(folder), "--model", "kelvin-voigt", "--blocked-force", "momentum", "--lowpass-hz", "1250", "--quiet"]
+    code, out, err = run_cli(argv + ["--out", str(tmp_path)])
+    assert code == 0, err
+    assert out.rstrip().endswith(data.conditioning_report())
+    d = json.loads((tmp_path / "fit.json").read_text())
+    assert d["conditioning"] == json.loads(json.dumps(list(data.conditioning)))
+    assert [e["source"] for e in d["excluded"]] == ["h160_clipped.wav"]
+    assert d["parameters"]["youngs_Pa"]["value"] == pytest.approx(result.parameters["youngs_Pa"].value, rel=1e-9)
+    # asked for strict loading, the clipped file is refused by name
+    code, out, err = run_cli(argv + ["--strict"])
+    assert code == 2 and "h160_clipped.wav: clipped" in err and out == ""
+
+
+@pytest.mark.parametrize("rate", [48_000.0, 25_600.0])
+def test_the_same_drops_at_other_rates_condition_to_the_same_records(drops, rate):
+    a = prepare_data(recordings(drops[1], RATE_HZ))
+    b = prepare_data(recordings(long_records(rate)[1], rate))
+    assert b.rate_Hz == rate and b.conditioning[0]["rate_Hz"] == rate
+    fa, fb = record_features(a.force_N, a.rate_Hz), record_features(b.force_N, b.rate_Hz)
+    # independent noise (0.19 N rms after the chain) on pulses of 0.5 to 2 kN; the octave
+    # bands above the chain's 1250 Hz cutoff (2 and 4 kHz) hold mostly noise
+    np.testing.assert_allclose(fb["peak_force_N"], fa["peak_force_N"], rtol=2e-3)
+    np.testing.assert_allclose(fb["contact_time_s"], fa["contact_time_s"], atol=2e-5)
+    np.testing.assert_allclose(fb["lfe_octave_dB"][:, :4], fa["lfe_octave_dB"][:, :4], atol=0.05)
+    np.testing.assert_allclose(fb["lfe_octave_dB"][:, 4:], fa["lfe_octave_dB"][:, 4:], atol=0.2)
