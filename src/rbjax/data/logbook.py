@@ -27,5 +27,5 @@ def describe_conditioning(log: dict) -> str:
     if log.get("impact_s") is not None:
         parts.append(f"impact at {log['impact_s']:.4f} s kept")
     for other in log.get("further_impacts") or ():
-        parts.append(f"impact at {other['time_s']:.4f} s ({other['peak_N']:.4g} N, e.g. the rebound) cut")
+        parts.append(f"further impact at {other['time_s']:.4f} s ({other['peak_N']:.4g} N: a rebound?) cut")
     return "; ".join(parts)
