@@ -12,7 +12,7 @@ import numpy as np
 
 from .columns import _FORCE_UNITS, _infer_rate
 from .errors import ClippedRecordError, DataError, MissingFormatError
-from .recording import Recording, _check_force, _check_height
+from .recording import MIN_SAMPLES, Recording, _check_force, _check_height
 from .sources import height_from_name
 
 #: The optional dependencies of the formats, installed by ``pip install 'rbjax[formats]'``.
@@ -55,7 +55,7 @@ def pick_channel(channels: list[Channel], channel: int | str | None, source: str
     """
     listing = ", ".join(f"{k}: {c.name!r}" for k, c in enumerate(channels))
     if not channels:
-        raise DataError(f"{source}: no numeric channel of at least 100 samples in this file")
+        raise DataError(f"{source}: no numeric channel of at least {MIN_SAMPLES} samples in this file")
     if channel is None:
         if len(channels) == 1:
             return channels[0]

@@ -26,20 +26,14 @@ from .tdms import read_tdms
 from .uff import read_uff
 from .wav import read_wav
 
-__all__ = ["Excluded", "READERS", "read_file", "load"]
+__all__ = ["Excluded", "SUFFIXES", "read_file", "load"]
 
-#: The reader of each file suffix.
-READERS = {
-    ".csv": read_csv,
-    ".wav": read_wav,
-    ".npy": read_npy,
-    ".mat": read_mat,
-    ".uff": read_uff,
-    ".unv": read_uff,
-    ".tdms": read_tdms,
-}
-_KNOWN = ", ".join(f"*{s}" for s in READERS)
 _ONE_CHANNEL = (".csv", ".npy")  # newtons in one channel: no channel, no calibration
+#: The formats whose channels have names, units and a time base of their own.
+_CHANNEL_READERS = {".mat": read_mat, ".uff": read_uff, ".unv": read_uff, ".tdms": read_tdms}
+#: The file suffixes :func:`read_file` and :func:`load` read.
+SUFFIXES = (*_ONE_CHANNEL, ".wav", *_CHANNEL_READERS)
+_KNOWN = ", ".join(f"*{s}" for s in SUFFIXES)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,7 +57,7 @@ def read_file(
     lowpass_Hz: float | None = None,
     channel: int | str | None = None,
 ) -> Recording:
-    """Read one recording of any known format, chosen by the file's suffix (:data:`READERS`).
+    """Read one recording of any known format, chosen by the file's suffix (:data:`SUFFIXES`).
 
     The arguments a format has no use for are refused, not ignored: a ``.csv`` or ``.npy``
     has one channel in newtons (no ``channel``, no calibration); a ``.wav``'s rate is in
@@ -71,7 +65,7 @@ def read_file(
     """
     p = Path(path)
     suf = p.suffix.lower()
-    if suf not in READERS:
+    if suf not in SUFFIXES:
         raise DataError(f"{p.name}: unknown file type {p.suffix!r}: none of the known formats ({_KNOWN})")
     if suf in _ONE_CHANNEL:
         if channel not in (None, 0):
@@ -88,8 +82,7 @@ def read_file(
         if rate_Hz is not None and abs(float(rate_Hz) - rec.rate_Hz) > 1e-4 * rec.rate_Hz:
             raise DataError(f"{p.name}: rate_Hz={rate_Hz!r} disagrees with the WAV header ({rec.rate_Hz:g} Hz)")
         return rec
-    reader = {".mat": read_mat, ".uff": read_uff, ".unv": read_uff, ".tdms": read_tdms}[suf]
-    return reader(
+    return _CHANNEL_READERS[suf](
         p, channel=channel, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, lowpass_Hz=lowpass_Hz
     )
 
@@ -178,7 +171,7 @@ def load(
     for it in items:
         p = Path(it)
         if p.is_dir():
-            found = sorted(q for q in p.iterdir() if q.is_file() and q.suffix.lower() in READERS)
+            found = sorted(q for q in p.iterdir() if q.is_file() and q.suffix.lower() in SUFFIXES)
             mf = p / "manifest.csv"
             if mf.is_file():
                 found = [q for q in found if q.name != "manifest.csv"]
