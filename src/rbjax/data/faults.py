@@ -29,8 +29,12 @@ MAINS_TOLERANCE_HZ = 0.5
 #: Harmonics of the mains frequency fitted together (1: the fundamental).
 HUM_HARMONICS = 3
 #: Hum is removed when its fundamental's amplitude exceeds this many times the rms of
-#: what remains of the quiet samples, and the quiet samples span this many periods.
+#: what remains of the quiet samples and ``HUM_SE_FACTOR`` times its own standard error
+#: (white-noise least squares; the chain's low-pass correlates the noise over ~12 samples
+#: at 44.1 kHz, hence the margin), and the quiet samples last this many periods in all
+#: (a short record's few quiet milliseconds do not determine a hum).
 HUM_FACTOR = 2.0
+HUM_SE_FACTOR = 10.0
 HUM_MIN_PERIODS = 2.0
 #: Sampling rate the frequency search thins the quiet samples to (the hum is below 200 Hz).
 SEARCH_RATE_HZ = 2000.0
@@ -79,6 +83,13 @@ def _fit(base: np.ndarray, y: np.ndarray, extra: np.ndarray | None = None):
     return coef, float(np.sqrt(np.mean(resid**2)))
 
 
+def _amplitude_se(base, t, f, rms) -> float:
+    """Standard error of the fundamental's amplitude (white noise of ``rms``)."""
+    a = np.hstack([base, _hum_columns(t, f)])
+    cov = np.linalg.pinv(a.T @ a) * rms**2
+    return float(np.sqrt(0.5 * (cov[2, 2] + cov[3, 3])))
+
+
 def _best_hum(base, y, t, mains):
     """(frequency, coefficients, residual rms) of the best hum near any mains frequency.
 
@@ -124,9 +135,9 @@ def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None 
        ``mains_Hz`` searched within ±0.5 Hz, a hum of that frequency and its 2nd and 3rd
        harmonics are fitted by least squares to the quiet samples (5 ms before to 20 ms
        after every impact left out). The hum is removed when its fundamental's amplitude
-       exceeds twice the rms of the quiet samples about the fit, over at least two
-       periods; the drift when the line changes by more than three times that rms over the
-       record. The drift is removed as a line through zero at the first impact, so that
+       exceeds twice the rms of the quiet samples about the fit and ten times its
+       standard error, the quiet samples lasting two periods at least; the drift when
+       the line changes by more than three times that rms over the record. The drift is removed as a line through zero at the first impact, so that
        the offset there is left to :func:`~rbjax.data.condition`'s pre-trigger baseline.
 
     ``Recording.log`` gains ``polarity`` (``"as recorded"`` or ``"inverted: sign
@@ -162,12 +173,12 @@ def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None 
     drift = hum = None
     if base is not None:
         coef, rms = _fit(base, yq)
-        span_s = (tq[-1] - tq[0]) if tq.size else 0.0
-        mains = [f for f in mains_Hz if span_s * (f - MAINS_TOLERANCE_HZ) >= HUM_MIN_PERIODS]
+        quiet_s = tq.size / rate
+        mains = [f for f in mains_Hz if quiet_s * (f - MAINS_TOLERANCE_HZ) >= HUM_MIN_PERIODS]
         if mains:
             f, hcoef, hrms = _best_hum(base, yq, tq, mains)
             amplitude = float(np.hypot(hcoef[2], hcoef[3]))
-            if amplitude > HUM_FACTOR * hrms:
+            if amplitude > max(HUM_FACTOR * hrms, HUM_SE_FACTOR * _amplitude_se(base, tq, f, hrms)):
                 x = x - _hum_columns(t, f) @ hcoef[2:]
                 coef, rms = hcoef[:2], hrms
                 hum = {"frequency_Hz": f, "amplitude_N": amplitude}
