@@ -38,8 +38,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._x64 import require_x64
 from .._validate import check_range, is_traced
+from .._x64 import require_x64
 from .band_kernel import SHORT_FFT_OVERSAMPLING, SHORT_PATH_MIN_RATIO, band_kernel, fast_length
 from .bands import (
     OCTAVE_BANDS,
