@@ -6,11 +6,12 @@ README), so this is a test of prediction, not of recovery: heights 0.2 m and 0.8
 out of the fit and compared with the unfitted paper model (JIS ball, E = 1.6 MPa, adiabatic
 gas, paper blocked force) in contact time, peak force and octave-band L_FE.
 
-Two fitted models are checked: hunt-crossley/momentum, the one `rbjax select` recommends on
-these data (fewest parameters within a standard error of the best held-out history error),
-and zener/momentum, the best held-out history error. Measured (README): the recommended model
-beats the paper's in history, peak force and every tolerance band but predicts the contact
-time ~3 % long (the paper's unfitted model: 1–2 %); zener/momentum beats it in all of them.
+Two fitted models are checked, each claim of README "Fitting measured force histories" (the
+paragraph "Where they fall short" below the held-out table) at its printed figure:
+hunt-crossley/momentum cuts the history error to 0.54× and 0.22× the paper model's, brings every
+tolerance band within 2.2 dB (the paper's model: 6–9 dB off at 500 Hz) but predicts the contact
+time ~3 % long (the paper's unfitted model: 1–2 %); zener/momentum predicts the contact time
+within 0.6 % but the peak force 2–5 % low; neither reproduces the 1 kHz band.
 """
 
 from __future__ import annotations
@@ -38,26 +39,41 @@ def test_only_the_held_out_heights_are_compared(comparison):
     assert set(comparison.rows) == {"hunt-crossley/momentum", "zener/momentum", "paper (unfitted)"}
 
 
-def _mean_band_error(row):
-    return float(np.mean(np.abs(row.lfe_octave_dB[TOLERANCE_BANDS])))
+def _rows(comparison, label):
+    return list(zip(comparison.rows[label], comparison.rows["paper (unfitted)"], strict=True))
 
 
 @pytest.mark.parametrize("label", ["hunt-crossley/momentum", "zener/momentum"])
 def test_fitted_models_predict_history_peak_and_bands_better_than_the_paper(comparison, label):
-    fitted = comparison.rows[label]
-    paper = comparison.rows["paper (unfitted)"]
-    assert all(r.converged for r in fitted)
-    for f, p in zip(fitted, paper):
+    assert all(r.converged for r in comparison.rows[label])
+    for f, p in _rows(comparison, label):
         assert f.height_m == p.height_m
         assert f.history_error_pct < 0.6 * p.history_error_pct, (f, p)
-        assert _mean_band_error(f) < _mean_band_error(p), (f, p)
-        # every tolerance band within 2.5 dB (the unfitted model misses 500 Hz by 6–9 dB)
-        assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.5), f
-    mean_peak = lambda rows: np.mean([abs(r.peak_force_pct) for r in rows])  # noqa: E731
-    assert mean_peak(fitted) < mean_peak(paper)
+        assert np.mean(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS])) < np.mean(np.abs(p.lfe_octave_dB[TOLERANCE_BANDS])), (f, p)
+        assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.5), f  # measured ≤ 2.3 dB
+        # README "Where they fall short": neither model reproduces the 1 kHz band (measured 4.8–11 dB off)
+        assert abs(f.lfe_octave_dB[5]) > 3.0, f
 
 
-def test_zener_also_predicts_the_contact_time_better_than_the_paper(comparison):
-    for f, p in zip(comparison.rows["zener/momentum"], comparison.rows["paper (unfitted)"]):
+def test_hunt_crossley_claims(comparison):
+    """README "Where they fall short", hunt-crossley/momentum: the history error 0.54× and 0.22×
+    the paper model's, every tolerance band within 2.2 dB (the paper's model 6–9 dB off at
+    500 Hz), the contact time ~3 % long against the paper model's 1–2 %; its peak force nearer
+    than the paper model's at each height (the table: +0.52, +1.52 % against +2.67, +5.43 %)."""
+    stated_ratio = {0.2: 0.54, 0.8: 0.22}
+    for f, p in _rows(comparison, "hunt-crossley/momentum"):
+        assert f.history_error_pct / p.history_error_pct < stated_ratio[f.height_m] + 0.05, (f, p)
+        assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.2), f
+        assert 5.5 <= abs(p.lfe_octave_dB[4]) < 9.5, p
+        assert 2.5 < f.contact_time_pct < 3.5, f
+        assert 0.5 <= abs(p.contact_time_pct) < 2.5 and abs(f.contact_time_pct) > abs(p.contact_time_pct), p
+        assert abs(f.peak_force_pct) < abs(p.peak_force_pct), (f, p)
+
+
+def test_zener_claims(comparison):
+    """README "Where they fall short", zener/momentum: the contact time within 0.6 % (better
+    than the paper model's), the peak force 2–5 % low."""
+    for f, p in _rows(comparison, "zener/momentum"):
+        assert abs(f.contact_time_pct) < 0.6, f
         assert abs(f.contact_time_pct) < abs(p.contact_time_pct), (f, p)
-        assert abs(f.contact_time_pct) < 1.0, f
+        assert -5.5 < f.peak_force_pct < -1.5, f

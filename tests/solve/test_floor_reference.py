@@ -10,12 +10,15 @@ linear-spring ball, the finite-difference points of the gradient check) is one b
 program; the floating floor with the stiff layer is the 2-mode ModalFloor of the scalar,
 energy and history checks.
 
-Measured (default Solver(), rtol 1e-9; the tests assert 1e-7): contact time, peak force,
-restitution and injected energy agree with the reference to ≤ 7e-10 relative on every dashpot
-(Z = 500, 2000, 1e5) and modal case, both conventions, h = 0.1 and 1 m; Z = 1e12 matches the
-rigid reference to ≤ 7e-10; the linear-spring ball matches the closed form to ≤ 4e-10; the
-energy balance closes to ≤ 6e-10 of the impact energy; jax.grad of the contact time matches
-central differences to ≤ 3e-9; the 1482-mode plate is within 0.1–0.4 % of the infinite plate.
+Measured (default Solver(), rtol 1e-9), with what the tests assert (README "Floors" states the
+measured figures; each assertion names it): contact time, peak force and restitution agree with
+the reference to ≤ 3.8e-10 relative on every dashpot (Z = 500, 2000, 1e5) and on the modal
+floor, both conventions, h = 0.1 and 1 m (asserted 1e-9), the injected energy to ≤ 7.3e-10
+(asserted 2e-9); Z = 1e12 matches the rigid reference to ≤ 6.8e-10 (asserted 2e-9); the
+linear-spring ball matches the closed form to ≤ 3.7e-10 (asserted 1e-9); the energy balance
+closes to ≤ 6e-10 of the impact energy (asserted 2e-9); jax.grad of the contact time matches
+fourth-order central differences of the reference to ≤ 2.8e-9 (asserted 1e-8); the 1482-mode
+plate is within 0.1–0.4 % of the infinite plate (asserted 0.5 %).
 
 On a floor where the force has two maxima (the floating floor with the stiffer layer),
 ``peak_force_N`` is the global maximum (the later, higher one), as the reference finds it.
@@ -44,7 +47,12 @@ BALL = rbjax.JIS_RUBBER_BALL
 HEIGHTS = (0.1, 1.0)
 CONVENTIONS = ("paper", "momentum")
 WEIGHT = {"paper": 0.0, "momentum": 1.0}
-REL = 1e-7  # rbjax's default solver against the rtol-1e-12 reference
+#: rbjax's default solver against the rtol-1e-12 reference (README "Floors": ≤ 4e-10 for the
+#: contact time, peak force and restitution, ≤ 1e-9 for the injected energy, ≤ 7e-10 for
+#: Dashpot(1e12) against the rigid floor; measured 3.8e-10, 7.3e-10, 6.8e-10).
+REL = 1e-9
+ENERGY_REL = 2e-9
+RIGID_REL = 2e-9
 QUANTITIES = ("contact_time_s", "peak_force_N", "restitution")
 
 #: OSB-like 15 mm plate (E 4.9 GPa, ρ 600 kg/m³, ν 0.3, η 0.02).
@@ -64,11 +72,15 @@ FLOAT = dict(screed_thickness_m=0.05, screed_density_kg_per_m3=2000.0, area_m2=0
 SOFT = floating_floor(dynamic_stiffness_N_per_m3=1e6, **FLOAT)
 STIFF = floating_floor(dynamic_stiffness_N_per_m3=1e7, **FLOAT)
 
-FD_Z, FD_E, FD_STEP = 2000.0, BALL.youngs_Pa, 1e-5  # gradient check at h = 1 m
+#: The gradient check at h = 1 m: fourth-order central differences of the reference at rtol
+#: 1e-13 with a relative step of 3e-3 (truncation ~step⁴, round-off ~1e-13/step, both ≲ 1e-9
+#: of the derivative; measured: the differences agree with each other to 1e-9 over steps 1e-3–3e-3).
+FD_Z, FD_E, FD_STEP, FD_RTOL = 2000.0, float(BALL.youngs_Pa), 3e-3, 1e-13
 
 
 # ------------------------------------------------------------------------------------------------
-# One dashpot batch: (label, height, Z, w, ball) per row.
+# One dashpot batch: (label, height, Z, w, ball) per row. Every assertion against the reference
+# below guards README "Floors" ("Against an independent scipy model of the ball on a moving floor").
 
 
 def _dashpot_rows():
@@ -82,9 +94,6 @@ def _dashpot_rows():
         rows.append((("plate", h), h, PLATE_Z, 0.0, BALL))
         for z in (500.0, 2000.0):
             rows.append((("linear", z, h), h, z, 0.0, LINEAR_BALL))
-    for sign in (-1.0, 1.0):
-        rows.append((("fd-z", sign), 1.0, FD_Z * (1.0 + sign * FD_STEP), 0.0, BALL))
-        rows.append((("fd-e", sign), 1.0, FD_Z, 0.0, BALL.replace(youngs_Pa=FD_E * (1.0 + sign * FD_STEP))))
     return rows
 
 
@@ -121,7 +130,7 @@ def test_dashpot_matches_reference(z, bf):
     for h in HEIGHTS:
         ref = reference(h, ("dashpot", z), bf)
         for q in QUANTITIES:
-            assert _rel(got[("dashpot", z, bf, h)][q], getattr(ref, q)) < REL, (q, h)
+            assert _rel(got[("dashpot", z, bf, h)][q], getattr(ref, q)) < REL, (q, h)  # README "Floors": ≤ 4e-10
 
 
 @functools.cache
@@ -147,7 +156,7 @@ def test_modal_floor_matches_reference(bf):
         assert _rel(float(out.contact_time_s[j]), ref.contact_time_s) < REL
         assert _rel(float(out.restitution[j]), ref.restitution) < REL
         assert _rel(float(out.max_deflection_m[j]), _global_max_deflection(ref)) < REL
-        assert _rel(float(energy.floor_energy_J[j]), ref.injected_energy_J) < REL
+        assert _rel(float(energy.floor_energy_J[j]), ref.injected_energy_J) < ENERGY_REL  # README "Floors": ≤ 1e-9
         assert _rel(float(out.peak_force_N[j]), ref.peak_force_N) < REL
 
 
@@ -177,17 +186,17 @@ def test_injected_energy_dashpot():
     zs = np.array([500.0, 2000.0, 1e5, 500.0, 2000.0, 1e5])
     hs = np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
     e = rbjax.energy_balance(hs, BALL, rbjax.Model(blocked_force="momentum", floor=rbjax.Dashpot(zs)))
-    assert np.all(np.abs(np.asarray(e.residual_J)) < 1e-8 * np.asarray(e.impact_energy_J))
+    assert np.all(np.abs(np.asarray(e.residual_J)) < ENERGY_REL * np.asarray(e.impact_energy_J))  # measured 1.5e-10
     for i, (z, h) in enumerate(zip(zs, hs)):
         ref = reference(float(h), ("dashpot", float(z)), "momentum")
-        assert _rel(float(e.floor_energy_J[i]), ref.injected_energy_J) < REL
+        assert _rel(float(e.floor_energy_J[i]), ref.injected_energy_J) < ENERGY_REL  # README "Floors": ≤ 1e-9
         assert _rel(float(e.rebound_energy_J[i]), ref.restitution**2 * ref.impact_energy_J) < REL
 
 
 def test_energy_balance_modal():
     _, energy = stiff_results()
     assert np.all(np.asarray(energy.status) == 0)
-    assert np.all(np.abs(np.asarray(energy.residual_J)) < 1e-8 * np.asarray(energy.impact_energy_J))
+    assert np.all(np.abs(np.asarray(energy.residual_J)) < ENERGY_REL * np.asarray(energy.impact_energy_J))  # measured 6e-10
 
 
 # ------------------------------------------------------------------------------------------------
@@ -202,8 +211,9 @@ def test_stiff_dashpot_is_rigid():
     for i, h in enumerate(HEIGHTS):
         ref = reference_impact(h, BALL)
         for q in QUANTITIES:
-            assert _rel(got[("rigid-limit", h)][q], getattr(ref, q)) < REL, q
-            assert _rel(got[("rigid-limit", h)][q], float(getattr(rigid, q)[i])) < REL, q
+            # README "Floors": Dashpot(1e12) is the rigid floor to ≤ 7e-10
+            assert _rel(got[("rigid-limit", h)][q], getattr(ref, q)) < RIGID_REL, q
+            assert _rel(got[("rigid-limit", h)][q], float(getattr(rigid, q)[i])) < RIGID_REL, q
 
 
 @pytest.mark.parametrize("z", [500.0, 2000.0])
@@ -220,7 +230,7 @@ def test_linear_spring_on_dashpot_closed_form(z):
         np.testing.assert_allclose(linear_oscillator_expm(h, BALL.mass_kg, k, z, t), v0 / wd * np.exp(-a * t) * np.sin(wd * t), rtol=1e-12)
         assert abs(linear_oscillator_expm(h, BALL.mass_kg, k, z, [exact["contact_time_s"]])[0]) < 1e-12 * v0 / wd
         for q in QUANTITIES:
-            assert _rel(got[("linear", z, h)][q], exact[q]) < REL, q
+            assert _rel(got[("linear", z, h)][q], exact[q]) < REL, q  # README "Floors": ≤ 4e-10
 
 
 def test_many_mode_plate_approaches_infinite_plate():
@@ -238,7 +248,7 @@ def test_many_mode_plate_approaches_infinite_plate():
         ref = reference(h, ("dashpot", PLATE_Z))
         for q in QUANTITIES:
             assert _rel(got[("plate", h)][q], getattr(ref, q)) < REL
-            assert _rel(float(getattr(out, q)[i]), getattr(ref, q)) < 5e-3, (q, h)
+            assert _rel(float(getattr(out, q)[i]), getattr(ref, q)) < 5e-3, (q, h)  # README "Floors": 0.1–0.4 %
 
 
 def _maxima(f):
@@ -246,20 +256,27 @@ def _maxima(f):
     return f[1:-1][(f[1:-1] > f[:-2]) & (f[1:-1] >= f[2:]) & (f[1:-1] > 1e-3 * f.max())]
 
 
-def test_floating_floor_force_peaks():
-    """The stiffer layer: two force peaks (counted on rbjax's 20 kHz history, paper convention),
-    as the reference finds; the soft layer: one (the reference's history: one more ModalFloor
-    would be one more ~10 s compile)."""
+def _floor_histories(floor, times):
+    return rbjax.trajectory(np.array(HEIGHTS), times, BALL, rbjax.Model(floor=floor))
+
+
+@pytest.mark.parametrize("floor, n_peaks", [(STIFF, 2), (SOFT, 1)], ids=["stiff-layer", "soft-layer"])
+def test_floating_floor_force_peaks(floor, n_peaks):
+    """README "Floors": a floating floor with a soft layer (1 MN/m³) gives one force peak and
+    with a stiffer one (10 MN/m³) two, 947 N and the global 1070 N at 1 m. Counted on rbjax's
+    own 20 kHz history (paper convention), which must follow the reference's to 1e-7 of the
+    peak; the reference finds the same maxima (one ModalFloor more: one ~10 s compile more)."""
     times = np.arange(0.0, 0.05, 1 / 20_000)
-    hist = rbjax.trajectory(np.array(HEIGHTS), times, BALL, rbjax.Model(floor=STIFF))
+    hist = _floor_histories(floor, times)
     for i, h in enumerate(HEIGHTS):
         peaks = _maxima(hist.force_N[i])
-        assert len(peaks) == 2, peaks
-        ref = reference(h, _modal_key(STIFF))
+        ref = reference(h, _modal_key(floor))
+        assert len(peaks) == n_peaks == len(ref.force_maxima_N), (h, peaks, ref.force_maxima_N)
         np.testing.assert_allclose(peaks, ref.force_maxima_N, rtol=1e-4)  # grid-sampled maxima
         assert float(np.max(np.abs(np.asarray(hist.force_N[i]) - ref.force_N(times)))) < 1e-7 * ref.peak_force_N
-        soft = reference(h, _modal_key(SOFT))
-        assert len(soft.force_maxima_N) == 1 and len(_maxima(soft.force_N(times))) == 1
+    if floor is STIFF:  # the two maxima at 1 m as the README prints them
+        first, second = reference(1.0, _modal_key(STIFF)).force_maxima_N
+        assert abs(first - 947.0) < 0.5 and abs(second - 1070.0) < 5.0, (first, second)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -267,15 +284,23 @@ def test_floating_floor_force_peaks():
 
 
 def test_contact_time_gradients():
+    """README "Floors": jax.grad of the contact time w.r.t. Z and E matches finite differences of
+    the independent reference to ≤ 3e-9 (measured 1e-10 and 2.8e-9; asserted 1e-8)."""
+
     def contact_time(z, e):
         return rbjax.simulate(1.0, BALL.replace(youngs_Pa=e), floor=rbjax.Dashpot(z), method="ode").contact_time_s
 
+    def reference_fd(z_scale, e_scale):
+        def tc(k):
+            ball = BALL.replace(youngs_Pa=FD_E * (1.0 + k * FD_STEP * e_scale))
+            return reference_floor_impact(1.0, ball, ("dashpot", FD_Z * (1.0 + k * FD_STEP * z_scale)), rtol=FD_RTOL).contact_time_s
+
+        step = FD_STEP * (FD_Z * z_scale + FD_E * e_scale)
+        return (8.0 * (tc(1) - tc(-1)) - (tc(2) - tc(-2))) / (12.0 * step)
+
     dz, de = jax.grad(contact_time, argnums=(0, 1))(FD_Z, FD_E)
-    got = dashpot_results()
-    fd_z = (got[("fd-z", 1.0)]["contact_time_s"] - got[("fd-z", -1.0)]["contact_time_s"]) / (2 * FD_STEP * FD_Z)
-    fd_e = (got[("fd-e", 1.0)]["contact_time_s"] - got[("fd-e", -1.0)]["contact_time_s"]) / (2 * FD_STEP * FD_E)
-    assert _rel(float(dz), fd_z) < 1e-4
-    assert _rel(float(de), fd_e) < 1e-4
+    assert _rel(float(dz), reference_fd(1.0, 0.0)) < 1e-8
+    assert _rel(float(de), reference_fd(0.0, 1.0)) < 1e-8
 
 
 # ------------------------------------------------------------------------------------------------

@@ -154,10 +154,23 @@ def test_jacfwd_of_contact_time_matches_finite_differences(reference_fd):
     np.testing.assert_allclose(g, reference_fd[0], rtol=1e-4)
 
 
-@pytest.mark.xfail(strict=True, raises=Exception, reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
+class ReverseModeNaN(Exception):
+    """The known failure of reverse mode with a ball mode (README "The ball's own vibration"):
+    Lineax refuses the NaN that reaches the event's linear solve."""
+
+
+@pytest.mark.xfail(strict=True, raises=ReverseModeNaN, reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
                    "event's linear solve (solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses")
 def test_grad_of_contact_time_matches_finite_differences(reference_fd):
-    g = np.asarray(jax.grad(_grad_outputs)(jnp.asarray(GRAD[1:])))
+    # Only that failure is expected: a finite but wrong gradient fails the assertion below, and
+    # a working one passes it, so strict xfail reports both (README: "an expected-failure test
+    # keeps it visible").
+    try:
+        g = np.asarray(jax.grad(_grad_outputs)(jnp.asarray(GRAD[1:])))
+    except jax.errors.JaxRuntimeError as err:
+        if "linear solver received non-finite" in str(err):
+            raise ReverseModeNaN from err
+        raise
     np.testing.assert_allclose(g, reference_fd[0], rtol=1e-4)
 
 

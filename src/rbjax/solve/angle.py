@@ -45,6 +45,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._x64 import require_x64
 from ..terms.ball import Ball
 from ..terms.forces import (
     contact_force_N,
@@ -274,6 +275,7 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
     fixed steps (2·``n_steps``). Any damping laws, gas, stiffening and blocked-force convention;
     not the ball mode or a moving floor (``angle_unsupported``).
     """
+    require_x64()
     v0, setup, (ys1, fs1), (ys2, fs2), error = _solve(height_m, ball, model, n_steps)
     half = 0.5 * np.pi
     phis1 = jnp.linspace(0.0, half, n_steps + 1)

@@ -38,8 +38,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import check_range, is_traced
+from .._x64 import require_x64
 from .band_kernel import SHORT_FFT_OVERSAMPLING, SHORT_PATH_MIN_RATIO, band_kernel, fast_length
 from .bands import (
     OCTAVE_BANDS,
@@ -94,6 +94,7 @@ _SHORT_FFT_BLOCK = 2**18
 
 
 def _as_force(force_N) -> jax.Array:
+    require_x64()
     x = jnp.asarray(force_N, dtype=jnp.float64)
     if x.ndim < 1 or x.shape[-1] < 1:
         raise ValueError(
