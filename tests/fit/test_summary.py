@@ -132,3 +132,17 @@ def test_paper_ball_elastic_fit_matches_the_independent_scipy_figures():
     peak = fit.row(1.6, "peak_force_N")
     assert not peak["in_fit"] and peak["fitted"] == pytest.approx(2100.0, rel=0.03)
     assert "peak_force_N 1 % of the value" in fit.identifiability  # the default, stated
+
+
+def test_cli_fit_summary_json(tmp_path):
+    import json
+
+    from cli_runner import run_cli
+
+    code, out, err = run_cli(["fit", "--summary", EXAMPLE, "--model", "paper", "--json", "--out", str(tmp_path), "--quiet"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["kind"] == "summary fit" and doc["parameters"]["poisson"]["fixed"]
+    assert (tmp_path / "summary_fit.png").exists() and (tmp_path / "fit.json").exists()
+    code, _, err = run_cli(["fit", "--summary", str(tmp_path / "none.csv")])
+    assert code == 2 and "none.csv" in err

@@ -7,16 +7,16 @@ from pathlib import Path
 from . import UsageError, emit_json, progress, write_json_file
 
 
-def run_summary(args) -> int:
+def run_summary(args, fix: dict, not_converged_exit: int) -> int:
+    """Run ``rbjax fit --summary`` (``fix``: the parsed ``--fix``; the exit code of a fit that
+    did not converge is ``fit``'s)."""
     from ..fit.summary import fit_summary
     from ..fit.summary_table import read_summary
-    from .fit import NOT_CONVERGED_EXIT, parse_fix
 
     if args.summary is None:
         raise UsageError("fit: give recordings (FILES_OR_DIR) or --summary TABLE")
     if args.paths:
         raise UsageError(f"fit: --summary {args.summary} fits a table of figures; leave out the recordings {' '.join(args.paths)}")
-    fix = parse_fix(args.fix)
     table = read_summary(args.summary)
     for note in table.notes:
         progress(f"note: {note}")
@@ -49,5 +49,5 @@ def run_summary(args) -> int:
         print(result.summary())
     if not result.converged:
         progress(f"the fit did not converge: {result.message}")
-        return NOT_CONVERGED_EXIT
+        return not_converged_exit
     return 0

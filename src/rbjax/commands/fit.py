@@ -137,7 +137,7 @@ def run(args) -> int:
     if args.summary is not None or not args.paths:
         from ._summary_fit import run_summary
 
-        return run_summary(args)
+        return run_summary(args, parse_fix(args.fix), NOT_CONVERGED_EXIT)
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
     data = load_fit_data(args)

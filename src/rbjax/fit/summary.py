@@ -233,8 +233,8 @@ def fit_summary(
     corr = np.clip(cov_phi / np.outer(d, d), -1.0, 1.0) if free else np.zeros((0, 0))
     if len(free) > 1:
         c = np.abs(corr - np.eye(len(free)))
-        i, k = np.unravel_index(np.argmax(c), c.shape)
-        notes.append(f"Largest correlation {corr[i, k]:+.3f} ({free[i]}–{free[k]}).")
+        a, b = (int(x) for x in np.unravel_index(np.argmax(c), c.shape))
+        notes.append(f"Largest correlation {corr[a, b]:+.3f} ({free[a]}–{free[b]}).")
     # prediction uncertainty of every figure (delta method in φ)
     pred_sd = np.sqrt(np.maximum(np.einsum("hfp,pq,hfq->hf", jac, cov_phi, jac), 0.0)) if free else np.zeros_like(value)
     rows = []

@@ -31,22 +31,25 @@ from .summary_table import OCTAVE_FIGURES, SCALAR_FIGURES, THIRD_OCTAVE_FIGURES
 
 #: Record length whose L_FE the band figures are (the paper's 1 s at 44.1 kHz, §2.4).
 N_RECORD = int(round(PAPER_RATE_Hz * PAPER_DURATION_S))
-#: The sampled window covers the longest contact at the start times this factor, + 2 samples.
+#: The sampled window covers the longest contact at the start times this factor, + 2 samples,
+#: rounded up to a multiple of ``WINDOW_QUANTUM`` (so that fits of similar balls share a program).
 WINDOW_MARGIN = 1.5
+WINDOW_QUANTUM = 512
 
 
 def window_samples(contact_time_s) -> int:
     """Samples of the force window for contacts up to ``WINDOW_MARGIN`` × the longest given."""
     tc = np.asarray(contact_time_s, dtype=float)
     longest = float(np.nanmax(tc)) if np.any(np.isfinite(tc)) else 0.05
-    return min(N_RECORD, int(math.ceil(WINDOW_MARGIN * longest * PAPER_RATE_Hz)) + 2)
+    n = int(math.ceil(WINDOW_MARGIN * longest * PAPER_RATE_Hz)) + 2
+    return min(N_RECORD, WINDOW_QUANTUM * math.ceil(n / WINDOW_QUANTUM))
 
 
 def figures_of(heights_m, ball, model: Model, figures: tuple[str, ...], num_samples: int, substeps: int = 1):
     """(len(heights), len(figures)) array of the figures of ``(ball, model)`` (traceable)."""
     coupled = model.coupling is not None
     solver = Solver(adjoint="forward") if coupled else None
-    columns = {}
+    columns: dict = {}
     if any(f in SCALAR_FIGURES for f in figures):
         res = simulate(heights_m, ball, model, solver=solver)
         columns.update(contact_time_s=res.contact_time_s, peak_force_N=res.peak_force_N, restitution=res.restitution)

@@ -114,7 +114,10 @@ def summary_table(rows: list[Mapping], source: str = "<table>", row_labels: list
     valid = (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES)
     if not rows:
         raise SummaryTableError(f"{source}: no rows; give one row per drop height with {HEIGHT_COLUMN} and any of {', '.join(FIGURES[:4])} …")
-    heights, values, sds, defaulted = [], {f: [] for f in FIGURES}, {f: [] for f in FIGURES}, set()
+    heights: list[float] = []
+    values: dict[str, list[float]] = {f: [] for f in FIGURES}
+    sds: dict[str, list[float]] = {f: [] for f in FIGURES}
+    defaulted: set[str] = set()
     for k, row in enumerate(rows):
         for col in row:
             if col not in valid:

@@ -34,14 +34,21 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import check_choice
+from .._validate import as_float, check_choice
 from ..fit.layout import fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
 from ..solve.inputs import as_arrays
 from ..solve.simulate import simulate
-from ..spectrum.standards import CLAUSE, RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS, check_conformance
+from ..spectrum.standards import (
+    CLAUSE,
+    RUBBER_BALL_TOLERANCES,
+    TOLERANCED_OCTAVE_BANDS,
+    Conformance,
+    check_conformance,
+)
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.declare import Parameter
+from ..terms.model import Model
 from ..terms.parameters import replace
 
 GEOMETRIES = {
@@ -79,7 +86,7 @@ def _specs(names) -> tuple[Parameter, ...]:
 
 
 def _density(ball: Ball) -> float:
-    r, h, m = float(ball.radius_m), float(ball.wall_m), float(ball.mass_kg)
+    r, h, m = (as_float(x) for x in (ball.radius_m, ball.wall_m, ball.mass_kg))
     return m / (4.0 / 3.0 * math.pi * (r**3 - (r - h) ** 3))
 
 
@@ -147,9 +154,9 @@ class DesignResult:
     model_name: str
     geometry: str
     ball: Ball
-    model: object
+    model: Model
     parameters: dict
-    conformance: object
+    conformance: Conformance
     margins: dict
     normalised_margins: dict
     smallest_margin: float
@@ -225,7 +232,7 @@ def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, st
         steps, learning_rate: Adam's steps and step size (in φ).
         vary_wall: also vary the wall thickness (``WALL_RANGE_M``), the mass following it.
     """
-    import optax
+    import optax  # type: ignore[import-untyped]
 
     check_choice("geometry", geometry, tuple(GEOMETRIES))
     if not (isinstance(n_starts, int) and n_starts >= 1):
@@ -250,7 +257,7 @@ def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, st
     history = []
     best_phi, best = phis.copy(), np.full(n_starts, -np.inf)
     for k in range(steps + 1):
-        soft, grad, values = _step_program(jnp.asarray(phis), *args, names, specs, density, num_samples)
+        soft, grad, values = _step_program(jnp.asarray(phis), args[0], args[1], names, specs, density, num_samples)
         hard = np.min(np.asarray(normalised_margins(values)), axis=-1)
         hard = np.where(np.isfinite(hard), hard, -np.inf)
         better = hard > best
@@ -290,7 +297,7 @@ def _result(model_name, geometry, phi, args, names, specs, density, num_samples,
     ball, model = args
     optimiser_values = np.asarray(_item_values(jnp.asarray(phi), ball, model, names, specs, density, num_samples))
     b, m = _ball_model(jnp.asarray(phi), ball, model, names, specs, density)
-    b = Ball(*(float(getattr(b, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")))
+    b = Ball(*(as_float(getattr(b, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")))
     m = jax.tree_util.tree_map(lambda x: float(x) if eqx.is_array(x) else x, m)
     res = simulate(STANDARD_HEIGHT_M, b, m)
     lfe = np.asarray(res.lfe_octave_dB())
@@ -302,7 +309,7 @@ def _result(model_name, geometry, phi, args, names, specs, density, num_samples,
     blocking = min(normalised, key=lambda k: normalised[k])
     values = {n: float(s.from_unconstrained(p)) for n, s, p in zip(names, specs, phi)}
     if "wall_m" in values:
-        values["mass_kg"] = float(b.mass_kg)
+        values["mass_kg"] = as_float(b.mass_kg)
     om = np.asarray(normalised_margins(optimiser_values))
     return DesignResult(
         model_name=model_name, geometry=geometry, ball=b, model=m, parameters=values, conformance=check, margins=margins,
