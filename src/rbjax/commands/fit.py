@@ -27,12 +27,17 @@ examples:
   rbjax fit h*.csv --model zener --fix poisson=0.49 --json > fit.json
   rbjax fit recordings/ --model hunt-crossley+ball-mode --blocked-force momentum
   rbjax simulate --height-m 1.0 --params fit.json
+
+summary figures instead of histories (--summary TABLE: contact time, peak force,
+restitution, L_FE per band, per drop height; see `rbjax.fit.summary_table`):
+  rbjax fit --summary src/rbjax/examples/paper-measured-ball/summary.csv --model paper
+  rbjax fit --summary certificate.toml            # models compared by held-out figures
 """
 
 
-def add_data_options(p: argparse.ArgumentParser) -> None:
+def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
     """Options shared by ``fit`` and ``select`` for reading and conditioning the recordings."""
-    p.add_argument("paths", nargs="+", metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy, *.mat, *.uff, *.unv, *.tdms) or directories of them")
+    p.add_argument("paths", nargs=paths, metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy, *.mat, *.uff, *.unv, *.tdms) or directories of them")
     p.add_argument(
         "--lowpass-hz",
         default="auto",
@@ -93,7 +98,8 @@ def load_fit_data(args):
 
 def register(subparsers) -> None:
     p = add_command(subparsers, "fit", help="fit E and a damping model to measured force histories", description=DESCRIPTION)
-    add_data_options(p)
+    add_data_options(p, paths="*")
+    p.add_argument("--summary", default=None, metavar="TABLE", help="fit to a table of summary figures per drop height (.csv or .toml) instead of recordings")
     p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode); default: choose by cross-validation")
     p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
@@ -131,6 +137,10 @@ def _check_model_and_fix(model, fix):
 def run(args) -> int:
     from ..fit import fit
 
+    if args.summary is not None or not args.paths:
+        from ._summary_fit import run_summary
+
+        return run_summary(args, parse_fix(args.fix), NOT_CONVERGED_EXIT)
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
     data = load_fit_data(args)

@@ -428,8 +428,11 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
         )
     growth = _growth(runs, heights)
     modes = _shell_modes()
+    from .measured_ball import measured_ball, report_section
+
+    measured = measured_ball(out, progress=progress)
     say("reproduce: [3/4] drawing figures 3-12", enabled=progress)
-    files = _figures(out, runs, heights, comparison, growth)
+    files = _figures(out, runs, heights, comparison, growth) + [measured["figure"]]
     say("reproduce: [4/4] writing report.md and results.json", enabled=progress)
     elapsed = time.perf_counter() - start
 
@@ -462,12 +465,13 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             "conformance_1m": conformance,
             "growth_per_doubling": {k: v for k, v in growth.items() if k != "recordings_error"},
             "shell_modes_fundamental_Hz": modes,
+            "measured_ball": measured,
             "figures": files,
             "report": "report.md",
             "elapsed_s": elapsed,
         }
     )
-    (out / "report.md").write_text(_report(runs, heights, comparison, explanations, conformance, files, elapsed, growth, modes))
+    (out / "report.md").write_text(_report(runs, heights, comparison, explanations, conformance, files, elapsed, growth, modes) + "\n".join(report_section(measured)) + "\n")
     (out / "results.json").write_text(json.dumps(results, indent=2, allow_nan=False))
     say(f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}", enabled=progress)
     return results

@@ -1,0 +1,53 @@
+"""``rbjax fit --summary TABLE``: the fit to summary figures (a helper of ``commands/fit.py``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import UsageError, emit_json, progress, write_json_file
+
+
+def run_summary(args, fix: dict, not_converged_exit: int) -> int:
+    """Run ``rbjax fit --summary`` (``fix``: the parsed ``--fix``; the exit code of a fit that
+    did not converge is ``fit``'s)."""
+    from ..fit.summary import fit_summary
+    from ..fit.summary_table import read_summary
+
+    if args.summary is None:
+        raise UsageError("fit: give recordings (FILES_OR_DIR) or --summary TABLE")
+    if args.paths:
+        raise UsageError(f"fit: --summary {args.summary} fits a table of figures; leave out the recordings {' '.join(args.paths)}")
+    table = read_summary(args.summary)
+    for note in table.notes:
+        progress(f"note: {note}")
+    selection = None
+    if args.model is None:
+        from ..studies.summary_selection import select_summary
+
+        progress("no --model: comparing models by leave-one-figure-out prediction")
+        selection = select_summary(table, fix=fix, gas=args.gas, blocked_force=args.blocked_force or "paper", progress=not args.quiet)
+        if selection.recommended is None:
+            raise ValueError(f"{table.source}: too few figures to compare models by held-out figures; give --model ({selection.table()})")
+        result = selection.candidates[selection.recommended].fit
+        progress(f"recommended: {selection.recommended}")
+    else:
+        result = fit_summary(table, args.model, blocked_force=args.blocked_force or "paper", gas=args.gas, fix=fix, progress=not args.quiet)
+    out = result.to_dict()
+    if selection is not None:
+        out["selection"] = selection.to_dict()
+    if args.out is not None:
+        written = write_json_file(args.out, "fit.json", out)
+        for path in result.plot(Path(args.out)):
+            progress(f"wrote {path}")
+        progress(f"wrote {written}")
+    if args.json:
+        emit_json(out)
+    else:
+        if selection is not None:
+            print(selection.table())
+            print()
+        print(result.summary())
+    if not result.converged:
+        progress(f"the fit did not converge: {result.message}")
+        return not_converged_exit
+    return 0
