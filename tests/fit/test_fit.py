@@ -241,6 +241,7 @@ def program_cache(tmp_path, monkeypatch):
     from rbjax.fit import program_store
 
     before = jax.config.jax_compilation_cache_dir
+    jax.config.update("jax_compilation_cache_dir", None)  # the test session's cache (conftest.py): the CLI keeps a chosen one
     monkeypatch.setenv("RBJAX_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(program_store, "_LOADED", {})
     yield tmp_path / "cache"
