@@ -33,6 +33,9 @@ SCRIPT = textwrap.dedent(
 
     ball, force = rbjax.JIS_RUBBER_BALL, np.hanning(900)
     result = rbjax.simulate(1.0)  # made with float64 on
+    import rbjax.data
+    import rbjax.fit
+    records = rbjax.fit.load_data(rbjax.data.examples_dir())
     jax.config.update("jax_enable_x64", False)
     calls = {
         "simulate": lambda: rbjax.simulate(1.0),
@@ -58,6 +61,9 @@ SCRIPT = textwrap.dedent(
         "studies.conformance_probability": lambda: conformance_probability(8, {"youngs_pa": ("uniform", 1.5e6, 1.7e6)}),
         "studies.model_growth": lambda: studies.model_growth([0.5, 1.0]),
         "studies.recording_growth": lambda: studies.recording_growth(),
+        "fit.fit": lambda: rbjax.fit.fit(records, "kelvin-voigt"),
+        "fit.predict": lambda: rbjax.fit.predict(records),
+        "studies.select_model": lambda: studies.select_model(records, ["paper"]),
     }
     outcome = {}
     for name, call in calls.items():

@@ -285,7 +285,7 @@ def test_cli_fit_json_and_outputs(tmp_path, program_cache, monkeypatch):
         (["fit", "DIR", "--model", "maxwell"], "model='maxwell'"),
         (["fit", "DIR", "--model", "paper", "--fix", "poisson"], "expected NAME=VALUE"),
         (["fit", "DIR", "--fix", "stiffness_ratio=1"], "without --model"),
-        (["fit", "EMPTY", "--model", "paper"], "no recording (*.csv, *.wav, *.npy, *.mat"),
+        (["fit", "EMPTY", "--model", "paper"], "no recording (*.csv, *.npy, *.wav, *.mat"),
         (["select", "EMPTY", "--candidates", "paper,maxwell"], "maxwell"),
     ],
 )

@@ -35,6 +35,7 @@ import numpy as np
 
 from .._progress import progress as say
 from .._validate import as_float, check_choice, check_range
+from .._x64 import require_x64
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import GAS_OPTIONS, Model, Solver
 from ..terms.parameters import replace
@@ -167,6 +168,7 @@ def fit(
     N_eff = N/τ_noise for every model fitted to the same data (τ_noise: the integrated
     autocorrelation of the pre-contact noise), so that they are comparable across models.
     """
+    require_x64()
     check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
     check_choice("gas", gas, GAS_OPTIONS)
     check_choice("optimizer", optimizer, OPTIMIZERS)
@@ -249,10 +251,11 @@ def fit(
         for k, v in alt.items():
             th[lay.index(k)] = v
         thetas.append(th)
-    everything = np.ones(data.n_records, bool)
-    outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
-    thetas = [realign(problem, th, o["features"], everything, rescale_E=auto_start, fit_mask=fit_mask) for th, o in zip(thetas, outs)]
-    outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
+    extra = dict(extra_weights or {})
+    if warm is None:  # a warm start's onsets are aligned already
+        outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
+        thetas = [realign(problem, th, o["features"], np.ones(data.n_records, bool), rescale_E=auto_start, fit_mask=fit_mask) for th, o in zip(thetas, outs)]
+    outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask, extra), constants)
     theta, out = thetas[0], outs[0]
 
     # 2. identifiability from the Jacobian with ν free
@@ -313,12 +316,12 @@ def fit(
 
     # 3. optimise every start: rounds of LM in the whitened frame of each round's start, all
     # starts in one call per round; the best converged start is kept
-    extra = dict(extra_weights or {})
+    nu_moved = any(th[inu] != theta[inu] for th in thetas)  # ν now held at another value
     for th in thetas:
         th[inu] = theta[inu]
     lanes = optimise(
         problem, thetas, outs, free, free_idx, constants, fit_mask,
-        weights_of=lambda r: problem.weights(fit_mask, extra, prior_row(r)),
+        weights_of=lambda r: problem.weights(fit_mask, extra, prior_row(r)), reevaluate=nu_moved or poisson_prior is not None,
         optimizer=optimizer, max_steps=max_steps, progress=progress, label=label,
         shown=[n for n in physical_free],
     )

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .._x64 import require_x64
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from ..terms.parameters import replace
@@ -24,6 +25,7 @@ def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, s
     :class:`FitResult` (all held out). ``model``: any ``rbjax.Model`` (default: the paper's
     elastic model). ``superset``: run in that model's compiled program (see :func:`fit`).
     """
+    require_x64()
     model = Model() if model is None else model
     problem, _, out = aligned(data, ball, model, solver, superset)
     d = problem.data

@@ -132,28 +132,41 @@ class Problem:
         }
 
     def run_batch(self, thetas, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None):
-        """The compiled program on B lanes at once (``thetas`` (B, n); ``weights`` a list of B
-        weight dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, default: an
-        evaluation at θ): one output dict per lane."""
+        """The compiled program on B lanes (``thetas`` (B, n); ``weights`` a list of B weight
+        dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, or none of them: an
+        evaluation at θ, one Jacobian and no optimiser step): one output dict per lane.
+
+        On a CPU the lanes go through the program one at a time: it is compute-bound, so B lanes
+        in lockstep cost B lanes' work, and each would run as many steps as the slowest
+        (measured in ``benchmarks/fit_time.py``); on an accelerator they go in one call."""
+        import jax
+
         lay = self.layout
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         b, n = thetas.shape
+        evaluate_only = atol is None
         phi_c = np.stack([lay.to_phi(th) for th in thetas]) if phi_c is None else np.asarray(phi_c)
         w = np.broadcast_to(np.eye(n), (b, n, n)) if w is None else np.asarray(w)
         atol = np.full(b, math.inf) if atol is None else np.asarray(atol, dtype=float)
         lanes = weights if isinstance(weights, list) else [weights] * b
-        stacked = {k: np.stack([np.asarray(x[k]) for x in lanes]) for k in lanes[0]}
-        out = run_program(
-            self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c, w=w, free=free, held=thetas, constants=constants,
-            data=self.arrays, weights=stacked, atol=atol,
-        )
-        return [{k: v[i] for k, v in out.items()} for i in range(b)]
+        per_call = 1 if jax.default_backend() == "cpu" else b
+        outs = []
+        for lo in range(0, b, per_call):
+            part = slice(lo, lo + per_call)
+            stacked = {k: np.stack([np.asarray(x[k]) for x in lanes[part]]) for k in lanes[0]}
+            out = run_program(
+                self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c[part], w=w[part], free=free, held=thetas[part], constants=constants,
+                data=self.arrays, weights=stacked, atol=atol[part], evaluate_only=evaluate_only,
+            )
+            outs += [{k: v[i] for k, v in out.items()} for i in range(len(thetas[part]))]
+        return outs
 
-    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=math.inf):
+    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None):
         """The compiled program on one lane (see :meth:`run_batch`)."""
         return self.run_batch(
             np.asarray(theta)[None], free, [weights], constants, optimizer=optimizer,
-            phi_c=None if phi_c is None else np.asarray(phi_c)[None], w=None if w is None else np.asarray(w)[None], atol=[atol],
+            phi_c=None if phi_c is None else np.asarray(phi_c)[None], w=None if w is None else np.asarray(w)[None],
+            atol=None if atol is None else [atol],
         )[0]
 
     def history_rows(self, r, fit_mask):

@@ -152,13 +152,13 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
     """The jitted fit program of a structure (cached in this process; :func:`run_program` also
     keeps it on disk through :mod:`rbjax.fit.program_store` where the compilation cache is on).
 
-    ``run(phi_c, w, free, held, constants, data, weights, atol)`` → dict with ``u`` (the
-    optimum in whitened coordinates), ``result`` (optimistix's code), ``steps``, and at the
-    last accepted point ``r``, ``jac_theta`` (dr/dθ), ``force`` and ``features``. With
-    ``atol = inf`` it stops after its first step: an evaluation at φ_c.
+    ``run(phi_c, w, free, held, constants, data, weights, atol, evaluate_only)`` → dict with
+    ``u`` (the optimum in whitened coordinates), ``result`` (optimistix's code), ``steps``, and
+    at the last accepted point ``r``, ``jac_theta`` (dr/dθ), ``force`` and ``features``. With
+    ``evaluate_only`` (one flag for all lanes) it only evaluates at φ_c: one Jacobian, no step.
     """
 
-    def run(phi_c, w, free, held, constants, data, weights, atol):
+    def run(phi_c, w, free, held, constants, data, weights, atol, evaluate_only):
         # Trace the model and its Jacobian once, here; the optimiser's init and step replay the
         # jaxpr (replaying costs no Python, retracing diffrax costs seconds each time).
         args = (phi_c, w, free, held, constants, data, weights)
@@ -192,25 +192,36 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
             )
         else:  # held parameters give zero Jacobian columns: a least-squares (SVD) step
             solver = optx.GaussNewton(rtol=1e-12, atol=atol, norm=optx.rms_norm, linear_solver=lx.SVD())
-        sol: optx.Solution = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
-        r, jac, force, feats = sol.aux
-        return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
+
+        def optimise(_):
+            sol: optx.Solution = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
+            r, jac, force, feats = sol.aux
+            return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
+
+        def evaluate(_):
+            _, _, (r, jac, force, feats) = value_and_jac(u0)
+            ok = jnp.asarray(optx.RESULTS.successful._value, dtype=jnp.int32)  # type: ignore[attr-defined]
+            return {"u": u0, "result": ok, "steps": jnp.zeros((), dtype=jnp.int64), "r": r, "jac_theta": jac, "force": force, "features": feats}
+
+        # the flag is the same for every lane, so under vmap this stays a branch (one runs)
+        return jax.lax.cond(evaluate_only, evaluate, optimise, None)
 
     # Several starts (or fits) of one structure in lockstep: every argument but the free mask,
-    # the constants and the data has a leading batch axis.
-    return jax.jit(jax.vmap(run, in_axes=(0, 0, None, 0, None, None, 0, 0)))
+    # the constants, the data and the evaluate-only flag has a leading batch axis.
+    return jax.jit(jax.vmap(run, in_axes=(0, 0, None, 0, None, None, 0, 0, None)))
 
 
-def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free, held, constants, data, weights, atol):
+def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free, held, constants, data, weights, atol, evaluate_only=False):
     """Call the compiled program on a batch of B lanes (``phi_c``, ``w``, ``held``, ``atol``
     and every weight with a leading axis B); NumPy in, NumPy out, each output with its leading
-    axis B (``successful`` and ``max_steps_reached`` flags added per lane)."""
+    axis B (``successful`` and ``max_steps_reached`` flags added per lane). ``evaluate_only``:
+    the residuals and Jacobian at φ_c of every lane, no optimiser step."""
     import numpy as np
 
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
     args = (f64(phi_c), f64(w), jnp.asarray(free, dtype=bool), f64(held), f64(constants),
             jax.tree_util.tree_map(f64, data), {k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v)) for k, v in weights.items()},
-            f64(atol))
+            f64(atol), jnp.asarray(evaluate_only, dtype=bool))
     fn = load_or_export(("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args)
     out = fn(*args)
     out = {k: np.asarray(v) for k, v in out.items()}

@@ -21,9 +21,8 @@ from ..solve.outcome import G_N_PER_KG
 from ..terms.ball import Ball
 from ..terms.model import Model
 from . import uncertainty as unc
-from .problem import (
-    Problem,
-)
+from .physical import BOUND_TOLERANCE
+from .problem import Problem
 
 #: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
@@ -95,31 +94,29 @@ class Lane:
         return 0.5 * float(r @ r) if np.all(np.isfinite(r)) else math.inf
 
 
-def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask, *, weights_of, optimizer, max_steps, progress, label, shown) -> list[Lane]:
-    """Rounds of the compiled optimiser for every start at once (one call per round, the starts
-    in lockstep), each round in the whitened frame of that start's current point, until each
-    start's remaining Gauss–Newton step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps
-    are spent, or its prediction fails. A start that is done is only evaluated again."""
+def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask, *, weights_of, reevaluate, optimizer, max_steps, progress, label, shown) -> list[Lane]:
+    """Rounds of the compiled optimiser for every start (one call per round), each round in the
+    whitened frame of that start's current point, until each start's remaining Gauss–Newton
+    step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps are spent, or its prediction
+    fails. ``outs``: the evaluations at ``thetas`` (evaluated again with ``weights_of`` where
+    ``reevaluate``). A start that is done is not run again."""
     lay = problem.layout
     n = len(lay.names)
-    weights = [weights_of(o["r"]) for o in outs]
-    lanes = [Lane(th, o) for th, o in zip(thetas, problem.run_batch(thetas, np.zeros(n, bool), weights, constants))]
+    if reevaluate:  # the residuals' weights depend on the residuals (the ν prior's row)
+        outs = problem.run_batch(thetas, np.zeros(n, bool), [weights_of(o["r"]) for o in outs], constants)
+    lanes = [Lane(th, o) for th, o in zip(thetas, outs)]
     for rounds in range(MAX_ROUNDS + 1):
-        phi_c, w, atol, weights = [], [], [], []
+        active, phi_c, w, atol, weights = [], [], [], [], []
         for i, lane in enumerate(lanes):
-            phi = lay.to_phi(lane.theta)
-            phi_c.append(phi)
-            weights.append(weights_of(lane.out["r"]))
-            w.append(np.eye(n))
-            atol.append(math.inf)
             if lane.done:
                 continue
+            phi = lay.to_phi(lane.theta)
             r = lane.out["r"]
             jac_phi = lane.out["jac_theta"][:, free_idx] * lay.from_phi(phi)[1][free_idx][None, :]
             tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
-            # a parameter pressed onto a bound of its fit range has a vanishing column in φ
-            # (φ → ±∞): the remaining step is judged on the others
-            inside = ~on_bound(lay, phi, free_idx)
+            # a parameter pressed onto a bound of its fit range: the remaining step is judged
+            # on the others
+            inside = ~pressed_on_bound(lay, phi, free_idx, jac_phi, r)
             values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
             start = f" start {i}" if len(lanes) > 1 else ""
             say(f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}", enabled=progress)
@@ -140,16 +137,18 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
                 lane.done = True
                 lane.message = lane.message or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
                 continue
-            w[-1] = np.zeros((n, n))
+            wi = np.zeros((n, n))
             moving = free_idx[inside]  # a parameter on a bound is held there for the round
-            w[-1][np.ix_(moving, moving)] = unc.whitening(jac_phi[:, inside], full=True)
-            atol[-1] = unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
-        if all(lane.done for lane in lanes):
+            wi[np.ix_(moving, moving)] = unc.whitening(jac_phi[:, inside], full=True)
+            active.append(lane)
+            phi_c.append(phi)
+            w.append(wi)
+            weights.append(weights_of(r))
+            atol.append(unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1)))
+        if not active:
             break
-        results = problem.run_batch([lane.theta for lane in lanes], free, weights, constants, optimizer=optimizer, phi_c=np.stack(phi_c), w=np.stack(w), atol=atol)
-        for lane, phi, wi, res in zip(lanes, phi_c, w, results):
-            if lane.done:
-                continue
+        results = problem.run_batch([lane.theta for lane in active], free, weights, constants, optimizer=optimizer, phi_c=np.stack(phi_c), w=np.stack(w), atol=atol)
+        for lane, phi, wi, res in zip(active, phi_c, w, results):
             lane.steps += int(res["steps"])
             new_theta = np.where(free, lay.from_phi(phi + wi @ res["u"])[0], lane.theta)
             if not np.all(np.isfinite(new_theta)):
@@ -161,19 +160,22 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
     return lanes
 
 
-#: An ``interval`` parameter counts as on a bound when its transform's relative slope
-#: σ(φ)(1 − σ(φ)) is below this (θ within ~1e-4 of the range from the bound).
-ON_BOUND_SLOPE = 1e-4
-
-
-def on_bound(lay, phi, free_idx) -> np.ndarray:
-    """Which of the free parameters ``free_idx`` sit on a bound of an ``interval`` range."""
-    out = np.zeros(len(free_idx), dtype=bool)
+def pressed_on_bound(lay, phi, free_idx, jac_phi, r) -> np.ndarray:
+    """Which of the free parameters ``free_idx`` the data press onto a bound of their fit range:
+    within ``physical.BOUND_TOLERANCE`` of the range from the bound (where the fit reports
+    them on it), with the Gauss–Newton step pointing out of the range. Held there for the next
+    round: in φ the interval's slope vanishes at the bound, and the optimiser would crawl."""
+    side = np.zeros(len(free_idx))
     for j, i in enumerate(free_idx):
         spec = lay.specs[i]
         if spec.transform == "interval":
-            out[j] = float(spec.slope(phi[i])) / (spec.upper - spec.lower) < ON_BOUND_SLOPE
-    return out
+            theta = float(spec.from_unconstrained(phi[i]))
+            width = spec.upper - spec.lower
+            side[j] = 1.0 if spec.upper - theta <= BOUND_TOLERANCE * width else (-1.0 if theta - spec.lower <= BOUND_TOLERANCE * width else 0.0)
+    if not side.any():
+        return np.zeros(len(free_idx), dtype=bool)
+    step = np.linalg.lstsq(jac_phi, -r, rcond=None)[0]  # φ grows with θ on an interval
+    return (side != 0) & (np.sign(step) == side)
 
 
 def pick_best(lanes: list[Lane]) -> Lane:

@@ -25,6 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._progress import progress as say
+from .._x64 import require_x64
 from ..fit import MODEL_NAMES, FitResult, fit, parse_model_terms, predict, prepare_data
 from ..terms.model import Model, superset_model
 
@@ -320,6 +321,7 @@ def select_model(
     module docstring for the rule). ``candidates``: model names of :mod:`rbjax.fit`, each
     tried with every one of ``blocked_forces`` (``paper``, ``momentum``), or ``"name/paper"``,
     ``"name/momentum"`` for one pairing; ``fit_kwargs`` go to :func:`rbjax.fit.fit`."""
+    require_x64()
     t0 = time.perf_counter()
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)

@@ -1,0 +1,48 @@
+"""Model selection run end to end on the bundled recordings (README "Model selection on the
+bundled emulated recordings"): every fit, every leave-one-height-out fold and the rule, for the
+two candidates the README's recommendation turns on (the best model without the ball mode and
+the one with it, both with the ``momentum`` blocked force). The figures are the README table's;
+the margins are the table's own standard errors of the held-out error, so a change that moves
+the selection by more than its noise fails here.
+
+The independent check of the rule itself (hand-worked candidates) is
+``test_selection_rule.py``; this test checks that the fits feeding it give the stated
+recommendation and held-out errors.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from rbjax.data import examples_dir
+from rbjax.fit import load_data, prepare_data
+from rbjax.studies import select_model
+
+#: README table: held-out history error (%) ± its standard error over the 6 folds.
+README_HELD_OUT = {
+    "hunt-crossley/momentum": (2.59, 0.36),
+    "hunt-crossley+ball-mode/momentum": (1.03, 0.15),
+}
+
+
+@pytest.fixture(scope="module")
+def selection():
+    data = prepare_data(load_data(examples_dir()))
+    return select_model(data, ["hunt-crossley", "hunt-crossley+ball-mode"], blocked_forces=("momentum",), progress=False)
+
+
+def test_the_ball_mode_is_recommended_and_nothing_else_is_within_the_noise(selection):
+    # README "Model selection": recommended hunt-crossley+ball-mode/momentum, "no other
+    # candidate is within the noise of the best"
+    assert selection.recommended.label == "hunt-crossley+ball-mode/momentum"
+    assert [c.label for c in selection.within_noise] == ["hunt-crossley+ball-mode/momentum"]
+
+
+@pytest.mark.parametrize("label", sorted(README_HELD_OUT))
+def test_held_out_errors_are_the_readme_table_within_their_standard_error(selection, label):
+    # README "Model selection" table, held-out history err (%) column
+    stated, se = README_HELD_OUT[label]
+    candidate = next(c for c in selection.candidates if c.label == label)
+    assert candidate.fit.converged
+    assert abs(candidate.cv_error_pct - stated) <= se
+    assert candidate.cv_se_pct == pytest.approx(se, abs=0.1)
