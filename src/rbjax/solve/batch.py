@@ -204,7 +204,9 @@ def _evaluate(samples, wrt, *, height_m, ball, model, solver, method, lfe, rate_
         out[f"d:{k}"][flagged] = np.nan
     if not lfe:
         return out
-    n_total = int(round(rate_Hz * duration_s))
+    check_range("rate_Hz", rate_Hz, lower=0.0)
+    check_range("duration_s", duration_s, lower=0.0)
+    n_total = max(1, int(round(rate_Hz * duration_s)))
     tc = out["contact_time_s"]
     longest = float(np.nanmax(tc)) if np.any(np.isfinite(tc)) else 0.0
     n_times = min(n_total, HISTORY_BLOCK * math.ceil((math.ceil(longest * rate_Hz) + 2) / HISTORY_BLOCK))
