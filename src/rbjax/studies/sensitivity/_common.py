@@ -64,3 +64,14 @@ def finite_groups(y: np.ndarray, group_size: int) -> np.ndarray:
     """Which consecutive groups of ``group_size`` rows (a base point and its companions in a
     SALib design) have every output finite: the groups an estimator may use."""
     return np.all(np.isfinite(y.reshape(-1, group_size)), axis=1)
+
+
+def salib_seed(seed: int) -> int:
+    """A seed for SALib's analysers (they treat 0 as 'no seed' and draw from the global state)."""
+    return int(seed) + 1
+
+
+def interval(value, half_width) -> np.ndarray:
+    """(..., 2) intervals value ± half_width (SALib's normal-approximation intervals)."""
+    value, half_width = np.asarray(value, dtype=float), np.asarray(half_width, dtype=float)
+    return np.stack([value - half_width, value + half_width], axis=-1)

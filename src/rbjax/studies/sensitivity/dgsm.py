@@ -34,8 +34,10 @@ from ._common import (
     check_ranges,
     finite_groups,
     inputs_dict,
+    interval,
     outputs_dict,
     salib_problem,
+    salib_seed,
 )
 from .results import IndexResult
 
@@ -88,13 +90,6 @@ class DGSMResult(IndexResult):
     def _rank(self, output: str) -> np.ndarray:
         exact = np.asarray(self.total_bound[output], dtype=float)
         return exact if np.any(np.isfinite(exact)) else np.asarray(self.total_bound_fd[output], dtype=float)
-
-
-def _mean_interval(values: np.ndarray, z: float) -> tuple[np.ndarray, np.ndarray]:
-    """Mean over the rows of ``values`` (m, d) and its interval ± z·(standard error)."""
-    mean = values.mean(axis=0)
-    half = z * values.std(axis=0, ddof=1) / math.sqrt(values.shape[0])
-    return mean, np.stack([mean - half, mean + half], axis=-1)
 
 
 def dgsm_measures(
@@ -158,15 +153,16 @@ def dgsm_measures(
         if m < 2 or not variance > 0.0:
             continue
         rows = np.repeat(keep, d + 1)
-        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, seed=seed + 1)
+        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
         res["salib"][name] = si
-        vi, vi_std = np.asarray(si["vi"], dtype=float), np.asarray(si["vi_std"], dtype=float)
-        res["nu_fd"][name] = vi
-        res["nu_fd_ci"][name] = np.stack([vi - z * vi_std / math.sqrt(m), vi + z * vi_std / math.sqrt(m)], axis=-1)
+        res["nu_fd"][name] = np.asarray(si["vi"], dtype=float)
+        res["nu_fd_ci"][name] = interval(si["vi"], z * np.asarray(si["vi_std"]) / math.sqrt(m))  # SALib's std of (Δf/Δx)²
         res["bound_fd"][name] = np.asarray(si["dgsm"], dtype=float)
         if grads:
-            res["nu"][name], res["nu_ci"][name] = _mean_interval(grads[name][keep] ** 2, z)
-            res["bound"][name] = res["nu"][name] * widths2 / (math.pi**2 * variance)
+            squares = grads[name][keep] ** 2
+            res["nu"][name] = nu = squares.mean(axis=0)
+            res["nu_ci"][name] = interval(nu, z * squares.std(axis=0, ddof=1) / math.sqrt(m))
+            res["bound"][name] = nu * widths2 / (math.pi**2 * variance)
     return DGSMResult(
         parameters=tuple(ranges),
         outputs=tuple(outputs),

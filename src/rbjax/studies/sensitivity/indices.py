@@ -35,19 +35,16 @@ from ._common import (
     check_ranges,
     finite_groups,
     inputs_dict,
+    interval,
     outputs_dict,
     salib_problem,
+    salib_seed,
 )
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
 
 #: Designs of ``sobol_indices``: Saltelli's scheme on a scrambled Sobol' sequence (SALib) or on
 #: pseudo-random points (to compare convergence).
 SOBOL_DESIGNS = ("sobol", "random")
-
-
-def _salib_seed(seed: int) -> int:
-    """A seed SALib's analysers use (they treat 0 as 'no seed')."""
-    return int(seed) + 1
 
 
 def _random_saltelli(problem: dict, n: int, second_order: bool, seed: int) -> np.ndarray:
@@ -119,11 +116,11 @@ def sobol_indices(
             res["S1_ci"][name] = res["ST_ci"][name] = np.full((d, 2), np.nan)
             res["S2"][name] = res["S2_ci"][name] = nan_dd
             continue
-        si = analyze.analyze(problem, rows.reshape(-1), calc_second_order=second_order, num_resamples=n_bootstrap, conf_level=confidence, seed=_salib_seed(seed))
+        si = analyze.analyze(problem, rows.reshape(-1), calc_second_order=second_order, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
         res["salib"][name] = si
         res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
-        res["S1_ci"][name] = _interval(si["S1"], si["S1_conf"])
-        res["ST_ci"][name] = _interval(si["ST"], si["ST_conf"])
+        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
+        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
         if second_order:
             res["S2"][name], res["S2_ci"][name] = np.asarray(si["S2"]), np.asarray(si["S2_conf"])
     return SobolResult(
@@ -146,12 +143,6 @@ def sobol_indices(
         samples={**inputs, **outputs, "block": np.tile(block, n), "base": np.repeat(np.arange(n), step)},
         salib=res["salib"],
     )
-
-
-def _interval(value, half_width) -> np.ndarray:
-    """(d, 2) intervals value ± half_width (SALib's normal-approximation bootstrap intervals)."""
-    value, half_width = np.asarray(value, dtype=float), np.asarray(half_width, dtype=float)
-    return np.stack([value - half_width, value + half_width], axis=-1)
 
 
 def morris_screening(
@@ -200,11 +191,11 @@ def morris_screening(
             res["mu_star_ci"][name] = np.full((d, 2), np.nan)
             continue
         rows = np.repeat(keep, d + 1)
-        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, num_levels=p, seed=_salib_seed(seed))
+        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, num_levels=p, seed=salib_seed(seed))
         res["salib"][name] = si
         for key in ("mu", "mu_star", "sigma"):
             res[key][name] = np.asarray(si[key], dtype=float)
-        res["mu_star_ci"][name] = _interval(si["mu_star"], si["mu_star_conf"])
+        res["mu_star_ci"][name] = interval(si["mu_star"], si["mu_star_conf"])
     return MorrisResult(
         parameters=tuple(ranges),
         outputs=tuple(outputs),
@@ -261,11 +252,11 @@ def fast_indices(
             continue
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", "FAST confidence intervals", UserWarning)
-            si = analyze.analyze(problem, y, M=m_int, num_resamples=n_bootstrap, conf_level=confidence, seed=_salib_seed(seed))
+            si = analyze.analyze(problem, y, M=m_int, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
         res["salib"][name] = si
         res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
-        res["S1_ci"][name] = _interval(si["S1"], si["S1_conf"])
-        res["ST_ci"][name] = _interval(si["ST"], si["ST_conf"])
+        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
+        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
     return FastResult(
         parameters=tuple(ranges),
         outputs=tuple(outputs),
@@ -308,7 +299,7 @@ def pawn_indices(func: Callable, ranges: Mapping, n_samples: int, *, n_condition
             continue
         with warnings.catch_warnings():  # SALib's pandas summary warns on a future dtype change
             warnings.simplefilter("ignore", FutureWarning)
-            si = analyze.analyze(problem, x[keep], y[keep], S=s, seed=_salib_seed(seed))
+            si = analyze.analyze(problem, x[keep], y[keep], S=s, seed=salib_seed(seed))
         res["salib"][name] = si
         for k in keys:
             res[k][name] = np.asarray(si[k], dtype=float)
