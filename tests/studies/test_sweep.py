@@ -94,6 +94,16 @@ def test_exact_derivatives_match_central_differences_of_the_reference(references
             np.testing.assert_allclose(jac[k][i, j], fd, rtol=2e-4, atol=1e-9 * abs(r[k]) / base[p], err_msg=f"d{k}/d{p}")
 
 
+def test_flagged_rows_are_computed_again_in_place():
+    from rbjax.solve.batch import _redo
+
+    out = {"y": np.zeros(10), "n": np.zeros(10)}
+    batch = {"a": np.arange(10.0), "b": np.arange(10.0)}
+    _redo(out, np.array([1, 4, 7]), _double_plus, batch, np.float64(0.5), sharded_map)
+    np.testing.assert_array_equal(out["y"], [0, 2.5, 0, 0, 8.5, 0, 0, 14.5, 0, 0])
+    np.testing.assert_array_equal(out["n"][[1, 4, 7]], 4.0)  # padded to a power of two
+
+
 def test_evaluate_rejects_bad_samples():
     with pytest.raises(ValueError, match="poisson"):
         evaluate({"poisson": np.array([0.4, 0.6])})
