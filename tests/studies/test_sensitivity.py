@@ -1,5 +1,5 @@
-"""Local sensitivities against finite differences of the scipy reference; Sobol and Morris on
-analytic functions; conformance probability against an analytic case; the CLI."""
+"""Local sensitivities against finite differences of the scipy reference; conformance
+probability against an analytic case; the CLI. (Global methods: test_global_sensitivity.py.)"""
 
 from __future__ import annotations
 
@@ -19,8 +19,6 @@ from rbjax.studies.sensitivity import (
     conformance_flags,
     conformance_probability,
     local_sensitivity,
-    morris_screening,
-    sobol_indices,
 )
 
 import scipy_reference as ref
@@ -134,60 +132,6 @@ def test_unknown_parameter_is_rejected():
         local_sensitivity(1.0, wrt=("stiffness_Pa",))
     with pytest.raises(ValueError, match="damping_Ns_per_m"):  # a damping field without a damping model
         local_sensitivity(1.0, wrt=("damping_Ns_per_m",))
-
-
-# ----------------------------------------------------------------------------------------------
-# Global sensitivity on analytic functions.
-
-
-def ishigami(x, a=7.0, b=0.1):
-    return np.sin(x["x1"]) + a * np.sin(x["x2"]) ** 2 + b * x["x3"] ** 4 * np.sin(x["x1"])
-
-
-def test_sobol_indices_of_the_ishigami_function():
-    a, b = 7.0, 0.1  # Ishigami & Homma (1990); indices from the analytic variances
-    v1, v2, v13 = 0.5 * (1 + b * np.pi**4 / 5) ** 2, a**2 / 8, b**2 * np.pi**8 * (1 / 18 - 1 / 50)
-    v = v1 + v2 + v13
-    first, total = np.array([v1, v2, 0.0]) / v, np.array([v1 + v13, v2, v13]) / v
-    res = sobol_indices(ishigami, {k: (-np.pi, np.pi) for k in ("x1", "x2", "x3")}, 20_000, seed=0)
-    assert res.n_evaluations == 100_000 and res.n_valid["y"] == 20_000
-    np.testing.assert_allclose(res.variance["y"], v, rtol=0.02)
-    np.testing.assert_allclose(res.first_order["y"], first, atol=0.02)
-    np.testing.assert_allclose(res.total_order["y"], total, atol=0.02)
-    lo, hi = res.first_order_ci["y"].T
-    assert np.all((lo <= first) & (first <= hi))
-    lo, hi = res.total_order_ci["y"].T
-    assert np.all((lo <= total) & (total <= hi))
-    assert res.driver("y") == "x1"
-
-
-def test_sobol_drops_rows_with_failed_evaluations():
-    def f(x):
-        y = x["u"] + 0.1 * x["v"]
-        return np.where(x["u"] > 0.95, np.nan, y)
-
-    res = sobol_indices(f, {"u": (0, 1), "v": (0, 1)}, 2000, seed=1, n_bootstrap=0)
-    assert 0 < res.n_valid["y"] < 2000
-    assert np.all(np.isfinite(res.first_order["y"]))
-
-
-def test_morris_elementary_effects_of_a_linear_function():
-    ranges = {"a": (0.0, 2.0), "b": (10.0, 20.0), "c": (-1.0, 1.0)}
-    res = morris_screening(lambda x: 3.0 * x["a"] - 0.5 * x["b"] + 0.0 * x["c"], ranges, 20, seed=3)
-    # effect per full range: coefficient × width, with no spread for a linear function
-    np.testing.assert_allclose(res.mu["y"], [6.0, -5.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(res.mu_star["y"], [6.0, 5.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(res.sigma["y"], 0.0, atol=1e-12)
-    assert res.n_evaluations == 20 * 4 and res.driver("y") == "a"
-
-
-def test_bad_ranges_are_rejected():
-    with pytest.raises(ValueError, match="low < high"):
-        sobol_indices(ishigami, {"x1": (1.0, 1.0)}, 10)
-    with pytest.raises(ValueError, match="youngs"):
-        from rbjax.studies.sensitivity import global_sensitivity
-
-        global_sensitivity({"youngs_Pa": (-1.0, 2e6)}, 10)
 
 
 # ----------------------------------------------------------------------------------------------

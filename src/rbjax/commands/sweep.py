@@ -1,16 +1,22 @@
-"""``rbjax sweep CONFIG.toml``: global sensitivity (Sobol, Morris) and conformance probability."""
+"""``rbjax sweep CONFIG.toml``: global sensitivity (SALib: Sobol, Morris, eFAST, PAWN, DGSM) and
+conformance probability."""
 
 from __future__ import annotations
 
 from . import add_command, emit_json, progress
 
 DESCRIPTION = """\
-Run a batched study of the rubber-ball impact described by a TOML file, sharded over all JAX
-devices (one CPU, several CPU devices with XLA_FLAGS=--xla_force_host_platform_device_count=N,
-or GPUs):
+Run a batched study of the rubber-ball impact described by a TOML file: a SALib design,
+evaluated on the fastest exact path the model allows and sharded over all JAX devices (on a
+CPU: one device per core, see --cpu-devices; or GPUs), analysed by SALib:
 
-  kind = "sobol"        first- and total-order Sobol indices with bootstrap intervals
+  kind = "sobol"        Sobol first-, total- (and second-) order indices on a Sobol'-sequence
+                        design, with bootstrap intervals
   kind = "morris"       Morris elementary-effect screening
+  kind = "fast"         extended FAST first- and total-order indices
+  kind = "pawn"         PAWN moment-independent indices
+  kind = "dgsm"         derivative-based measures from exact gradients beside SALib's finite
+                        differences, and the total-index upper bound
   kind = "conformance"  Monte Carlo probability of meeting the rubber-ball tolerances
                         (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2)
 
@@ -36,7 +42,27 @@ def register(subparsers) -> None:
         help="multi-host run: call jax.distributed.initialize() first (SLURM/Open MPI/TPU detected); "
         "start the same command on every host; process 0 writes the output",
     )
+    p.add_argument(
+        "--cpu-devices",
+        type=int,
+        default=None,
+        metavar="N",
+        help="JAX CPU devices to shard over (default: one per core; each runs its share of the batch on one core)",
+    )
     p.set_defaults(func=run)
+
+
+def _cpu_devices(jax, n: int | None) -> None:
+    """Ask JAX for ``n`` CPU devices (default: one per core) unless XLA_FLAGS sets a count or
+    the backend already started (then its devices are used as they are)."""
+    import os
+
+    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
+        return
+    try:
+        jax.config.update("jax_num_cpu_devices", n or len(os.sched_getaffinity(0)))
+    except RuntimeError:  # the backend is running (e.g. a second command in one process)
+        pass
 
 
 def run(args) -> int:
@@ -46,6 +72,9 @@ def run(args) -> int:
 
     from ..studies.sweep import load_config, run_sweep, write_outputs
 
+    if args.cpu_devices is not None and args.cpu_devices < 1:
+        raise ValueError(f"--cpu-devices={args.cpu_devices!r} must be an integer ≥ 1")
+    _cpu_devices(jax, args.cpu_devices)
     if args.distributed:
         jax.distributed.initialize()
     config = load_config(args.config)

@@ -6,10 +6,11 @@ general path and the reference), the quadrature of the undamped rigid-floor impa
 phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`) and histories
 sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
 :func:`~rbjax.solve.simulate.simulate` choosing among them, the energy balance
-(:mod:`~rbjax.solve.energy`) and sharded batched evaluation (:mod:`~rbjax.solve.batch`)."""
+(:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path (:mod:`~rbjax.solve.batch`), sharded over the
+devices (:mod:`~rbjax.solve.sharded`)."""
 
 from .angle import impact_angle
-from .batch import evaluate, sharded_map
+from .batch import evaluate, evaluate_jacobian
 from .energy import EnergyBalance, energy_balance
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
 from .ode import impact_batch, recontact_horizon_s, trajectory_batch
@@ -23,10 +24,11 @@ from .outcome import (
 from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
 from .sampled import sampled_history
+from .sharded import sharded_map
 from .simulate import METHODS, ImpactResult, force_history, make_model, simulate, trajectory
 
 __all__ = [
-    "impact_angle", "evaluate", "sharded_map", "EnergyBalance", "energy_balance",
+    "impact_angle", "evaluate", "evaluate_jacobian", "sharded_map", "EnergyBalance", "energy_balance",
     "PAPER_DURATION_S", "PAPER_RATE_Hz", "check_inputs", "impact_batch", "recontact_horizon_s",
     "trajectory_batch", "STATUS_CODES", "STATUS_NAMES", "ImpactScalars", "Trajectory",
     "impact_velocity_m_per_s", "impact_quadrature", "impact_quadrature_batch",

@@ -1,11 +1,12 @@
-"""Sweep configuration files: a TOML file → Sobol indices, Morris screening or conformance probability.
+"""Sweep configuration files: a TOML file → a global sensitivity study (SALib: Sobol, Morris,
+eFAST, PAWN, DGSM) or a conformance probability.
 
-The batched, sharded evaluation itself is :mod:`rbjax.solve.batch`; the estimators are
+The batched, sharded evaluation itself is :mod:`rbjax.solve.batch`; the methods are
 :mod:`rbjax.studies.sensitivity`.
 
 Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.toml``)::
 
-    kind = "sobol"            # "sobol", "morris" or "conformance"
+    kind = "sobol"            # "sobol", "morris", "fast", "pawn", "dgsm" or "conformance"
     seed = 0
     height_m = 1.0            # the nominal drop height (also a parameter: see below)
     outputs = ["contact_time_s", "peak_force_N", "restitution", "lfe"]
@@ -17,24 +18,44 @@ Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.
     [model]                   # as in the params JSON (rbjax.terms.serialize): gas, blocked_force,
     gas = "adiabatic"         # damping = {name = "kelvin-voigt", damping_Ns_per_m = 5.0}, ...
 
-    [solver]                  # rbjax.Solver fields (default: tsit5, rtol 1e-9, atol 1e-12)
-    rtol = 1e-9
+    [solver]                  # rbjax.Solver fields: asks for the diffrax ODE with them (without
+    rtol = 1e-9               # this table: the fastest exact path the model allows)
 
-    [sobol]                   # kind = "sobol": n_base samples, N = n_base (d + 2) evaluations
-    n_base = 20000
-    n_bootstrap = 200
     [ranges]                  # uniform ranges of the varied parameters
     youngs_Pa = [1.2e6, 2.0e6]
     mass_kg = [2.4, 2.6]
 
-    [morris]                  # kind = "morris": N = n_trajectories (d + 1) evaluations
+    [sobol]                   # kind = "sobol": N base points, a power of two;
+    n_base = 8192             # N (d + 2) evaluations, N (2d + 2) with second_order = true
+    second_order = false
+    design = "sobol"          # or "random" (pseudo-random points, to compare)
+    n_bootstrap = 100
+    confidence = 0.95
+
+    [morris]                  # kind = "morris": n_trajectories (d + 1) evaluations
     n_trajectories = 500
     n_levels = 4
+    optimal_trajectories = 50 # optional: keep the 50 trajectories spread farthest apart
+
+    [fast]                    # kind = "fast": n_per_parameter d evaluations (> 4 M²)
+    n_per_parameter = 1000
+    interference = 4
+
+    [pawn]                    # kind = "pawn": n_samples evaluations (Latin hypercube)
+    n_samples = 2000
+    n_conditioning = 10
+
+    [dgsm]                    # kind = "dgsm": n_base (d + 1) evaluations (finite differences)
+    n_base = 1024             # and exact gradients at the n_base points
+    delta = 1e-4
 
     [conformance]             # kind = "conformance"
     n_samples = 20000
     [distributions]           # each {kind = "uniform", low, high} | {kind = "normal", mean, sd}
     height_m = {kind = "uniform", low = 0.99, high = 1.01}   # | {kind = "lognormal", median, sigma}
+
+A method's table holds its sample size and any of its options
+(``rbjax.studies.sensitivity.method_options``).
 """
 
 from __future__ import annotations
@@ -61,8 +82,10 @@ from ..terms.model import Solver
 from ..terms.serialize import to_json
 from . import sensitivity as sens
 
-SWEEP_KINDS = ("sobol", "morris", "conformance")
-CONFIG_KEYS = ("kind", "seed", "height_m", "outputs", "chunk_size", "ball", "model", "solver", "sobol", "morris", "conformance", "ranges", "distributions")
+SWEEP_KINDS = (*sens.METHODS, "conformance")
+CONFIG_KEYS = ("kind", "seed", "height_m", "outputs", "chunk_size", "ball", "model", "solver", "ranges", "distributions", *SWEEP_KINDS)
+#: Sample sizes of a method whose table does not give one.
+DEFAULT_SIZES = {"sobol": 1024, "morris": 100, "fast": 1000, "pawn": 1000, "dgsm": 1024}
 
 
 def load_config(path) -> dict:
@@ -86,7 +109,9 @@ def _base(config: dict):
         raise ValueError(f"[ball] has unknown keys {sorted(unknown)}; valid: {', '.join(BALL_PARAMETERS)}")
     ball = JIS_RUBBER_BALL.replace(**{k: float(v) for k, v in ball_fields.items()})
     model = model_from_dict(config.get("model", {}))
-    solver_fields = config.get("solver", {})
+    if "solver" not in config:  # the fastest exact path
+        return float(config.get("height_m", 1.0)), ball, model, None
+    solver_fields = config["solver"]
     unknown = set(solver_fields) - {f.name for f in dataclasses.fields(Solver)}
     if unknown:
         raise ValueError(f"[solver] has unknown keys {sorted(unknown)}; valid: {', '.join(f.name for f in dataclasses.fields(Solver))}")
@@ -96,9 +121,10 @@ def _base(config: dict):
 def run_sweep(config: dict, *, progress: bool = False, devices=None):
     """Run a sweep configuration (see the module docstring); returns the study's result object.
 
-    ``kind = "sobol"`` → ``rbjax.studies.sensitivity.SobolResult``, ``"morris"`` → ``MorrisResult``,
-    ``"conformance"`` → ``ConformanceProbability``. Each has ``.to_dict()`` (the JSON summary)
-    and ``.samples`` (the inputs and outputs of every evaluation).
+    ``kind = "sobol"`` → ``rbjax.studies.sensitivity.SobolResult``, ``"morris"`` →
+    ``MorrisResult``, ``"fast"`` → ``FastResult``, ``"pawn"`` → ``PawnResult``, ``"dgsm"`` →
+    ``DGSMResult``, ``"conformance"`` → ``ConformanceProbability``. Each has ``.to_dict()`` (the
+    JSON summary) and ``.samples`` (the inputs and outputs of every evaluation).
     """
 
     unknown = set(config) - set(CONFIG_KEYS)
@@ -135,27 +161,16 @@ def run_sweep(config: dict, *, progress: bool = False, devices=None):
     outputs = config.get("outputs", ("contact_time_s", "peak_force_N", "restitution"))
     if isinstance(outputs, str) or not isinstance(outputs, (list, tuple)):
         raise ValueError(f"outputs = {outputs!r}: expected a list of output names")
-    outputs = tuple(outputs)
-    if kind == "sobol":
-        section = config.get("sobol", {})
-        return sens.global_sensitivity(
-            ranges,
-            int(section.get("n_base", 1024)),
-            method="sobol",
-            outputs=outputs,
-            n_bootstrap=int(section.get("n_bootstrap", 200)),
-            confidence=float(section.get("confidence", 0.95)),
-            **common,
-        )
-    section = config.get("morris", {})
-    return sens.global_sensitivity(
-        ranges,
-        int(section.get("n_trajectories", 100)),
-        method="morris",
-        outputs=outputs,
-        n_levels=int(section.get("n_levels", 4)),
-        **common,
-    )
+    if not isinstance(config.get(kind, {}), dict):
+        raise ValueError(f"{kind} = {config[kind]!r}: expected a [{kind}] table")
+    options = dict(config.get(kind, {}))
+    size = sens.size_name(kind)
+    valid = (size, *sens.method_options(kind))
+    unknown = set(options) - set(valid)
+    if unknown:
+        raise ValueError(f"[{kind}] has unknown keys {sorted(unknown)}; valid: {', '.join(valid)}")
+    n = options.pop(size, DEFAULT_SIZES[kind])
+    return sens.global_sensitivity(ranges, n, method=kind, outputs=tuple(outputs), **options, **common)
 
 
 def write_outputs(result, path, config: dict | None = None) -> list[Path]:

@@ -10,12 +10,15 @@
   per % change of the parameter; for an L_FE band, whose dB value is already logarithmic, the
   elasticity is that of the band's force energy E (L_FE = 10 log10 E, so
   ∂ln E/∂ln x = (ln 10/10) x ∂L_FE/∂x).
-* **Global** (:mod:`rbjax.studies.sensitivity.indices`): Sobol first- and total-order indices
-  (:func:`sobol_indices`, Saltelli 2010 first-order and Jansen 1999 total-order estimators,
-  bootstrap confidence intervals) and Morris elementary-effect screening
-  (:func:`morris_screening`) over uniform parameter ranges; :func:`global_sensitivity` applies
-  them to the impact model, evaluated in batches sharded over the JAX devices
-  (:mod:`rbjax.studies.sweep`).
+* **Global**, on SALib (sample → evaluate in batches on the fastest exact path, sharded over the
+  JAX devices → analyse): Sobol first-, total- and second-order indices on a Sobol'-sequence
+  design (:func:`sobol_indices`), Morris screening (:func:`morris_screening`), eFAST
+  (:func:`fast_indices`) and PAWN (:func:`pawn_indices`) in
+  :mod:`~rbjax.studies.sensitivity.indices`, their result objects in
+  :mod:`~rbjax.studies.sensitivity.results`; derivative-based measures from exact gradients
+  beside SALib's finite differences, with the total-index bound (:func:`dgsm_measures`,
+  :mod:`~rbjax.studies.sensitivity.dgsm`); :func:`global_sensitivity`
+  (:mod:`~rbjax.studies.sensitivity.study`) applies any of them to the impact model.
 * **Conformance probability** (:func:`conformance_probability`,
   :mod:`rbjax.studies.sensitivity.conformance`): Monte Carlo probability that a ball whose drop height,
   mass or rubber vary stays inside the rubber-ball tolerances (ISO 16283-2:2020 Table A.1 =
@@ -31,17 +34,31 @@ from .conformance import (
     draw_samples,
     wilson_interval,
 )
-from .indices import MorrisResult, SobolResult, global_sensitivity, morris_screening, sobol_indices
+from .dgsm import DGSMResult, dgsm_measures
+from .indices import SOBOL_DESIGNS, fast_indices, morris_screening, pawn_indices, sobol_indices
 from .local import SCALAR_OUTPUTS, Sensitivity, local_sensitivity
+from .results import FastResult, IndexResult, MorrisResult, PawnResult, SobolResult
+from .study import METHODS, global_sensitivity, method_options, size_name
 
 __all__ = [
     "SCALAR_OUTPUTS",
     "Sensitivity",
     "local_sensitivity",
+    "IndexResult",
     "SobolResult",
+    "SOBOL_DESIGNS",
     "sobol_indices",
     "MorrisResult",
     "morris_screening",
+    "FastResult",
+    "fast_indices",
+    "PawnResult",
+    "pawn_indices",
+    "DGSMResult",
+    "dgsm_measures",
+    "METHODS",
+    "method_options",
+    "size_name",
     "global_sensitivity",
     "DISTRIBUTION_KINDS",
     "draw_samples",

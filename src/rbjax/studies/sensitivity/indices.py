@@ -1,169 +1,64 @@
-"""Global sensitivity of the rubber-ball impact: Sobol indices and Morris screening.
+"""Global sensitivity indices on SALib: sample (SALib) → evaluate (``func``, one call) → analyse
+(SALib).
 
-Sobol first- and total-order indices (:func:`sobol_indices`, Saltelli 2010 first-order and
-Jansen 1999 total-order estimators, bootstrap confidence intervals) and Morris elementary-effect
-screening (:func:`morris_screening`) over uniform parameter ranges; :func:`global_sensitivity`
-applies them to the impact model (contact time, peak force, restitution: paper §2.4, Eq. 7;
-L_FE per octave band: Eq. 11), evaluated in batches sharded over the JAX devices
-(:mod:`rbjax.studies.sweep`).
+Over independent uniform ranges of the inputs:
+
+* :func:`sobol_indices`: first-, total- and second-order Sobol indices (SALib ``sample.sobol``,
+  Saltelli's scheme on a scrambled Sobol' sequence, and ``analyze.sobol``: Saltelli et al. 2010
+  first order, Jansen 1999 total order, Saltelli 2002 second order, bootstrap intervals);
+* :func:`morris_screening`: Morris (1991) elementary effects, optionally on Campolongo's
+  optimised trajectories (SALib ``sample.morris``, ``analyze.morris``);
+* :func:`fast_indices`: extended FAST first- and total-order indices (Saltelli et al. 1999;
+  SALib ``sample.fast_sampler``, ``analyze.fast``);
+* :func:`pawn_indices`: the moment-independent PAWN indices (Pianosi & Wagener 2015) on a Latin
+  hypercube (SALib ``sample.latin``, ``analyze.pawn``).
+
+``func`` takes a dict parameter → (N,) array and returns an (N,) array or a dict of them (one
+per output); it is called once, with every row of the design. Base points (Sobol), trajectories
+(Morris) or rows (PAWN) with a non-finite output are left out for that output (``n_valid``);
+eFAST needs every row (an output with one failed row has NaN indices). The derivative-based
+measures are :mod:`rbjax.studies.sensitivity.dgsm`; :mod:`rbjax.studies.sensitivity.study`
+applies all of them to the impact model.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
+import warnings
 from collections.abc import Callable, Mapping
-from typing import ClassVar
 
 import numpy as np
 
 from ..._validate import check_range
-from ...solve.batch import SCALAR_OUTPUTS as SWEEP_SCALAR_OUTPUTS
-from ...solve.batch import assemble, canonical_name, evaluate, lfe_output_names
-from ...solve.simulate import make_model
-from ...terms.ball import JIS_RUBBER_BALL, Ball
-from ...terms.model import Model, Solver
-from ._common import _is_lfe
+from ._common import (
+    check_count,
+    check_ranges,
+    finite_groups,
+    inputs_dict,
+    interval,
+    outputs_dict,
+    salib_problem,
+    salib_seed,
+)
+from .results import FastResult, MorrisResult, PawnResult, SobolResult
+
+#: Designs of ``sobol_indices``: Saltelli's scheme on a scrambled Sobol' sequence (SALib) or on
+#: pseudo-random points (to compare convergence).
+SOBOL_DESIGNS = ("sobol", "random")
 
 
-def _check_ranges(ranges: Mapping, canonical: Callable = lambda n: n) -> dict[str, tuple[float, float]]:
-    if not isinstance(ranges, Mapping) or not ranges:
-        raise ValueError(f"ranges={ranges!r} must be a non-empty mapping of parameter name to (low, high)")
-    out = {}
-    for name, bounds in ranges.items():
-        try:
-            low, high = (float(b) for b in bounds)
-        except (TypeError, ValueError):
-            raise ValueError(f"ranges[{name!r}]={bounds!r} must be a pair (low, high) of numbers") from None
-        if not (math.isfinite(low) and math.isfinite(high) and low < high):
-            raise ValueError(f"ranges[{name!r}]=({low!r}, {high!r}) must be finite with low < high")
-        out[canonical(name)] = (low, high)
-    return out
-
-
-def _outputs_dict(y) -> dict[str, np.ndarray]:
-    if isinstance(y, Mapping):
-        return {k: np.asarray(v, dtype=float) for k, v in y.items()}
-    return {"y": np.asarray(y, dtype=float)}
-
-
-def _scale(unit: np.ndarray, ranges: dict) -> dict[str, np.ndarray]:
-    return {name: lo + (hi - lo) * unit[:, j] for j, (name, (lo, hi)) in enumerate(ranges.items())}
-
-
-@dataclasses.dataclass(frozen=True)
-class _IndexResult:
-    """What ``SobolResult`` and ``MorrisResult`` share: the first fields (parameter and output
-    names, the uniform ranges), per-output, per-parameter indices of which one (``_RANKING``:
-    S_Ti, μ*) ranks the parameters, and their JSON summary and text table."""
-
-    _RANKING: ClassVar[str]
-    parameters: tuple[str, ...]
-    outputs: tuple[str, ...]
-    ranges: dict
-
-    def driver(self, output: str) -> str:
-        """The parameter with the largest ranking index of ``output``: the largest total-order
-        index (Sobol), what drives the output's spread; the largest μ* (Morris), the most
-        influential one."""
-        return self.parameters[int(np.nanargmax(getattr(self, self._RANKING)[output]))]
-
-    def _driver_or(self, output: str, default):
-        """``driver(output)``, or ``default`` when no index of the output is finite."""
-        return self.driver(output) if np.any(np.isfinite(getattr(self, self._RANKING)[output])) else default
-
-    def _summary(self, head: dict, design: dict, scalars: Callable[[str], dict], indices: tuple[str, ...]) -> dict:
-        """``to_dict``: ``head``, the parameters and ranges, ``design``, then per output its driver,
-        ``scalars(output)`` and each index attribute in ``indices`` as parameter → value."""
-        return {
-            **head,
-            "parameters": list(self.parameters),
-            "ranges": {k: list(v) for k, v in self.ranges.items()},
-            **design,
-            "outputs": {
-                o: {
-                    "driver": self._driver_or(o, None),
-                    **scalars(o),
-                    **{k: dict(zip(self.parameters, getattr(self, k)[o].tolist())) for k in indices},
-                }
-                for o in self.outputs
-            },
-        }
-
-    def _table(self, title: str, note: Callable[[str], str], row: Callable[[str, int], str]) -> str:
-        """``table``: ``title``, then per output a line naming its driver (and ``note(output)``)
-        and a line ``row(output, j)`` per parameter j."""
-        lines = [title]
-        for o in self.outputs:
-            lines.append(f"{o}  (driver: {self._driver_or(o, '—')}{note(o)})")
-            lines.extend(f"  {p:<20} {row(o, j)}" for j, p in enumerate(self.parameters))
-        return "\n".join(lines)
-
-
-@dataclasses.dataclass(frozen=True)
-class SobolResult(_IndexResult):
-    """Sobol indices of each output (see ``sobol_indices``).
-
-    Attributes:
-        parameters, outputs: names.
-        ranges: parameter → (low, high), the uniform input ranges.
-        n_base: base sample size n; ``n_evaluations`` = n (d + 2).
-        first_order, total_order: output → indices S_i, S_Ti, shape (d,).
-        first_order_ci, total_order_ci: output → bootstrap percentile intervals, shape (d, 2).
-        confidence: level of the intervals.
-        mean, variance: output → mean and variance over the A and B samples.
-        n_valid: output → number of base rows with every evaluation finite (rows with a
-            flagged solve are left out).
-        samples: the inputs and outputs of every evaluation, with ``block`` = 0 for A, 1 for B,
-            2 + i for A_B^(i).
-    """
-
-    n_base: int
-    n_evaluations: int
-    first_order: dict
-    total_order: dict
-    first_order_ci: dict
-    total_order_ci: dict
-    confidence: float
-    mean: dict
-    variance: dict
-    n_valid: dict
-    samples: dict = dataclasses.field(repr=False)
-
-    _RANKING = "total_order"
-
-    def to_dict(self) -> dict:
-        return self._summary(
-            {"method": "sobol", "estimators": "first order: Saltelli et al. 2010; total order: Jansen 1999; percentile bootstrap"},
-            {"n_base": self.n_base, "n_evaluations": self.n_evaluations, "confidence": self.confidence},
-            lambda o: {"mean": self.mean[o], "variance": self.variance[o], "n_valid": self.n_valid[o]},
-            ("first_order", "total_order", "first_order_ci", "total_order_ci"),
-        )
-
-    def table(self) -> str:
-        def row(o: str, j: int) -> str:
-            s, (slo, shi) = self.first_order[o][j], self.first_order_ci[o][j]
-            t, (tlo, thi) = self.total_order[o][j], self.total_order_ci[o][j]
-            return f"S {s:7.3f} [{slo:6.3f}, {shi:6.3f}]   S_T {t:7.3f} [{tlo:6.3f}, {thi:6.3f}]"
-
-        title = f"Sobol indices, {self.n_evaluations} evaluations (n = {self.n_base}), {self.confidence:.0%} bootstrap CI"
-        return self._table(title, lambda o: f", valid rows {self.n_valid[o]}", row)
-
-
-def _sobol_estimates(ya, yb, yab):
-    """S_i (Saltelli 2010) and S_Ti (Jansen 1999) from rows (..., n); yab: (d, ..., n).
-
-    The outputs are centred on the mean of y_A and y_B first: that leaves the expectation of
-    the first-order estimator unchanged (E[y_{A_B^i} − y_A] = 0) and removes its variance
-    term proportional to the squared mean (large for, e.g., a contact time of 20 ± 1 ms).
-    """
-    both = np.concatenate([ya, yb], axis=-1)
-    centre = np.mean(both, axis=-1, keepdims=True)
-    ya, yb, yab = ya - centre, yb - centre, yab - centre
-    variance = np.var(both, axis=-1)
-    first = np.mean(yb * (yab - ya), axis=-1) / variance
-    total = 0.5 * np.mean((ya - yab) ** 2, axis=-1) / variance
-    return first, total
+def _random_saltelli(problem: dict, n: int, second_order: bool, seed: int) -> np.ndarray:
+    """Saltelli's scheme on pseudo-random points, rows laid out as SALib's ``sample.sobol``:
+    per base point A, A_B^(1..d), [B_A^(1..d)], B (a design SALib does not provide)."""
+    d = problem["num_vars"]
+    base = np.random.default_rng(seed).random((n, 2 * d))
+    a, b = base[:, :d], base[:, d:]
+    eye = np.eye(d, dtype=bool)
+    ab = np.where(eye[None], b[:, None, :], a[:, None, :])  # (n, d, d): A with column i from B
+    blocks = [a[:, None], ab] + ([np.where(eye[None], a[:, None, :], b[:, None, :])] if second_order else []) + [b[:, None]]
+    unit = np.concatenate(blocks, axis=1).reshape(-1, d)
+    low, high = np.array(problem["bounds"]).T
+    return low + (high - low) * unit
 
 
 def sobol_indices(
@@ -171,239 +66,256 @@ def sobol_indices(
     ranges: Mapping,
     n_base: int,
     *,
+    second_order: bool = True,
+    design: str = "sobol",
     seed: int = 0,
     n_bootstrap: int = 200,
     confidence: float = 0.95,
 ) -> SobolResult:
-    """First- and total-order Sobol indices of ``func`` over independent uniform inputs.
+    """First-, total- and (``second_order``) second-order Sobol indices of ``func`` (SALib).
 
-    ``func`` takes a dict parameter → (N,) array and returns an (N,) array or a dict of them
-    (one per output); it is called once, with all N = n_base (d + 2) rows (the A, B and
-    A_B^(i) matrices of Saltelli et al. 2010, from a seeded pseudo-random design). Estimators:
-    S_i = mean(y_B (y_{A_B^i} − y_A)) / V (Saltelli et al. 2010) and
-    S_Ti = mean((y_A − y_{A_B^i})²) / (2V) (Jansen 1999), V the variance of y_A and y_B
-    together; confidence intervals by the percentile bootstrap over the n base rows. Rows with a
-    non-finite output are dropped for that output (``n_valid``).
+    ``n_base`` N, a power of two for the Sobol' sequence (its balance holds for 2^m points):
+    N (d + 2) evaluations, N (2d + 2) with the second order. ``design="random"`` lays the same
+    scheme on pseudo-random points (any N), for comparison. Intervals: the index ± SALib's
+    bootstrap half-width over the base points (``n_bootstrap`` resamples, level
+    ``confidence``; the bootstrap treats the points as independent, so for the Sobol' design
+    it overstates the error: replicate the study with other seeds to measure it).
     """
-    ranges = _check_ranges(ranges)
-    check_range("n_base", n_base, lower=1.0, upper=math.inf, lower_open=False)
+    ranges = check_ranges(ranges)
+    if design not in SOBOL_DESIGNS:
+        raise ValueError(f"design={design!r} is not known; valid: {', '.join(map(repr, SOBOL_DESIGNS))}")
+    why = " for the Sobol' sequence design (its balance holds for 2^m points)" if design == "sobol" else ""
+    n = check_count("n_base", n_base, 2, power_of_two=design == "sobol", why=why)
+    n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
-    check_range("n_bootstrap", n_bootstrap, lower=0.0, upper=math.inf, lower_open=False)
-    n, d = int(n_base), len(ranges)
-    rng = np.random.default_rng(seed)
-    a, b = rng.random((n, d)), rng.random((n, d))
-    ab = np.repeat(a[None], d, axis=0)
-    ab[np.arange(d), :, np.arange(d)] = b.T
-    unit = np.concatenate([a, b, ab.reshape(d * n, d)])
-    inputs = _scale(unit, ranges)
-    outputs = _outputs_dict(func(inputs))
-    block = np.repeat(np.arange(d + 2), n)
-    samples = {**inputs, **outputs, "block": block}
+    from SALib.analyze import sobol as analyze
+    from SALib.sample import sobol as sample
 
-    alpha = 0.5 * (1.0 - confidence)
-    res: dict[str, dict] = {k: {} for k in ("first", "total", "first_ci", "total_ci", "mean", "var", "n_valid")}
-    boot_rng = np.random.default_rng([seed, 1])
+    problem, d = salib_problem(ranges), len(ranges)
+    if design == "sobol":
+        x = sample.sample(problem, n, calc_second_order=second_order, scramble=True, seed=seed)
+    else:
+        x = _random_saltelli(problem, n, second_order, seed)
+    step = 2 * d + 2 if second_order else d + 2
+    inputs = inputs_dict(x, ranges)
+    outputs = outputs_dict(func(inputs), n * step)
+    block = np.concatenate([[0], 2 + np.arange(d), 2 + d + np.arange(d) if second_order else [], [1]]).astype(int)
+
+    res: dict[str, dict] = {k: {} for k in ("S1", "ST", "S1_ci", "ST_ci", "S2", "S2_ci", "mean", "var", "n_valid", "salib")}
+    nan_d, nan_dd = np.full(d, np.nan), np.full((d, d), np.nan)
     for name, y in outputs.items():
-        if y.shape != (n * (d + 2),):
-            raise ValueError(f"func returned {name!r} with shape {y.shape}; expected ({n * (d + 2)},)")
-        blocks = y.reshape(d + 2, n)
-        keep = np.all(np.isfinite(blocks), axis=0)
-        ya, yb, yab = blocks[0, keep], blocks[1, keep], blocks[2:, keep]
+        keep = finite_groups(y, step)
         m = int(keep.sum())
+        rows = y.reshape(n, step)[keep]
         res["n_valid"][name] = m
-        res["mean"][name] = float(np.mean(np.concatenate([ya, yb]))) if m else math.nan
-        res["var"][name] = float(np.var(np.concatenate([ya, yb]))) if m else math.nan
-        if m < 2:
-            nan = np.full(d, np.nan)
-            res["first"][name], res["total"][name] = nan, nan
-            res["first_ci"][name] = res["total_ci"][name] = np.full((d, 2), np.nan)
+        both = np.concatenate([rows[:, 0], rows[:, -1]])
+        res["mean"][name] = float(np.mean(both)) if m else math.nan
+        res["var"][name] = float(np.var(both)) if m else math.nan
+        if m < 2 or not np.ptp(both) > 0.0:  # too few points, or a constant output: no index
+            res["S1"][name] = res["ST"][name] = nan_d
+            res["S1_ci"][name] = res["ST_ci"][name] = np.full((d, 2), np.nan)
+            res["S2"][name] = res["S2_ci"][name] = nan_dd
             continue
-        res["first"][name], res["total"][name] = _sobol_estimates(ya, yb, yab)
-        boot_first, boot_total = np.empty((n_bootstrap, d)), np.empty((n_bootstrap, d))
-        for r in range(int(n_bootstrap)):
-            idx = boot_rng.integers(0, m, m)
-            boot_first[r], boot_total[r] = _sobol_estimates(ya[idx], yb[idx], yab[:, idx])
-        q = [100 * alpha, 100 * (1 - alpha)]
-        res["first_ci"][name] = np.percentile(boot_first, q, axis=0).T if n_bootstrap else np.full((d, 2), np.nan)
-        res["total_ci"][name] = np.percentile(boot_total, q, axis=0).T if n_bootstrap else np.full((d, 2), np.nan)
+        si = analyze.analyze(problem, rows.reshape(-1), calc_second_order=second_order, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
+        res["salib"][name] = si
+        res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
+        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
+        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
+        if second_order:
+            res["S2"][name], res["S2_ci"][name] = np.asarray(si["S2"]), np.asarray(si["S2_conf"])
     return SobolResult(
         parameters=tuple(ranges),
         outputs=tuple(outputs),
         ranges=ranges,
+        n_evaluations=n * step,
+        n_valid=res["n_valid"],
         n_base=n,
-        n_evaluations=n * (d + 2),
-        first_order=res["first"],
-        total_order=res["total"],
-        first_order_ci=res["first_ci"],
-        total_order_ci=res["total_ci"],
+        design=design,
         confidence=float(confidence),
+        first_order=res["S1"],
+        total_order=res["ST"],
+        first_order_ci=res["S1_ci"],
+        total_order_ci=res["ST_ci"],
+        second_order=res["S2"] if second_order else None,
+        second_order_ci=res["S2_ci"] if second_order else None,
         mean=res["mean"],
         variance=res["var"],
-        n_valid=res["n_valid"],
-        samples=samples,
+        samples={**inputs, **outputs, "block": np.tile(block, n), "base": np.repeat(np.arange(n), step)},
+        salib=res["salib"],
     )
 
 
-@dataclasses.dataclass(frozen=True)
-class MorrisResult(_IndexResult):
-    """Morris elementary-effect screening (see ``morris_screening``).
+def morris_screening(
+    func: Callable,
+    ranges: Mapping,
+    n_trajectories: int,
+    *,
+    n_levels: int = 4,
+    optimal_trajectories: int | None = None,
+    seed: int = 0,
+    n_bootstrap: int = 200,
+    confidence: float = 0.95,
+) -> MorrisResult:
+    """Morris (1991) elementary effects of ``func`` over uniform ranges (SALib).
 
-    Attributes:
-        mu, mu_star, sigma: output → mean, mean absolute value and standard deviation of the
-            elementary effects per parameter, shape (d,), in output units per full range of
-            the parameter (an effect of 1 means the output changes by 1 across the range).
-        n_trajectories, n_levels, n_evaluations = n_trajectories (d + 1).
+    ``n_trajectories`` r one-at-a-time trajectories on the ``n_levels``-level grid (SALib
+    ``sample.morris``); with ``optimal_trajectories`` = k < r, the k of them that are spread
+    farthest apart (Campolongo et al. 2007) are kept. r (d + 1) (or k (d + 1)) evaluations.
+    Effects are in output units per full range of the parameter.
     """
+    ranges = check_ranges(ranges)
+    r = check_count("n_trajectories", n_trajectories, 2)
+    p = check_count("n_levels", n_levels, 2)
+    if p % 2:
+        raise ValueError(f"n_levels={n_levels!r} must be an even integer ≥ 2 (an odd grid biases the effects)")
+    if optimal_trajectories is not None:
+        k = check_count("optimal_trajectories", optimal_trajectories, 2)
+        if k >= r:
+            raise ValueError(f"optimal_trajectories={k!r} must be fewer than n_trajectories={r!r} (the candidates it picks from)")
+    n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
+    check_range("confidence", confidence, lower=0.0, upper=1.0)
+    from SALib.analyze import morris as analyze
+    from SALib.sample import morris as sample
 
-    n_trajectories: int
-    n_levels: int
-    n_evaluations: int
-    mu: dict
-    mu_star: dict
-    sigma: dict
-    samples: dict = dataclasses.field(repr=False)
-
-    _RANKING = "mu_star"
-
-    def to_dict(self) -> dict:
-        return self._summary(
-            {"method": "morris"},
-            {"n_trajectories": self.n_trajectories, "n_levels": self.n_levels, "n_evaluations": self.n_evaluations},
-            lambda o: {},
-            ("mu", "mu_star", "sigma"),
-        )
-
-    def table(self) -> str:
-        def row(o: str, j: int) -> str:
-            return f"mu* {self.mu_star[o][j]:11.4g}  mu {self.mu[o][j]:11.4g}  sigma {self.sigma[o][j]:11.4g}"
-
-        title = f"Morris screening, {self.n_evaluations} evaluations ({self.n_trajectories} trajectories, {self.n_levels} levels)"
-        return self._table(title, lambda o: "", row)
-
-
-def morris_screening(func: Callable, ranges: Mapping, n_trajectories: int, *, n_levels: int = 4, seed: int = 0) -> MorrisResult:
-    """Morris (1991) elementary effects of ``func`` over uniform ranges (one-at-a-time trajectories).
-
-    Each trajectory starts at a random point of the p-level grid of the unit cube and moves
-    every parameter once, in random order, by Δ = p / (2(p − 1)) (up if that stays inside,
-    else down). The elementary effect of parameter i is (y(x ± Δe_i) − y(x)) / (±Δ), in output
-    units per full range. ``func`` is called once with all r (d + 1) points (see
-    ``sobol_indices``). Effects with a non-finite output are left out.
-    """
-    ranges = _check_ranges(ranges)
-    check_range("n_trajectories", n_trajectories, lower=1.0, upper=math.inf, lower_open=False)
-    if not isinstance(n_levels, (int, np.integer)) or n_levels < 2 or n_levels % 2:
-        raise ValueError(f"n_levels={n_levels!r} must be an even integer >= 2")
-    r, d, p = int(n_trajectories), len(ranges), int(n_levels)
-    delta = p / (2.0 * (p - 1))
-    rng = np.random.default_rng(seed)
-    points = np.empty((r, d + 1, d))
-    moved = np.empty((r, d), dtype=int)
-    step = np.empty((r, d))
-    for t in range(r):
-        x = rng.integers(0, p, d) / (p - 1)
-        order = rng.permutation(d)
-        points[t, 0] = x
-        for k, i in enumerate(order):
-            s = delta if x[i] + delta <= 1.0 + 1e-12 else -delta
-            x = x.copy()
-            x[i] += s
-            points[t, k + 1] = x
-            moved[t, k], step[t, k] = i, s
-    inputs = _scale(points.reshape(-1, d), ranges)
-    outputs = _outputs_dict(func(inputs))
-    res: dict[str, dict] = {"mu": {}, "mu_star": {}, "sigma": {}}
+    problem, d = salib_problem(ranges), len(ranges)
+    x = sample.sample(problem, r, num_levels=p, optimal_trajectories=optimal_trajectories, seed=seed)
+    n_traj = x.shape[0] // (d + 1)
+    inputs = inputs_dict(x, ranges)
+    outputs = outputs_dict(func(inputs), x.shape[0])
+    res: dict[str, dict] = {k: {} for k in ("mu", "mu_star", "sigma", "mu_star_ci", "n_valid", "salib")}
     for name, y in outputs.items():
-        y = y.reshape(r, d + 1)
-        effects = np.full((r, d), np.nan)
-        effects[np.arange(r)[:, None], moved] = np.diff(y, axis=1) / step
-        with np.errstate(invalid="ignore"):
-            res["mu"][name] = np.nanmean(effects, axis=0)
-            res["mu_star"][name] = np.nanmean(np.abs(effects), axis=0)
-            res["sigma"][name] = np.nanstd(effects, axis=0, ddof=1) if r > 1 else np.full(d, np.nan)
+        keep = finite_groups(y, d + 1)
+        res["n_valid"][name] = m = int(keep.sum())
+        if m < 2:
+            res["mu"][name] = res["mu_star"][name] = res["sigma"][name] = np.full(d, np.nan)
+            res["mu_star_ci"][name] = np.full((d, 2), np.nan)
+            continue
+        rows = np.repeat(keep, d + 1)
+        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, num_levels=p, seed=salib_seed(seed))
+        res["salib"][name] = si
+        for key in ("mu", "mu_star", "sigma"):
+            res[key][name] = np.asarray(si[key], dtype=float)
+        res["mu_star_ci"][name] = interval(si["mu_star"], si["mu_star_conf"])
     return MorrisResult(
         parameters=tuple(ranges),
         outputs=tuple(outputs),
         ranges=ranges,
-        n_trajectories=r,
+        n_evaluations=x.shape[0],
+        n_valid=res["n_valid"],
+        n_trajectories=n_traj,
         n_levels=p,
-        n_evaluations=r * (d + 1),
+        optimal_trajectories=optimal_trajectories,
+        confidence=float(confidence),
         mu=res["mu"],
         mu_star=res["mu_star"],
         sigma=res["sigma"],
-        samples={**inputs, **outputs, "trajectory": np.repeat(np.arange(r), d + 1)},
+        mu_star_ci=res["mu_star_ci"],
+        samples={**inputs, **outputs, "trajectory": np.repeat(np.arange(n_traj), d + 1)},
+        salib=res["salib"],
     )
 
 
-def _impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
-    """Expand ``"lfe"`` to the band names; check the names; say whether L_FE is needed."""
-    valid = SWEEP_SCALAR_OUTPUTS + lfe_output_names()
-    expanded: list[str] = []
-    for o in [outputs] if isinstance(outputs, str) else outputs:
-        expanded.extend(lfe_output_names() if o == "lfe" else [o])
-    unknown = [o for o in expanded if o not in valid]
-    if unknown or not expanded:
-        raise ValueError(f"outputs={list(outputs)!r}: unknown {unknown}; valid: 'lfe', {', '.join(valid)}")
-    names = tuple(dict.fromkeys(expanded))
-    return names, any(_is_lfe(o) for o in names)
-
-
-def global_sensitivity(
+def fast_indices(
+    func: Callable,
     ranges: Mapping,
-    n: int,
+    n_per_parameter: int,
     *,
-    method: str = "sobol",
-    outputs=("contact_time_s", "peak_force_N", "restitution", "lfe"),
-    height_m: float = 1.0,
-    ball: Ball = JIS_RUBBER_BALL,
-    gas: str = "adiabatic",
-    blocked_force: str = "paper",
-    damping=None,
-    stiffening=None,
-    model: Model | None = None,
-    solver: Solver | None = None,
+    interference: int = 4,
     seed: int = 0,
     n_bootstrap: int = 200,
     confidence: float = 0.95,
-    n_levels: int = 4,
-    chunk_size: int = 1024,
-    devices=None,
-    progress: bool = False,
-) -> SobolResult | MorrisResult:
-    """Global sensitivity of the impact outputs over uniform parameter ranges.
+) -> FastResult:
+    """Extended FAST first- and total-order indices of ``func`` (SALib; Saltelli et al. 1999).
 
-    Args:
-        ranges: parameter name (any case; see ``rbjax.studies.sweep.parameter_names``) → (low, high).
-        n: ``method="sobol"``: base sample size (n (d + 2) impacts); ``"morris"``: number of
-            trajectories (n (d + 1) impacts).
-        outputs: among ``contact_time_s``, ``peak_force_N``, ``restitution``,
-            ``max_deflection_m``, ``lfe_<band>_dB`` and ``"lfe"`` (all octave bands).
-        height_m, ball, gas, blocked_force, damping, stiffening: the nominal impact (or pass
-            ``model``); parameters not in ``ranges`` keep these values.
-        seed, n_bootstrap, confidence, n_levels: of the estimators.
-        chunk_size, devices, progress: batching and sharding (``rbjax.studies.sweep.evaluate``).
-
-    Returns:
-        ``SobolResult`` or ``MorrisResult``; ``.driver(output)`` names the parameter that drives
-        an output's spread. Elastic models use the quadrature fast path for the scalar outputs;
-        L_FE needs the force history (ODE).
+    ``n_per_parameter`` N samples along each parameter's search curve (N > 4 M², M the
+    ``interference`` factor): N d evaluations. The intervals are SALib's bootstrap, which SALib
+    itself calls indicative only for eFAST (SALib issue 649; its warning is silenced here).
     """
-    if model is None:
-        model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
-    ranges = _check_ranges(ranges, lambda name: canonical_name(name, model))
-    names, lfe = _impact_outputs(outputs)
-    for name, (lo, hi) in ranges.items():  # bounds must be valid parameter values (named errors)
-        bounds = {name: np.array([lo, hi])}
-        assemble(bounds, height_m, ball, model)
-        if name == "height_m":
-            check_range("height_m", bounds[name], lower=0.0)
+    ranges = check_ranges(ranges)
+    m_int = check_count("interference", interference, 1)
+    n = check_count("n_per_parameter", n_per_parameter, 4 * m_int**2 + 1, why=f" (N > 4 M² = {4 * m_int**2} for M = {m_int})")
+    n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
+    check_range("confidence", confidence, lower=0.0, upper=1.0)
+    from SALib.analyze import fast as analyze
+    from SALib.sample import fast_sampler as sample
 
-    def func(inputs):
-        out = evaluate(inputs, height_m=height_m, ball=ball, model=model, solver=solver, lfe=lfe, chunk_size=chunk_size, devices=devices, progress=progress)
-        return {o: out[o] for o in names}
+    problem, d = salib_problem(ranges), len(ranges)
+    x = sample.sample(problem, n, M=m_int, seed=seed)
+    inputs = inputs_dict(x, ranges)
+    outputs = outputs_dict(func(inputs), x.shape[0])
+    res: dict[str, dict] = {k: {} for k in ("S1", "ST", "S1_ci", "ST_ci", "n_valid", "salib")}
+    for name, y in outputs.items():
+        res["n_valid"][name] = int(np.isfinite(y).sum())
+        if not np.all(np.isfinite(y)):  # the Fourier analysis needs every point of each curve
+            res["S1"][name] = res["ST"][name] = np.full(d, np.nan)
+            res["S1_ci"][name] = res["ST_ci"][name] = np.full((d, 2), np.nan)
+            continue
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "FAST confidence intervals", UserWarning)
+            si = analyze.analyze(problem, y, M=m_int, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
+        res["salib"][name] = si
+        res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
+        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
+        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
+    return FastResult(
+        parameters=tuple(ranges),
+        outputs=tuple(outputs),
+        ranges=ranges,
+        n_evaluations=x.shape[0],
+        n_valid=res["n_valid"],
+        n_per_parameter=n,
+        interference=m_int,
+        confidence=float(confidence),
+        first_order=res["S1"],
+        total_order=res["ST"],
+        first_order_ci=res["S1_ci"],
+        total_order_ci=res["ST_ci"],
+        samples={**inputs, **outputs, "curve": np.repeat(np.arange(d), n)},
+        salib=res["salib"],
+    )
 
-    if method == "sobol":
-        return sobol_indices(func, ranges, n, seed=seed, n_bootstrap=n_bootstrap, confidence=confidence)
-    if method == "morris":
-        return morris_screening(func, ranges, n, n_levels=n_levels, seed=seed)
-    raise ValueError(f"method={method!r} is not known; valid: 'sobol', 'morris'")
+
+def pawn_indices(func: Callable, ranges: Mapping, n_samples: int, *, n_conditioning: int = 10, seed: int = 0) -> PawnResult:
+    """PAWN indices of ``func`` (SALib; Pianosi & Wagener 2015) from ``n_samples`` Latin
+    hypercube points, each parameter's range cut into ``n_conditioning`` slices."""
+    ranges = check_ranges(ranges)
+    s = check_count("n_conditioning", n_conditioning, 2)
+    n = check_count("n_samples", n_samples, 2 * s, why=f" (at least 2 per slice, {s} slices)")
+    from SALib.analyze import pawn as analyze
+    from SALib.sample import latin as sample
+
+    problem, d = salib_problem(ranges), len(ranges)
+    x = sample.sample(problem, n, seed=seed)
+    inputs = inputs_dict(x, ranges)
+    outputs = outputs_dict(func(inputs), n)
+    keys = ("minimum", "mean", "median", "maximum", "CV")
+    res: dict[str, dict] = {k: {} for k in keys + ("n_valid", "salib")}
+    for name, y in outputs.items():
+        keep = np.isfinite(y)
+        res["n_valid"][name] = m = int(keep.sum())
+        if m < 2 * s:
+            for k in keys:
+                res[k][name] = np.full(d, np.nan)
+            continue
+        with warnings.catch_warnings():  # SALib's pandas summary warns on a future dtype change
+            warnings.simplefilter("ignore", FutureWarning)
+            si = analyze.analyze(problem, x[keep], y[keep], S=s, seed=salib_seed(seed))
+        res["salib"][name] = si
+        for k in keys:
+            res[k][name] = np.asarray(si[k], dtype=float)
+    return PawnResult(
+        parameters=tuple(ranges),
+        outputs=tuple(outputs),
+        ranges=ranges,
+        n_evaluations=n,
+        n_valid=res["n_valid"],
+        n_samples=n,
+        n_conditioning=s,
+        minimum=res["minimum"],
+        mean=res["mean"],
+        median=res["median"],
+        maximum=res["maximum"],
+        cv=res["CV"],
+        samples={**inputs, **outputs},
+        salib=res["salib"],
+    )
