@@ -42,6 +42,8 @@ class ImpactSound:
     radiated_energy_J: float
     warnings: tuple[str, ...]
     levels: RoomLevels = dataclasses.field(repr=False, compare=False)
+    force_N: np.ndarray = dataclasses.field(repr=False, compare=False, default_factory=lambda: np.zeros(0))
+    rate_Hz: float = 44100.0
     chain: Chain = Chain()
 
     def to_dict(self) -> dict:
@@ -122,6 +124,8 @@ def impact_sound(
         radiated_energy_J=float(np.sum(injected * np.asarray(lv.radiated_fraction))),
         warnings=tuple(warnings),
         levels=lv,
+        force_N=np.asarray(trajectory(height_m, np.arange(n) / rate_Hz, ball, make_model(floor=slab.plate if floor is None else floor)).force_N),
+        rate_Hz=float(rate_Hz),
         chain=chain,
     )
 

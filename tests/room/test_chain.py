@@ -1,0 +1,103 @@
+"""The room chain: the energy the force injects against the ODE's energy balance (infinite
+plate and modal floor), the gradient of L_iA,Fmax against finite differences, bad input and
+the command line."""
+
+import json
+
+import jax
+import numpy as np
+import pytest
+
+from rbjax.room import Chain, ReceivingRoom, RoomChainError, Slab, impact_sound, rating_unrounded_dB, room_levels
+from rbjax.room.chain import bands
+from rbjax.room.injection import modal_energies_J
+from rbjax.solve import energy_balance, trajectory
+from rbjax.solve.simulate import make_model
+from rbjax.terms import JIS_RUBBER_BALL, Model, Solver, floating_floor
+from rbjax.terms.floors.kinds import Rigid
+from tests.cli_runner import run_cli
+
+RATE = 44100.0
+SLAB = Slab.of_material("concrete", 0.15)
+ROOM = ReceivingRoom(50.0, 0.5)
+
+
+@pytest.fixture(scope="module")
+def bare():
+    return impact_sound(SLAB, ROOM)
+
+
+def test_infinite_plate_injects_band_energy_over_z(bare):
+    # independent: the force history again, its band energies by numpy's FFT over 1 s, over Z
+    force = bare.force_N
+    spec = np.abs(np.fft.rfft(force, n=int(RATE)) / RATE) ** 2 * 2
+    spec[0] /= 2
+    freq = np.fft.rfftfreq(int(RATE), 1 / RATE)
+    _, _, (lo, hi) = bands(1)
+    z = float(SLAB.plate.impedance_Ns_per_m)
+    expected = np.array([spec[(freq >= a) & (freq < b)].sum() for a, b in zip(lo, hi)]) / z
+    np.testing.assert_allclose(np.asarray(bare.levels.injected_J), expected, rtol=1e-6)
+    # and all bins together: the floor work ∫F u̇ dt of the ODE's energy balance
+    w_floor = float(energy_balance(1.0, model=make_model(floor=SLAB.plate)).floor_energy_J)
+    assert spec.sum() / z == pytest.approx(w_floor, rel=1e-5)
+
+
+def test_levels_and_rating_are_consistent(bare):
+    assert bare.LiA_Fmax_dB == round(bare.LiA_Fmax_unrounded_dB)
+    assert bare.normalised_dB == pytest.approx(bare.level_dB)  # the reference room itself
+    assert any("Schroeder" in w for w in bare.warnings)
+    # the Fast level against time peaks at the band maximum
+    t = np.linspace(0.0, 0.5, 5001)
+    np.testing.assert_allclose(bare.fast_levels_dB(t).max(axis=1), bare.level_dB, atol=1e-4)
+
+
+def test_modal_floor_energy_balance():
+    floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0, layer_loss_factor=0.2, base_loss_factor=0.05)
+    model = make_model(floor=floor)
+    force = trajectory(1.0, np.arange(3000) / 88200.0, JIS_RUBBER_BALL, model).force_N  # 34 ms: the whole contact
+    injected = float(np.sum(np.asarray(modal_energies_J(force, 88200.0, floor))))
+    w_floor = float(energy_balance(1.0, model=model).floor_energy_J)
+    assert injected == pytest.approx(w_floor, rel=1e-6)
+
+
+def test_gradient_of_the_rating_against_finite_differences():
+    solver = Solver(adjoint="forward")
+    n = 1000
+
+    def rating(thickness):
+        slab = Slab.of_material("concrete", thickness)
+        return rating_unrounded_dB(room_levels(slab, ROOM, n_samples=n, solver=solver), 1)
+
+    f = jax.jit(rating)
+    t0, h = 0.15, 1e-5
+    _, tangent = jax.jvp(f, (t0,), (1.0,))
+    fd = (float(f(t0 + h)) - float(f(t0 - h))) / (2 * h)
+    assert float(tangent) == pytest.approx(fd, rel=1e-4)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="volume_m3"):
+        ReceivingRoom(0.0, 0.5)
+    with pytest.raises(ValueError, match="reverberation_s"):
+        ReceivingRoom(50.0, -0.5)
+    with pytest.raises(RoomChainError, match="one per band, 6"):
+        room_levels(SLAB, ReceivingRoom(50.0, [0.5, 0.6]), n_samples=10)
+    with pytest.raises(RoomChainError, match="no structure that radiates"):
+        room_levels(SLAB, ROOM, floor=Rigid(), n_samples=10)
+    floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0)
+    with pytest.raises(RoomChainError, match="slab="):
+        room_levels(None, ROOM, floor=floor, n_samples=10)
+    with pytest.raises(ValueError, match="floor_decay"):
+        Chain(floor_decay="yes")
+
+
+def test_cli_room_json_and_errors(tmp_path):
+    code, out, _ = run_cli(["room", "--floor", "concrete-150mm", "--room-volume-m3", "100", "--reverberation-s", "1.0", "--json", "--plot", str(tmp_path / "f.png")])
+    assert code == 0
+    data = json.loads(out)
+    assert isinstance(data["LiA_Fmax_dB"], int) and isinstance(data["LiA_Fmax_normalised_dB"], int)
+    # V = 100 m³, T = 1 s: normalised = level + 3.01 dB − 1.94 dB in every band
+    np.testing.assert_allclose(np.subtract(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"]), 10 * np.log10(2) - 1.94, atol=0.01)
+    assert (tmp_path / "f.png").stat().st_size > 1000
+    code, _, err = run_cli(["room", "--floor", "rigid", "--room-volume-m3", "50", "--reverberation-s", "0.5"])
+    assert code == 2 and "radiates" in err
