@@ -8,12 +8,20 @@ import jax
 import numpy as np
 import pytest
 
-from rbjax.room import Chain, ReceivingRoom, RoomChainError, Slab, impact_sound, rating_unrounded_dB, room_levels
+from rbjax.room import (
+    Chain,
+    ReceivingRoom,
+    RoomChainError,
+    Slab,
+    impact_sound,
+    rating_unrounded_dB,
+    room_levels,
+)
 from rbjax.room.chain import bands
 from rbjax.room.injection import modal_energies_J
 from rbjax.solve import energy_balance, trajectory
 from rbjax.solve.simulate import make_model
-from rbjax.terms import JIS_RUBBER_BALL, Model, Solver, floating_floor
+from rbjax.terms import JIS_RUBBER_BALL, Solver, floating_floor
 from rbjax.terms.floors.kinds import Rigid
 from tests.cli_runner import run_cli
 

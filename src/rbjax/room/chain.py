@@ -47,13 +47,25 @@ from .. import _x64  # noqa: F401  (float64 on)
 from ..solve.simulate import make_model, simulate, trajectory
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
-from ..terms.floors.kinds import AbstractFloor, InfinitePlate, ModalFloor
+from ..terms.floors.kinds import AbstractFloor, ModalFloor
 from ..terms.model import Model, Solver
 from .detector import cascade, maximum_over_time
 from .injection import modal_energies_J, plate_band_energies_J
-from .radiation import AIR_DENSITY_kg_per_m3, SPEED_OF_SOUND_m_per_s, critical_frequency_Hz, radiation_efficiency, radiation_loss_factor
+from .radiation import (
+    AIR_DENSITY_kg_per_m3,
+    SPEED_OF_SOUND_m_per_s,
+    critical_frequency_Hz,
+    radiation_efficiency,
+    radiation_loss_factor,
+)
 from .scene import Chain, ReceivingRoom, RoomChainError, Slab
-from .standards import FAST_TIME_CONSTANT_s, RATING_BANDS, a_weighted_sum_dB, decay_rate_per_s, normalised_level_dB
+from .standards import (
+    RATING_BANDS,
+    FAST_TIME_CONSTANT_s,
+    a_weighted_sum_dB,
+    decay_rate_per_s,
+    normalised_level_dB,
+)
 
 #: Reference sound pressure, Pa.
 REFERENCE_PRESSURE_Pa = 20e-6

@@ -93,7 +93,7 @@ def cascade(rates, t):
     if len(rates) == 2:
         return two_stage(rates[0], rates[1], t)
     if len(rates) == 3:
-        return three_stage(*rates, t)
+        return three_stage(rates[0], rates[1], rates[2], t)
     raise ValueError(f"a cascade of {len(rates)} stages; valid: 1 to 3")
 
 

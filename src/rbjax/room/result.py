@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from .._validate import as_float
 from ..solve.simulate import make_model, simulate, trajectory
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.kinds import ModalFloor
@@ -116,7 +117,7 @@ def impact_sound(
         LiA_Fmax_dB=round_rating(rating_unrounded_dB(lv, fraction)),
         LiA_Fmax_normalised_dB=round_rating(rating_unrounded_dB(lv, fraction, normalised=True)),
         LiA_Fmax_unrounded_dB=float(rating_unrounded_dB(lv, fraction)),
-        volume_m3=float(room.volume_m3),
+        volume_m3=as_float(room.volume_m3),
         reverberation_s=tuple(t_band.tolist()),
         height_m=float(height_m),
         floor=name,

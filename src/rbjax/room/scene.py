@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike
 
-from .._validate import check_choice, check_range, is_traced
+from .._validate import as_float, check_choice, check_range, is_traced
 from ..terms.floors.kinds import InfinitePlate
 from ..terms.floors.materials import material
 
@@ -112,7 +112,7 @@ class ReceivingRoom(eqx.Module):
         diffuse-field level is a room average only; ``None`` under tracing."""
         if is_traced((self.volume_m3, self.reverberation_s)):
             return None
-        return 2000.0 * np.sqrt(np.asarray(self.reverberation_s, float) / float(self.volume_m3))
+        return 2000.0 * np.sqrt(np.asarray(self.reverberation_s, float) / as_float(self.volume_m3))
 
 
 @dataclasses.dataclass(frozen=True)
