@@ -1,6 +1,13 @@
-"""The room chain: the energy the force injects against the ODE's energy balance (infinite
-plate and modal floor), the gradient of L_iA,Fmax against finite differences, bad input and
-the command line."""
+"""The room chain: the energy the force injects against the independent scipy reference's
+∫F u̇ dt (infinite plate and modal floor), the gradient of L_iA,Fmax against finite
+differences, bad input and the command line.
+
+Compile budget: the ball on the bare 150 mm slab is solved once (``bare``) and the command
+line runs the same slab (its preset), so it reuses that program; the gradient check compiles
+one forward-mode program whose primal outputs give the finite differences too. The energy
+references are ``tests/scipy_floor_reference.py`` (its own ODE, DOP853 at rtol 1e-12), not a
+second diffrax solve.
+"""
 
 import json
 
@@ -19,14 +26,14 @@ from rbjax.room import (
 )
 from rbjax.room.chain import bands
 from rbjax.room.injection import modal_energies_J
-from rbjax.solve import energy_balance, trajectory
-from rbjax.solve.simulate import make_model
 from rbjax.terms import JIS_RUBBER_BALL, Solver, floating_floor
 from rbjax.terms.floors.kinds import Rigid
 from tests.cli_runner import run_cli
 
+from scipy_floor_reference import reference_floor_impact
+
 RATE = 44100.0
-SLAB = Slab.of_material("concrete", 0.15)
+SLAB = Slab.of_material("concrete", 0.15)  # the preset concrete-150mm of the command line
 ROOM = ReceivingRoom(50.0, 0.5)
 
 
@@ -45,8 +52,8 @@ def test_infinite_plate_injects_band_energy_over_z(bare):
     z = float(SLAB.plate.impedance_Ns_per_m)
     expected = np.array([spec[(freq >= a) & (freq < b)].sum() for a, b in zip(lo, hi)]) / z
     np.testing.assert_allclose(np.asarray(bare.levels.injected_J), expected, rtol=1e-6)
-    # and all bins together: the floor work ∫F u̇ dt of the ODE's energy balance
-    w_floor = float(energy_balance(1.0, model=make_model(floor=SLAB.plate)).floor_energy_J)
+    # and all bins together: the floor work ∫F u̇ dt of the scipy reference (ball on a dashpot Z)
+    w_floor = reference_floor_impact(1.0, JIS_RUBBER_BALL, SLAB.plate).injected_energy_J
     assert spec.sum() / z == pytest.approx(w_floor, rel=1e-5)
 
 
@@ -60,12 +67,13 @@ def test_levels_and_rating_are_consistent(bare):
 
 
 def test_modal_floor_energy_balance():
+    # the force of the ball on the floating floor and ∫F u̇ dt, both from the scipy reference
     floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0, layer_loss_factor=0.2, base_loss_factor=0.05)
-    model = make_model(floor=floor)
-    force = trajectory(1.0, np.arange(3000) / 88200.0, JIS_RUBBER_BALL, model).force_N  # 34 ms: the whole contact
-    injected = float(np.sum(np.asarray(modal_energies_J(force, 88200.0, floor))))
-    w_floor = float(energy_balance(1.0, model=model).floor_energy_J)
-    assert injected == pytest.approx(w_floor, rel=1e-6)
+    ref = reference_floor_impact(1.0, JIS_RUBBER_BALL, floor)
+    rate = 88200.0
+    times = np.arange(int(np.ceil(ref.contact_time_s * rate)) + 2) / rate  # the whole contact
+    injected = float(np.sum(np.asarray(modal_energies_J(ref.force_N(times), rate, floor))))
+    assert injected == pytest.approx(ref.injected_energy_J, rel=1e-6)
 
 
 def test_gradient_of_the_rating_against_finite_differences():
@@ -76,10 +84,11 @@ def test_gradient_of_the_rating_against_finite_differences():
         slab = Slab.of_material("concrete", thickness)
         return rating_unrounded_dB(room_levels(slab, ROOM, n_samples=n, solver=solver), 1)
 
-    f = jax.jit(rating)
+    # one program: its primal outputs at t0 ± h are the finite differences
+    f = jax.jit(lambda t: jax.jvp(rating, (t,), (1.0,)))
     t0, h = 0.15, 1e-5
-    _, tangent = jax.jvp(f, (t0,), (1.0,))
-    fd = (float(f(t0 + h)) - float(f(t0 - h))) / (2 * h)
+    _, tangent = f(t0)
+    fd = (float(f(t0 + h)[0]) - float(f(t0 - h)[0])) / (2 * h)
     assert float(tangent) == pytest.approx(fd, rel=1e-4)
 
 
@@ -99,11 +108,14 @@ def test_bad_input():
         Chain(floor_decay="yes")
 
 
-def test_cli_room_json_and_errors(tmp_path):
+def test_cli_room_json_and_errors(bare, tmp_path):
+    # the slab of ``bare`` (the preset concrete-150mm): the compiled impact is reused
     code, out, _ = run_cli(["room", "--floor", "concrete-150mm", "--room-volume-m3", "100", "--reverberation-s", "1.0", "--json", "--plot", str(tmp_path / "f.png")])
     assert code == 0
     data = json.loads(out)
     assert isinstance(data["LiA_Fmax_dB"], int) and isinstance(data["LiA_Fmax_normalised_dB"], int)
+    # the room changes the levels only: the injected energy is that of ``bare``
+    assert data["injected_energy_J"] == pytest.approx(bare.injected_energy_J, rel=1e-12)
     # V = 100 m³, T = 1 s: normalised = level + 3.01 dB − 1.94 dB in every band
     np.testing.assert_allclose(np.subtract(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"]), 10 * np.log10(2) - 1.94, atol=0.01)
     assert (tmp_path / "f.png").stat().st_size > 1000

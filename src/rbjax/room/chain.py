@@ -44,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 on)
+from ..solve.inputs import as_arrays
 from ..solve.simulate import make_model, simulate, trajectory
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
@@ -169,9 +170,17 @@ def room_levels(
     model = make_model(floor=impact_floor) if model is None else eqx.tree_at(lambda m: m.floor, model, impact_floor)
     times = jnp.arange(n_samples) / rate_Hz
     force = trajectory(height_m, times, ball, model, solver).force_N
+    return _levels_of_force(*as_arrays((force, slab, room.volume_m3, t_band)), floor, chain, fraction, float(rate_Hz))
+
+
+@eqx.filter_jit
+def _levels_of_force(force, slab: Slab, volume_m3, t_band, floor, chain: Chain, fraction: int, rate_Hz: float) -> RoomLevels:
+    """Steps 2–5 of the chain on the force samples: one compiled program per floor kind,
+    chain, fraction and force length (the values are traced)."""
+    _, centres, edges = bands(fraction)
     energy, decay, radiate, member = _sources(floor, slab, force, rate_Hz, centres, edges, chain)
     b = decay_rate_per_s(t_band)
-    kappa = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s**2 / room.volume_m3
+    kappa = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s**2 / volume_m3
     parts = dict(injected_J=energy, radiated_fraction=radiate / decay, floor_decay_per_s=decay, room_decay_per_s=b, radiation_per_s=radiate, membership=member, pressure_scale=kappa)
 
     def band(bi, row):
@@ -179,7 +188,7 @@ def room_levels(
 
     peak, t_star = jax.vmap(band)(b, member)
     level = 10.0 * jnp.log10(peak / REFERENCE_PRESSURE_Pa**2)
-    return RoomLevels(level_dB=level, peak_time_s=t_star, normalised_dB=normalised_level_dB(level, room.volume_m3, t_band), **parts)
+    return RoomLevels(level_dB=level, peak_time_s=t_star, normalised_dB=normalised_level_dB(level, volume_m3, t_band), **parts)
 
 
 def _band_response(parts, chain: Chain, room_rate, row, t):
@@ -197,6 +206,7 @@ def _band_response(parts, chain: Chain, room_rate, row, t):
     return scale * jnp.sum(row * amp * cascade([jnp.broadcast_to(r, decay.shape) for r in rates], t))
 
 
+@eqx.filter_jit
 def fast_levels_dB(levels: RoomLevels, chain: Chain, times_s):
     """The Fast-weighted level (or, without the detector, the level of p²) of each band at
     ``times_s``: shape (bands, times); the same closed form whose maximum is ``level_dB``."""
