@@ -47,14 +47,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from ..room import ReceivingRoom, RoomChainError, Slab, impact_sound
-    from ..terms.floors.kinds import InfinitePlate, ModalFloor
+    from ..terms.floors.kinds import AbstractModalFloor, InfinitePlate
     from ..terms.floors.presets import load_named_floor
 
     name, floor = load_named_floor(args.floor)
     sides = dict(length_x_m=args.length_x_m, length_y_m=args.length_y_m, loss_factor=args.loss_factor)
     if isinstance(floor, InfinitePlate):
         slab, modal = Slab.of_plate(floor, **sides), None
-    elif isinstance(floor, ModalFloor):
+    elif isinstance(floor, AbstractModalFloor):
         if args.slab_material is None or args.slab_thickness_m is None:
             raise RoomChainError("a modal floor needs the slab that radiates: give --slab-material and --slab-thickness-m")
         slab, modal = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides), floor

@@ -9,7 +9,7 @@ term of ``Chain`` that can be left out:
 2. **floor** (``rbjax.room.injection``): the energy it injects, W, and how the floor holds it:
    a resonant slab (``floor=None``: the ball on the bare ``Slab``, point impedance
    Z = 8√(B′m″); SEA) holds the band energy W_b = E_F,b/Z, decaying at
-   a_b = ω_b(η_s + 2η_rad); a modal floor (``ModalFloor``) holds W_k in each mode k, decaying
+   a_b = ω_b(η_s + 2η_rad); a modal floor (``ModalFloor``, ``FloatingFloor``) holds W_k in each mode k, decaying
    at a_k = ω_kη_k (its own loss factor, radiation included), the mode counted in the band of
    its frequency.
 3. **radiation** (``rbjax.room.radiation``): the floor radiates into the room below the power
@@ -48,10 +48,10 @@ from ..solve.inputs import as_arrays
 from ..solve.simulate import make_model, simulate, trajectory
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
-from ..terms.floors.kinds import AbstractFloor, ModalFloor
+from ..terms.floors.kinds import AbstractFloor, AbstractModalFloor
 from ..terms.model import Model, Solver
 from .detector import cascade, maximum_over_time
-from .injection import modal_energies_J, plate_band_energies_J
+from .injection import modal_energies_J, modal_grid_size, plate_band_energies_J
 from .radiation import (
     AIR_DENSITY_kg_per_m3,
     SPEED_OF_SOUND_m_per_s,
@@ -103,14 +103,14 @@ def _check_floor(floor: AbstractFloor | None, slab: Slab | None) -> None:
         if slab is None:
             raise RoomChainError("give slab= (the radiating slab; the ball then strikes it) or a modal floor with slab=")
         return
-    if isinstance(floor, ModalFloor):
+    if isinstance(floor, AbstractModalFloor):
         if slab is None:
             raise RoomChainError("floor=modal needs slab= (the plate that radiates: its mass per area and critical frequency)")
         return
     kind = getattr(floor, "name", type(floor).__name__)
     raise RoomChainError(
         f"floor={kind!r} has no structure that radiates into a room below; valid: floor=None (the ball on the bare slab=), "
-        "a modal floor (ModalFloor) with slab=, or an infinite-plate floor turned into a slab with Slab.of_plate"
+        "a modal floor (ModalFloor, FloatingFloor) with slab=, or an infinite-plate floor turned into a slab with Slab.of_plate"
     )
 
 
@@ -120,7 +120,7 @@ def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver
     return int(math.ceil(float(np.max(np.asarray(res.contact_time_s))) * rate_Hz)) + 2
 
 
-def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain):
+def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_fft):
     """Per source (band or mode): injected energy W, floor decay a, radiation rate ω η_rad and
     the (bands × sources) membership."""
     fc = critical_frequency_Hz(slab.thickness_m, slab.youngs_Pa, slab.density_kg_per_m3, slab.poisson)
@@ -130,14 +130,15 @@ def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain):
         sigma = radiation_efficiency(f, fc, slab.length_x_m, slab.length_y_m) if chain.radiation == "iso12354" else jnp.ones_like(f)
         return 2.0 * jnp.pi * f * radiation_loss_factor(f, sigma, mass)
 
-    if isinstance(floor, ModalFloor):
-        fk = np.asarray(floor.frequency_Hz)
-        energy = modal_energies_J(force, rate_Hz, floor)
-        f_safe = jnp.asarray(np.where(fk > 0.0, fk, 1.0))
-        decay = 2.0 * jnp.pi * f_safe * jnp.asarray(floor.loss_factor)
-        radiate = jnp.where(jnp.asarray(fk > 0.0), rad_rate(f_safe), 0.0)
+    if isinstance(floor, AbstractModalFloor):
+        _, omega, eta = floor.modes()
+        fk = omega / (2.0 * jnp.pi)
+        energy = modal_energies_J(force, rate_Hz, floor, n_fft)
+        f_safe = jnp.where(fk > 0.0, fk, 1.0)
+        decay = 2.0 * jnp.pi * f_safe * eta
+        radiate = jnp.where(fk > 0.0, rad_rate(f_safe), 0.0)
         member = (fk[None, :] >= edges[0][:, None]) & (fk[None, :] < edges[1][:, None])
-        return energy, decay, radiate, jnp.asarray(member, dtype=jnp.float64)
+        return energy, decay, radiate, member.astype(jnp.float64)
     impedance = (slab.plate if floor is None else floor).impedance_Ns_per_m
     energy = plate_band_energies_J(force, rate_Hz, edges[0], edges[1], impedance, n_record=max(force.shape[-1], int(rate_Hz)))
     f = jnp.asarray(centres)
@@ -150,7 +151,7 @@ def room_levels(
     slab: Slab,
     room: ReceivingRoom,
     *,
-    floor: ModalFloor | None = None,
+    floor: AbstractModalFloor | None = None,
     height_m=1.0,
     ball=JIS_RUBBER_BALL,
     model: Model | None = None,
@@ -159,10 +160,14 @@ def room_levels(
     rate_Hz: float = 44100.0,
     n_samples: int,
     solver: Solver = Solver(),
+    n_fft: int | None = None,
 ) -> RoomLevels:
     """The chain's arrays for the ball on ``floor`` (``None``: on the bare ``slab``) over
     ``n_samples`` force samples (``contact_samples``); pure JAX, differentiable in the slab,
-    room, ball and height (``jax.jvp``/``jax.jacfwd`` with ``Solver(adjoint="forward")``)."""
+    room, ball, height and the parameters of a ``FloatingFloor`` (``jax.jvp``/``jax.jacfwd``
+    with ``Solver(adjoint="forward")``). ``n_fft``: the frequency grid of a modal floor's
+    energies (``rbjax.room.injection.modal_grid_size``, the default where the floor's values
+    are concrete; give it where they are traced)."""
     _check_floor(floor, slab)
     labels, centres, edges = bands(fraction)
     t_band = room.reverberation_per_band(labels)
@@ -170,15 +175,17 @@ def room_levels(
     model = make_model(floor=impact_floor) if model is None else eqx.tree_at(lambda m: m.floor, model, impact_floor)
     times = jnp.arange(n_samples) / rate_Hz
     force = trajectory(height_m, times, ball, model, solver).force_N
-    return _levels_of_force(*as_arrays((force, slab, room.volume_m3, t_band)), floor, chain, fraction, float(rate_Hz))
+    if isinstance(floor, AbstractModalFloor) and n_fft is None:
+        n_fft = modal_grid_size(floor, rate_Hz, n_samples)
+    return _levels_of_force(*as_arrays((force, slab, room.volume_m3, t_band, floor)), chain, fraction, float(rate_Hz), n_fft)
 
 
 @eqx.filter_jit
-def _levels_of_force(force, slab: Slab, volume_m3, t_band, floor, chain: Chain, fraction: int, rate_Hz: float) -> RoomLevels:
+def _levels_of_force(force, slab: Slab, volume_m3, t_band, floor, chain: Chain, fraction: int, rate_Hz: float, n_fft: int | None) -> RoomLevels:
     """Steps 2–5 of the chain on the force samples: one compiled program per floor kind,
-    chain, fraction and force length (the values are traced)."""
+    chain, fraction, force length and grid (the values are traced)."""
     _, centres, edges = bands(fraction)
-    energy, decay, radiate, member = _sources(floor, slab, force, rate_Hz, centres, edges, chain)
+    energy, decay, radiate, member = _sources(floor, slab, force, rate_Hz, centres, edges, chain, n_fft)
     b = decay_rate_per_s(t_band)
     kappa = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s**2 / volume_m3
     parts = dict(injected_J=energy, radiated_fraction=radiate / decay, floor_decay_per_s=decay, room_decay_per_s=b, radiation_per_s=radiate, membership=member, pressure_scale=kappa)
@@ -187,7 +194,10 @@ def _levels_of_force(force, slab: Slab, volume_m3, t_band, floor, chain: Chain, 
         return maximum_over_time(lambda t: _band_response(parts, chain, bi, row, t), 1e-4, 20.0 / bi)
 
     peak, t_star = jax.vmap(band)(b, member)
-    level = 10.0 * jnp.log10(peak / REFERENCE_PRESSURE_Pa**2)
+    # a band without a source (a modal floor without a mode in it) is silent: −inf dB, and a
+    # zero gradient rather than 0/0
+    heard = peak > 0.0
+    level = jnp.where(heard, 10.0 * jnp.log10(jnp.where(heard, peak, 1.0) / REFERENCE_PRESSURE_Pa**2), -jnp.inf)
     return RoomLevels(level_dB=level, peak_time_s=t_star, normalised_dB=normalised_level_dB(level, volume_m3, t_band), **parts)
 
 

@@ -9,7 +9,7 @@ A force F(t) on a drive point of mobility Y(ω) = u̇/F injects (Parseval)
   mobility (its modal density × π/(2M)): the energy injected into a band is the force energy
   of the band (``rbjax.spectrum.band_energies_N2s``) over Z. This is the SEA input of a
   resonant slab.
-* A modal floor (``ModalFloor``: u = Σ q_k, m_k(q̈_k + η_kω_k q̇_k + ω_k² q_k) = F) has
+* A modal floor (``AbstractModalFloor``: u = Σ q_k, m_k(q̈_k + η_kω_k q̇_k + ω_k² q_k) = F) has
   Re Y = Σ_k Re Y_k, Re Y_k(ω) = η_kω_kω²/m_k / ((ω_k² − ω²)² + (η_kω_kω)²) (modal
   superposition), so each mode receives W_k = ∫ E_F Re Y_k df. The integral is a sum over a
   uniform grid of the zero-padded spectrum of the force samples (the trapezoidal rule, which
@@ -28,8 +28,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 on)
+from .._validate import is_traced
 from ..spectrum.levels import band_energies_N2s, energy_spectrum
-from ..terms.floors.kinds import ModalFloor
+from ..terms.floors.kinds import AbstractModalFloor
 
 #: The finest frequency grid of the modal energies: 2^21 points of the zero-padded record.
 MAX_FFT = 2**21
@@ -42,10 +43,15 @@ def plate_band_energies_J(force_N, rate_Hz: float, lower_Hz, upper_Hz, impedance
     return band_energies_N2s(force_N, rate_Hz, lower_Hz, upper_Hz, n_record=n_record) / impedance_Ns_per_m
 
 
-def modal_grid_size(floor: ModalFloor, rate_Hz: float, n_samples: int) -> int:
+def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -> int:
     """The FFT length of ``modal_energies_J``: Δf ≤ γ_min/3 over the lossy modes, at least the
-    samples' count, at most ``MAX_FFT`` (a power of two)."""
-    widths = [0.5 * eta * f for f, eta in zip(floor.frequency_Hz, floor.loss_factor) if f > 0.0 and eta > 0.0]
+    samples' count, at most ``MAX_FFT`` (a power of two). The floor's values must be concrete
+    (a shape): under a transformation, compute it first and pass it on as ``n_fft``."""
+    if is_traced(floor):
+        raise ValueError("modal_grid_size needs the floor's concrete values; under jit/jvp pass n_fft=modal_grid_size(floor, rate_Hz, n_samples) computed outside")
+    _, omega, eta = (np.asarray(x, dtype=np.float64) for x in floor.modes())
+    freq = omega / (2.0 * math.pi)
+    widths = [0.5 * e * f for f, e in zip(freq, eta) if f > 0.0 and e > 0.0]
     step = min([1.0] + [w / POINTS_PER_HALF_WIDTH for w in widths])
     return int(min(MAX_FFT, max(2 ** math.ceil(math.log2(rate_Hz / step)), 2 ** math.ceil(math.log2(n_samples)))))
 
@@ -56,26 +62,27 @@ def _dtft_Ns(force_N, rate_Hz: float, freq_Hz):
     return phase @ force_N / rate_Hz
 
 
-def modal_energies_J(force_N, rate_Hz: float, floor: ModalFloor):
+def modal_energies_J(force_N, rate_Hz: float, floor: AbstractModalFloor, n_fft: int | None = None):
     """Energy W_k injected into each mode of ``floor`` by the force samples (module docstring);
-    shape (num_modes,). ``force_N`` holds every non-zero sample of the record (1-D)."""
+    shape (num_modes,). ``force_N`` holds every non-zero sample of the record (1-D); ``n_fft``:
+    the grid (default ``modal_grid_size``; give it where the floor's values are traced)."""
     x = jnp.asarray(force_N, dtype=jnp.float64)
-    n_fft = modal_grid_size(floor, rate_Hz, x.shape[-1])
+    n_fft = modal_grid_size(floor, rate_Hz, x.shape[-1]) if n_fft is None else int(n_fft)
     freq, esd = energy_spectrum(x, rate_Hz, n_record=n_fft)
     df = rate_Hz / n_fft
-    mass = np.asarray(floor.mass_kg)
-    fk = np.asarray(floor.frequency_Hz)
-    eta = np.asarray(floor.loss_factor)
+    mass, omega, eta = floor.modes()
+    fk = omega / (2.0 * jnp.pi)
     resolved = (fk > 0.0) & (eta > 0.0) & (0.5 * eta * fk >= POINTS_PER_HALF_WIDTH * df * (1.0 - 1e-12))
     w = 2.0 * jnp.pi * freq
 
     def one(args):
-        m, f, e = args
-        wk = 2.0 * jnp.pi * f
+        m, wk, e = args
         re_y = e * wk * w**2 / m / ((wk**2 - w**2) ** 2 + (e * wk * w) ** 2)
         return jnp.sum(esd * re_y) * df
 
-    grid = jax.lax.map(one, (jnp.asarray(mass), jnp.asarray(fk), jnp.asarray(eta))) if resolved.any() else jnp.zeros(len(mass))
+    # an unresolved mode's sum is not used: a harmless resonance (half the Nyquist frequency,
+    # η = 1) stands in for it, so that no 0/0 reaches the values or the gradient
+    grid = jax.lax.map(one, (mass, jnp.where(resolved, omega, 0.5 * jnp.pi * rate_Hz), jnp.where(resolved, eta, 1.0)))
     spectrum = _dtft_Ns(x, rate_Hz, fk)
     narrow = (spectrum.real**2 + spectrum.imag**2) / (2.0 * mass)
-    return jnp.where(jnp.asarray(resolved), grid, narrow)
+    return jnp.where(resolved, grid, narrow)

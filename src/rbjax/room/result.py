@@ -11,7 +11,7 @@ import numpy as np
 from .._validate import as_float
 from ..solve.simulate import make_model, simulate, trajectory
 from ..terms.ball import JIS_RUBBER_BALL
-from ..terms.floors.kinds import ModalFloor
+from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.model import Solver
 from .chain import RoomLevels, bands, fast_levels_dB, rating_unrounded_dB, room_levels
 from .scene import Chain, ReceivingRoom, Slab
@@ -92,7 +92,7 @@ def impact_sound(
     slab: Slab,
     room: ReceivingRoom,
     *,
-    floor: ModalFloor | None = None,
+    floor: AbstractModalFloor | None = None,
     height_m: float = 1.0,
     ball=JIS_RUBBER_BALL,
     chain: Chain = Chain(),
