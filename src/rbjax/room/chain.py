@@ -177,7 +177,8 @@ def room_levels(
     force = trajectory(height_m, times, ball, model, solver).force_N
     if isinstance(floor, AbstractModalFloor) and n_fft is None:
         n_fft = modal_grid_size(floor, rate_Hz, n_samples)
-    return _levels_of_force(*as_arrays((force, slab, room.volume_m3, t_band, floor)), chain, fraction, float(rate_Hz), n_fft)
+    force, slab, volume, t_band, floor = as_arrays((force, slab, room.volume_m3, t_band, floor))
+    return _levels_of_force(force, slab, volume, t_band, floor, chain, fraction, float(rate_Hz), n_fft)
 
 
 @eqx.filter_jit

@@ -381,7 +381,7 @@ def recontact_horizon_s(model: Model):
     """How long after separation ``_recontacts`` follows the free motion: two periods of the
     slowest ball or floor mode, at least 10 ms."""
     floor = model.floor
-    horizon = 0.01
+    horizon: jax.Array | float = 0.01
     if isinstance(floor, AbstractModalFloor):
         omega = floor.modes()[1]
         periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)

@@ -86,7 +86,7 @@ class FloatingFloor(AbstractModalFloor):
 
     def modes(self):
         m1, m2 = jnp.asarray(self.screed_mass_kg, dtype=jnp.float64), jnp.asarray(self.base_mass_kg, dtype=jnp.float64)
-        k1 = self.dynamic_stiffness_N_per_m3 * self.area_m2
+        k1 = jnp.asarray(self.dynamic_stiffness_N_per_m3 * self.area_m2, dtype=jnp.float64)
         k2 = m2 * (2.0 * jnp.pi * self.base_frequency_Hz) ** 2
         a, b, c = k1 / m1, -k1 / jnp.sqrt(m1 * m2), (k1 + k2) / m2
         upper = 0.5 * (a + c) + jnp.sqrt((0.5 * (a - c)) ** 2 + b**2)
