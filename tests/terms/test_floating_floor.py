@@ -51,3 +51,11 @@ def test_bad_parameters_are_named(field, value):
     args = dict(screed_thickness_m=0.07, screed_density_kg_per_m3=2200.0, area_m2=1.0, dynamic_stiffness_N_per_m3=40e6, base_mass_kg=1725.0, base_frequency_Hz=27.0)
     with pytest.raises(ValueError, match=f"{field}={value}"):
         FloatingFloor(**(args | {field: value}))
+
+
+def test_model_json_round_trip():
+    from rbjax.terms.serialize import model_from_dict, model_to_dict
+
+    d = model_to_dict(Model(floor=FloatingFloor(0.07, 2200.0, 1.0, 40e6, 1725.0, 27.0)))
+    assert d["floor"]["name"] == "floating" and d["floor"]["dynamic_stiffness_N_per_m3"] == 40e6
+    assert model_to_dict(model_from_dict(d)) == d

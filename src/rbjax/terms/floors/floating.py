@@ -2,7 +2,7 @@
 structure, as the two drive-point modes of a mass–spring–mass system (``FloatingFloor``).
 
 Its parameters are leaves of the pytree (declared, with units and bounds, like every term):
-the impact, the room chain (``rbjax.room``) and the fits are differentiable in the screed's
+the impact and the room chain (``rbjax.room``) are differentiable in the screed's
 mass, the layer's dynamic stiffness and loss and the base, and a new build-up reuses the
 compiled programs. ``rbjax.terms.floors.modes.floating_floor`` gives the same floor as a
 ``ModalFloor`` of static values.
