@@ -14,7 +14,7 @@ SRC = Path(rbjax.__file__).parent
 
 #: Layers from the bottom up (README "Layout"): a module may import its own layer and the
 #: layers below it, never one above.
-LAYERS = ("terms", "spectrum", "solve", "data", "fit", "studies", "report", "commands")
+LAYERS = ("terms", "spectrum", "solve", "room", "data", "fit", "studies", "report", "commands")
 #: Top-level helpers beside the packages, and the layers they may import.
 HELPERS = {"_x64": (), "_validate": (), "_progress": (), "text": (), "plot": ("spectrum",)}
 MAX_LINES = 500

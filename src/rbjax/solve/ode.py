@@ -27,7 +27,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ..terms.floors.kinds import ModalFloor
+from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import (
     contact_force_N,
     dynamic_mass_kg,
@@ -381,8 +381,11 @@ def recontact_horizon_s(model: Model):
     """How long after separation ``_recontacts`` follows the free motion: two periods of the
     slowest ball or floor mode, at least 10 ms."""
     floor = model.floor
-    freqs = [f for f in floor.frequency_Hz if f > 0.0] if isinstance(floor, ModalFloor) else []
-    horizon = max([2.0 / f for f in freqs] + [0.01])
+    horizon: jax.Array | float = 0.01
+    if isinstance(floor, AbstractModalFloor):
+        omega = floor.modes()[1]
+        periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)
+        horizon = jnp.maximum(jnp.max(periods), horizon)
     if model.ball_mode is not None:
         return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
     return horizon
@@ -405,12 +408,11 @@ def _recontacts(y_end, args):
         bm = model.ball_mode
         w, wd = model.ball_mode_states(z)
         gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
-    if isinstance(model.floor, ModalFloor):
+    if isinstance(model.floor, AbstractModalFloor):
         s = model.floor_states(z)
         n = model.floor.num_modes
         q, qd = s[:n], s[n:]
-        omega = 2.0 * jnp.pi * jnp.asarray(model.floor.frequency_Hz)
-        eta = jnp.asarray(model.floor.loss_factor)
+        _, omega, eta = model.floor.modes()
         free = _free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
         gap_close = gap_close - jnp.sum(free - q, axis=1)
     scale = 1e-9 * ball.wall_m

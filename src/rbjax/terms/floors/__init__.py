@@ -1,12 +1,15 @@
 """Floors, a family of terms like the damping laws: the kinds of floor the ball can strike
 (:mod:`~rbjax.terms.floors.kinds`: rigid, a dashpot, an infinite plate, modes at the drive
-point), the building materials (:mod:`~rbjax.terms.floors.materials`), the modal builders
+point, and a floating floor of declared parameters:
+:mod:`~rbjax.terms.floors.floating`), the building materials (:mod:`~rbjax.terms.floors.materials`), the modal builders
 (:mod:`~rbjax.terms.floors.modes`: a simply supported plate, a floating floor) and the named
 presets and floor files (:mod:`~rbjax.terms.floors.presets`)."""
 
+from .floating import FloatingFloor
 from .kinds import (
     FLOOR_MODELS,
     AbstractFloor,
+    AbstractModalFloor,
     Dashpot,
     InfinitePlate,
     ModalFloor,
@@ -26,7 +29,7 @@ from .presets import (
 )
 
 __all__ = [
-    "FLOOR_MODELS", "AbstractFloor", "Dashpot", "InfinitePlate", "ModalFloor", "Rigid",
+    "FLOOR_MODELS", "AbstractFloor", "AbstractModalFloor", "Dashpot", "FloatingFloor", "InfinitePlate", "ModalFloor", "Rigid",
     "plate_impedance_Ns_per_m", "MATERIALS", "Material", "cross_laminated_youngs_Pa", "material",
     "floating_floor", "simply_supported_plate_modes", "FLOOR_PRESETS", "PLATE_PRESETS",
     "floor_from_mapping", "floor_preset", "load_floor", "load_named_floor", "plate",

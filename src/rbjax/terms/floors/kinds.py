@@ -6,7 +6,8 @@ deflection is the ball's displacement relative to the surface, δ = X − u (X: 
 moving part, downward positive), and the floor receives the force of the coupled motion. A
 floor is an equinox Module, a term like the others: ``Rigid`` (the default, today's model
 exactly), ``Dashpot`` (a real point impedance Z: u̇ = F/Z), ``InfinitePlate`` (the thin plate's
-Z = 8√(B′m″)) and ``ModalFloor`` (modes at the drive point). The coupled equations are derived
+Z = 8√(B′m″)) and the modal floors (modes at the drive point: ``ModalFloor``, values given;
+``rbjax.terms.floors.floating.FloatingFloor``, a floating floor of declared parameters). The coupled equations are derived
 in :mod:`rbjax.solve.ode` and the README ("Floors").
 
 A floor tells the solver three things about its drive point, for a floor force F and the
@@ -193,15 +194,54 @@ def _static_tuple(name: str, values) -> tuple[float, ...]:
     return out
 
 
-class ModalFloor(AbstractFloor):
-    """A floor given by its modes at the drive point (a finite plate, a floating floor, a
-    measured modal model).
+class AbstractModalFloor(AbstractFloor):
+    """A floor given by its modes at the drive point: u = Σ q_k with
+    m_k(q̈_k + η_k ω_k q̇_k + ω_k² q_k) = F. Each mode k is a mass m_k (its modal mass seen at the
+    drive point, m_k = M_k/φ_k² for a mode of generalised mass M_k and shape value φ_k there), an
+    angular frequency ω_k = 2πf_k and a loss factor η_k (viscous at resonance); each adds two
+    states (q_k, q̇_k). Subclasses give ``modes()`` (``ModalFloor``: the values as given;
+    ``rbjax.terms.floors.floating.FloatingFloor``: computed from its declared parameters)."""
 
-    The drive-point displacement is u = Σ q_k with m_k(q̈_k + η_k ω_k q̇_k + ω_k² q_k) = F: each mode
-    k is a mass m_k (its modal mass seen at the drive point, m_k = M_k/φ_k² for a mode of
-    generalised mass M_k and shape value φ_k there), a natural frequency f_k = ω_k/2π and a loss
-    factor η_k (viscous at resonance). Each mode adds two states (q_k, q̇_k). The values are
-    static (given, not fitted): a new floor compiles a new program.
+    @property
+    @abc.abstractmethod
+    def num_modes(self) -> int:
+        """How many modes (static)."""
+
+    @abc.abstractmethod
+    def modes(self):
+        """(m_k in kg, ω_k in rad/s, η_k): three arrays of ``num_modes`` values (JAX, traceable)."""
+
+    @property
+    def num_states(self) -> int:
+        return 2 * self.num_modes
+
+    def _modal_accelerations(self, states, force_N):
+        m, w, eta = self.modes()
+        n = self.num_modes
+        q, qd = states[:n], states[n:]
+        return force_N / m - eta * w * qd - w**2 * q
+
+    def rates(self, states, force_N):
+        n = self.num_modes
+        return jnp.concatenate([states[n:], self._modal_accelerations(states, force_N)])
+
+    def velocity_m_per_s(self, states, force_N):
+        return jnp.sum(states[self.num_modes :])
+
+    def displacement_m(self, states):
+        return jnp.sum(states[: self.num_modes])
+
+    def acceleration_m_per_s2(self, states, force_N):
+        return jnp.sum(self._modal_accelerations(states, force_N))
+
+
+class ModalFloor(AbstractModalFloor):
+    """A floor given by its modes at the drive point (a finite plate, a floating floor, a
+    measured modal model; ``AbstractModalFloor``).
+
+    The values are static (given, not fitted): a new floor compiles a new program. A floor whose
+    modes follow from parameters to differentiate declares them as leaves and computes its
+    modes (``rbjax.terms.floors.floating.FloatingFloor``).
 
     Attributes:
         mass_kg, frequency_Hz, loss_factor: one value per mode (sequences of equal length);
@@ -238,30 +278,5 @@ class ModalFloor(AbstractFloor):
     def num_modes(self) -> int:
         return len(self.mass_kg)
 
-    @property
-    def num_states(self) -> int:
-        return 2 * self.num_modes
-
-    def _arrays(self):
-        m = jnp.asarray(self.mass_kg)
-        w = 2.0 * jnp.pi * jnp.asarray(self.frequency_Hz)
-        return m, w, jnp.asarray(self.loss_factor)
-
-    def _modal_accelerations(self, states, force_N):
-        m, w, eta = self._arrays()
-        n = self.num_modes
-        q, qd = states[:n], states[n:]
-        return force_N / m - eta * w * qd - w**2 * q
-
-    def rates(self, states, force_N):
-        n = self.num_modes
-        return jnp.concatenate([states[n:], self._modal_accelerations(states, force_N)])
-
-    def velocity_m_per_s(self, states, force_N):
-        return jnp.sum(states[self.num_modes :])
-
-    def displacement_m(self, states):
-        return jnp.sum(states[: self.num_modes])
-
-    def acceleration_m_per_s2(self, states, force_N):
-        return jnp.sum(self._modal_accelerations(states, force_N))
+    def modes(self):
+        return jnp.asarray(self.mass_kg), 2.0 * jnp.pi * jnp.asarray(self.frequency_Hz), jnp.asarray(self.loss_factor)

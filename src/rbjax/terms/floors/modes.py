@@ -3,7 +3,8 @@
 * ``simply_supported_plate_modes``: a rectangular thin (Kirchhoff) plate simply supported on
   its four edges, whose modes are known in closed form.
 * ``floating_floor``: a screed on a resilient layer over a base structure, idealised as two
-  masses on two springs (the classic mass–spring–mass model of a floating floor).
+  masses on two springs (the classic mass–spring–mass model of a floating floor;
+  ``rbjax.terms.floors.floating.FloatingFloor`` is the same floor with traceable parameters).
 
 Both return a ``ModalFloor`` (masses, frequencies and loss factors seen at the drive point, the
 point the ball hits). The values are computed here in NumPy, once: they are static in the
@@ -17,6 +18,7 @@ import math
 import numpy as np
 
 from ..._validate import check_range
+from .floating import FloatingFloor
 from .kinds import ModalFloor
 
 
@@ -114,28 +116,10 @@ def floating_floor(
     layer_loss_factor=0.1,
     base_loss_factor=0.02,
 ) -> ModalFloor:
-    """A floating floor as the two-mode drive-point model of a mass–spring–mass system.
-
-    The idealisation: the screed under the ball moves as one rigid mass m₁ = ρ t A (``area_m2``:
-    the area that moves with the ball, a modelling choice; a real screed bends, so A is
-    the area of the screed that takes part in the impact), resting on the resilient layer's
-    spring k₁ = s′A (s′: the layer's dynamic stiffness per unit area, EN 29052-1), over a base
-    structure given as one mode of mass m₂ and frequency f₂ (its spring to ground
-    k₂ = m₂(2πf₂)²; f₂ = 0: a free mass). With x₁ (screed) and x₂ (base),
-
-        M ẍ + K x = (F, 0),   M = diag(m₁, m₂),   K = [[k₁, −k₁], [−k₁, k₁ + k₂]].
-
-    The eigenvectors φ_k of K φ = ω² M φ, normalised to φ_kᵀ M φ_k = 1, give the drive-point
-    (screed) receptance Σ_k φ_{1k}²/(ω_k² − ω²), i.e. two modes of modal mass m_k = 1/φ_{1k}² at
-    the drive point (Σ 1/m_k = 1/m₁). Each mode's loss factor is the strain-energy-weighted
-    loss of the springs (the modal strain energy method, Johnson & Kienholz, AIAA J. 20, 1982):
-    η_k = [η_layer k₁(φ_{1k} − φ_{2k})² + η_base k₂ φ_{2k}²]/ω_k² (0 for a rigid-body mode).
-
-    The mass–spring resonance of the screed on the layer over a rigid base,
-    f₀ = (1/2π)√(s′/m″), m″ = ρt, is the usual design figure (Vigran, *Building Acoustics*,
-    §8.3; Cremer, Heckl & Petersson §5.8): a soft layer (f₀ well below the ball's ~20 Hz
-    contact frequency) leaves the screed a free mass during the contact, a stiff one makes the
-    screed bounce on the layer within the contact.
+    """A floating floor as the two-mode drive-point model of a mass–spring–mass system, with
+    static values: ``FloatingFloor(...).modal_floor()`` (the derivation:
+    ``rbjax.terms.floors.floating``; use ``FloatingFloor`` itself to differentiate in the
+    build-up).
 
     Raises ``ValueError`` (naming the argument) for a non-positive thickness, density, area,
     dynamic stiffness or base mass, a negative base frequency, or a negative loss factor.
@@ -150,15 +134,4 @@ def floating_floor(
     eta1 = _loss("layer_loss_factor", layer_loss_factor)
     eta2 = _loss("base_loss_factor", base_loss_factor)
 
-    m1 = rho * t * area
-    k1 = s * area
-    k2 = m2 * (2.0 * math.pi * f2) ** 2
-    mass = np.array([m1, m2])
-    stiffness = np.array([[k1, -k1], [-k1, k1 + k2]])
-    root = 1.0 / np.sqrt(mass)
-    w2, v = np.linalg.eigh(stiffness * root[:, None] * root[None, :])
-    phi = v * root[:, None]  # mass-normalised: φᵀMφ = 1
-    w2 = np.where(w2 > 1e-12 * np.max(w2), w2, 0.0)  # a free base: its rigid-body mode at 0
-    strain = eta1 * k1 * (phi[0] - phi[1]) ** 2 + eta2 * k2 * phi[1] ** 2
-    loss = np.where(w2 > 0.0, strain / np.where(w2 > 0.0, w2, 1.0), 0.0)
-    return ModalFloor(mass_kg=1.0 / phi[0] ** 2, frequency_Hz=np.sqrt(w2) / (2.0 * math.pi), loss_factor=loss)
+    return FloatingFloor(t, rho, area, s, m2, f2, layer_loss_factor=eta1, base_loss_factor=eta2).modal_floor()

@@ -1,0 +1,31 @@
+"""From the ball's force to the rating in the room below (README "Impact sound in the room
+below"): the floor's injected energy (:mod:`~rbjax.room.injection`), radiation
+(:mod:`~rbjax.room.radiation`), the receiving room and the Fast detector
+(:mod:`~rbjax.room.detector`), chained in :mod:`~rbjax.room.chain` (scene terms in
+:mod:`~rbjax.room.scene`), the standards' arithmetic (:mod:`~rbjax.room.standards`: ISO 16283-2
+normalisation, ISO 717-2 Annex D rating) and ``impact_sound`` (:mod:`~rbjax.room.result`).
+
+Layer: above ``solve`` (it simulates the impact) and ``spectrum``; below ``data``."""
+
+from .chain import RoomLevels, contact_samples, fast_levels_dB, rating_unrounded_dB, room_levels
+from .result import ImpactSound, impact_sound
+from .scene import Chain, ReceivingRoom, RoomChainError, Slab
+from .standards import (
+    FAST_TIME_CONSTANT_s,
+    REFERENCE_REVERBERATION_s,
+    REFERENCE_VOLUME_m3,
+    a_weighted_sum_dB,
+    fast_correction_dB,
+    fast_max_of_decay,
+    normalised_level_dB,
+    rating_dB,
+    round_rating,
+)
+
+__all__ = [
+    "RoomLevels", "contact_samples", "fast_levels_dB", "rating_unrounded_dB", "room_levels",
+    "ImpactSound", "impact_sound", "Chain", "ReceivingRoom", "RoomChainError", "Slab",
+    "FAST_TIME_CONSTANT_s", "REFERENCE_REVERBERATION_s", "REFERENCE_VOLUME_m3",
+    "a_weighted_sum_dB", "fast_correction_dB", "fast_max_of_decay", "normalised_level_dB",
+    "rating_dB", "round_rating",
+]

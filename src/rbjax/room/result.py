@@ -1,0 +1,151 @@
+"""``impact_sound``: the room chain on concrete inputs, with the rating, the validity warnings
+and a frozen result that prints, writes JSON and draws itself."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .._validate import as_float
+from ..solve.simulate import make_model, simulate, trajectory
+from ..terms.ball import JIS_RUBBER_BALL
+from ..terms.floors.kinds import AbstractModalFloor
+from ..terms.model import Solver
+from .chain import RoomLevels, bands, fast_levels_dB, rating_unrounded_dB, room_levels
+from .scene import Chain, ReceivingRoom, Slab
+from .standards import round_rating
+
+#: A floor decay counts as short against the room's when its 60 dB decay time is below this
+#: share of T (where ``Chain(floor_decay=False)`` is used).
+SHORT_DECAY_SHARE = 0.3
+
+
+@dataclasses.dataclass(frozen=True)
+class ImpactSound:
+    """L_i,Fmax per band, normalised, and the ratings L_iA,Fmax (ISO 717-2:2020 Annex D).
+
+    ``warnings`` lists where the prediction is outside the chain's validity (``rbjax.room.chain``)."""
+
+    bands: tuple[str, ...]
+    level_dB: tuple[float, ...]
+    normalised_dB: tuple[float, ...]
+    peak_time_s: tuple[float, ...]
+    LiA_Fmax_dB: int
+    LiA_Fmax_normalised_dB: int
+    LiA_Fmax_unrounded_dB: float
+    volume_m3: float
+    reverberation_s: tuple[float, ...]
+    height_m: float
+    floor: str
+    injected_energy_J: float
+    radiated_energy_J: float
+    warnings: tuple[str, ...]
+    levels: RoomLevels = dataclasses.field(repr=False, compare=False)
+    force_N: np.ndarray = dataclasses.field(repr=False, compare=False, default_factory=lambda: np.zeros(0))
+    rate_Hz: float = 44100.0
+    chain: Chain = Chain()
+
+    def to_dict(self) -> dict:
+        return {
+            "floor": self.floor, "height_m": self.height_m, "volume_m3": self.volume_m3,
+            "reverberation_s": list(self.reverberation_s), "bands_Hz": list(self.bands),
+            "Li_Fmax_dB": list(self.level_dB), "Li_Fmax_normalised_dB": list(self.normalised_dB),
+            "peak_time_s": list(self.peak_time_s), "LiA_Fmax_dB": self.LiA_Fmax_dB,
+            "LiA_Fmax_normalised_dB": self.LiA_Fmax_normalised_dB,
+            "LiA_Fmax_unrounded_dB": self.LiA_Fmax_unrounded_dB,
+            "injected_energy_J": self.injected_energy_J, "radiated_energy_J": self.radiated_energy_J,
+            "warnings": list(self.warnings),
+        }  # fmt: skip
+
+    def fast_levels_dB(self, times_s) -> np.ndarray:
+        """The Fast-weighted level of each band at ``times_s`` (bands × times; ``rbjax.room.chain.fast_levels_dB``)."""
+        return np.asarray(fast_levels_dB(self.levels, self.chain, times_s))
+
+    def plot(self, path=None):
+        """Band levels (measured-room and normalised) and the Fast level against time."""
+        from .figure import plot_impact_sound
+
+        return plot_impact_sound(self, path)
+
+
+def _contact_samples(height_m, ball, slab, floor, rate_Hz) -> int:
+    """Samples over the contact: twice the rigid-floor contact time (the cheap quadrature),
+    doubled while the ball is still in contact at the last sample."""
+    model = make_model(floor=slab.plate if floor is None else floor)
+    n = int(math.ceil(2.0 * float(np.asarray(simulate(height_m, ball).contact_time_s)) * rate_Hz)) + 2
+    for _ in range(8):
+        traj = trajectory(height_m, np.arange(n) / rate_Hz, ball, model)
+        status = int(np.asarray(traj.status))
+        if status != 0:
+            from ..solve.outcome import STATUS_NAMES
+
+            raise RuntimeError(f"the impact on the floor failed: {STATUS_NAMES[status]}")
+        if not bool(np.asarray(traj.in_contact)[-1]):
+            return n
+        n *= 2
+    raise RuntimeError(f"the contact lasts longer than {n / rate_Hz:.3g} s")
+
+
+def impact_sound(
+    slab: Slab,
+    room: ReceivingRoom,
+    *,
+    floor: AbstractModalFloor | None = None,
+    height_m: float = 1.0,
+    ball=JIS_RUBBER_BALL,
+    chain: Chain = Chain(),
+    fraction: int = 1,
+    rate_Hz: float = 44100.0,
+    name: str = "slab",
+) -> ImpactSound:
+    """L_i,Fmax, normalised levels and L_iA,Fmax of the ball dropped from ``height_m`` on the
+    bare ``slab`` (``floor=None``) or on a modal ``floor`` radiating through ``slab`` into
+    ``room`` (``rbjax.room.chain``)."""
+    n = _contact_samples(height_m, ball, slab, floor, rate_Hz)
+    lv = room_levels(slab, room, floor=floor, height_m=height_m, ball=ball, chain=chain, fraction=fraction, rate_Hz=rate_Hz, n_samples=n, solver=Solver())
+    labels, _, edges = bands(fraction)
+    t_band = np.asarray(room.reverberation_per_band(labels))
+    warnings = _warnings(lv, labels, edges, room, chain, floor, t_band)
+    injected = np.asarray(lv.injected_J)
+    return ImpactSound(
+        bands=tuple(labels),
+        level_dB=tuple(np.asarray(lv.level_dB).tolist()),
+        normalised_dB=tuple(np.asarray(lv.normalised_dB).tolist()),
+        peak_time_s=tuple(np.asarray(lv.peak_time_s).tolist()),
+        LiA_Fmax_dB=round_rating(rating_unrounded_dB(lv, fraction)),
+        LiA_Fmax_normalised_dB=round_rating(rating_unrounded_dB(lv, fraction, normalised=True)),
+        LiA_Fmax_unrounded_dB=float(rating_unrounded_dB(lv, fraction)),
+        volume_m3=as_float(room.volume_m3),
+        reverberation_s=tuple(t_band.tolist()),
+        height_m=float(height_m),
+        floor=name,
+        injected_energy_J=float(np.sum(injected)),
+        radiated_energy_J=float(np.sum(injected * np.asarray(lv.radiated_fraction))),
+        warnings=tuple(warnings),
+        levels=lv,
+        force_N=np.asarray(trajectory(height_m, np.arange(n) / rate_Hz, ball, make_model(floor=slab.plate if floor is None else floor)).force_N),
+        rate_Hz=float(rate_Hz),
+        chain=chain,
+    )
+
+
+def _warnings(lv: RoomLevels, labels, edges, room: ReceivingRoom, chain: Chain, floor, t_band) -> list[str]:
+    out = []
+    fs = room.schroeder_frequency_Hz()
+    if fs is not None:
+        below = [lab for lab, hi, f in zip(labels, edges[1], np.broadcast_to(fs, (len(labels),))) if hi < f]
+        if below:
+            out.append(f"bands {', '.join(below)} Hz lie below the room's Schroeder frequency: the diffuse-field level is a room average there")
+    floor_t60 = 6.0 * math.log(10.0) / np.asarray(lv.floor_decay_per_s)
+    if not chain.floor_decay and floor is None and np.any(floor_t60 > SHORT_DECAY_SHARE * t_band):
+        slow = [lab for lab, tf, tr in zip(labels, floor_t60, t_band) if tf > SHORT_DECAY_SHARE * tr]
+        out.append(f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use Chain(floor_decay=True)")
+    if not chain.floor_decay and floor is not None:
+        t_room = float(np.min(t_band))
+        if np.any(floor_t60 > SHORT_DECAY_SHARE * t_room):
+            out.append("modes of the floor decay slower than 0.3 T: the diffuse-field step (floor_decay=False) is outside its validity")
+    if np.any(np.asarray(lv.radiated_fraction) > 1.0):
+        out.append("a mode radiates more than its loss factor allows (η_rad > η_k): give the modes their radiation loss")
+    return out

@@ -1,0 +1,165 @@
+"""The room chain: the energy the force injects against the independent scipy reference's
+∫F u̇ dt (infinite plate and modal floor), the gradient of L_iA,Fmax against finite
+differences, bad input and the command line.
+
+Compile budget: the ball on the bare 150 mm slab is solved once (``bare``) and the command
+line runs the same slab (its preset), so it reuses that program; the gradient check compiles
+one forward-mode program whose primal outputs give the finite differences too. The energy
+references are ``tests/scipy_floor_reference.py`` (its own ODE, DOP853 at rtol 1e-12), not a
+second diffrax solve.
+"""
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rbjax.room import (
+    Chain,
+    ReceivingRoom,
+    RoomChainError,
+    Slab,
+    impact_sound,
+    rating_unrounded_dB,
+    room_levels,
+)
+from rbjax.room.chain import bands
+from rbjax.room.injection import modal_energies_J, modal_grid_size
+from rbjax.terms import JIS_RUBBER_BALL, FloatingFloor, Solver, floating_floor
+from rbjax.terms.floors.kinds import Rigid
+from tests.cli_runner import run_cli
+
+from scipy_floor_reference import reference_floor_impact
+
+RATE = 44100.0
+SLAB = Slab.of_material("concrete", 0.15)  # the preset concrete-150mm of the command line
+ROOM = ReceivingRoom(50.0, 0.5)
+
+
+@pytest.fixture(scope="module")
+def bare():
+    return impact_sound(SLAB, ROOM)
+
+
+def test_infinite_plate_injects_band_energy_over_z(bare):
+    # independent: the force history again, its band energies by numpy's FFT over 1 s, over Z
+    force = bare.force_N
+    spec = np.abs(np.fft.rfft(force, n=int(RATE)) / RATE) ** 2 * 2
+    spec[0] /= 2
+    freq = np.fft.rfftfreq(int(RATE), 1 / RATE)
+    _, _, (lo, hi) = bands(1)
+    z = float(SLAB.plate.impedance_Ns_per_m)
+    expected = np.array([spec[(freq >= a) & (freq < b)].sum() for a, b in zip(lo, hi)]) / z
+    np.testing.assert_allclose(np.asarray(bare.levels.injected_J), expected, rtol=1e-6)
+    # and all bins together: the floor work ∫F u̇ dt of the scipy reference (ball on a dashpot Z)
+    w_floor = reference_floor_impact(1.0, JIS_RUBBER_BALL, SLAB.plate).injected_energy_J
+    assert spec.sum() / z == pytest.approx(w_floor, rel=1e-5)
+
+
+def test_levels_and_rating_are_consistent(bare):
+    assert bare.LiA_Fmax_dB == round(bare.LiA_Fmax_unrounded_dB)
+    assert bare.normalised_dB == pytest.approx(bare.level_dB)  # the reference room itself
+    assert any("Schroeder" in w for w in bare.warnings)
+    # the Fast level against time peaks at the band maximum
+    t = np.linspace(0.0, 0.5, 5001)
+    np.testing.assert_allclose(bare.fast_levels_dB(t).max(axis=1), bare.level_dB, atol=1e-4)
+
+
+def test_modal_floor_energy_balance():
+    # the force of the ball on the floating floor and ∫F u̇ dt, both from the scipy reference
+    floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0, layer_loss_factor=0.2, base_loss_factor=0.05)
+    ref = reference_floor_impact(1.0, JIS_RUBBER_BALL, floor)
+    rate = 88200.0
+    times = np.arange(int(np.ceil(ref.contact_time_s * rate)) + 2) / rate  # the whole contact
+    injected = float(np.sum(np.asarray(modal_energies_J(ref.force_N(times), rate, floor))))
+    assert injected == pytest.approx(ref.injected_energy_J, rel=1e-6)
+
+
+def test_gradient_of_the_rating_against_finite_differences():
+    solver = Solver(adjoint="forward")
+    n = 1000
+
+    def rating(thickness):
+        slab = Slab.of_material("concrete", thickness)
+        return rating_unrounded_dB(room_levels(slab, ROOM, n_samples=n, solver=solver), 1)
+
+    # one program: its primal outputs at t0 ± h are the finite differences
+    f = jax.jit(lambda t: jax.jvp(rating, (t,), (1.0,)))
+    t0, h = 0.15, 1e-5
+    _, tangent = f(t0)
+    fd = (float(f(t0 + h)[0]) - float(f(t0 - h)[0])) / (2 * h)
+    assert float(tangent) == pytest.approx(fd, rel=1e-4)
+
+
+#: The floating floor of the gradient check: θ = (slab thickness, screed thickness, the layer's
+#: s′, the layer's loss factor) over a base mode like the first of a 150 mm slab of 4 m × 5 m
+#: at its centre (m₂ = ρtL_xL_y/4 = 1725 kg, 27 Hz, η 0.05); modes near 26 Hz and 85 Hz.
+THETA = np.array([0.15, 0.07, 40e6, 0.1])
+FLOAT = dict(screed_density_kg_per_m3=2200.0, area_m2=1.0, base_mass_kg=1725.0, base_frequency_Hz=27.0, base_loss_factor=0.05)
+N_FLOAT = 1000  # 22.7 ms at 44.1 kHz: the whole contact (checked against the reference)
+
+
+def _floating(theta):
+    return FloatingFloor(theta[1], FLOAT["screed_density_kg_per_m3"], FLOAT["area_m2"], theta[2], FLOAT["base_mass_kg"], FLOAT["base_frequency_Hz"], layer_loss_factor=theta[3], base_loss_factor=FLOAT["base_loss_factor"])
+
+
+def test_gradient_in_the_floating_floor_against_finite_differences():
+    solver = Solver(adjoint="forward")
+    n_fft = modal_grid_size(_floating(THETA), RATE, N_FLOAT)
+
+    def outputs(theta):
+        lv = room_levels(Slab.of_material("concrete", theta[0]), ROOM, floor=_floating(theta), n_samples=N_FLOAT, solver=solver, n_fft=n_fft)
+        return rating_unrounded_dB(lv, 1), jnp.sum(lv.injected_J)
+
+    # one program: the four directional derivatives, and the values for the differences
+    program = jax.jit(lambda theta: jax.vmap(lambda v: jax.jvp(outputs, (theta,), (v,)))(jnp.eye(len(THETA))))
+    (rating, injected), (tangent, _) = program(THETA)
+    # the primal: the energy the ball puts into the floor, as the scipy reference integrates it
+    ref = reference_floor_impact(1.0, JIS_RUBBER_BALL, _floating(THETA))
+    assert ref.contact_time_s < (N_FLOAT - 2) / RATE
+    assert float(injected[0]) == pytest.approx(ref.injected_energy_J, rel=1e-5)
+    assert np.isfinite(float(rating[0]))
+    for i in range(len(THETA)):
+        h = 1e-4 * THETA[i]
+        up, down = THETA.copy(), THETA.copy()
+        up[i] += h
+        down[i] -= h
+        fd = (float(program(up)[0][0][0]) - float(program(down)[0][0][0])) / (2 * h)
+        assert float(tangent[i]) == pytest.approx(fd, rel=1e-4), i
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="volume_m3"):
+        ReceivingRoom(0.0, 0.5)
+    with pytest.raises(ValueError, match="reverberation_s"):
+        ReceivingRoom(50.0, -0.5)
+    with pytest.raises(RoomChainError, match="one per band, 6"):
+        room_levels(SLAB, ReceivingRoom(50.0, [0.5, 0.6]), n_samples=10)
+    with pytest.raises(RoomChainError, match="no structure that radiates"):
+        room_levels(SLAB, ROOM, floor=Rigid(), n_samples=10)
+    floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0)
+    with pytest.raises(RoomChainError, match="slab="):
+        room_levels(None, ROOM, floor=floor, n_samples=10)
+    with pytest.raises(ValueError, match="floor_decay"):
+        Chain(floor_decay="yes")
+    with pytest.raises(ValueError, match="dynamic_stiffness_N_per_m3=-1"):
+        _floating([0.15, 0.07, -1.0, 0.1])
+    with pytest.raises(ValueError, match="n_fft"):
+        jax.jit(lambda s: modal_grid_size(_floating([0.15, 0.07, s, 0.1]), RATE, N_FLOAT))(40e6)
+
+
+def test_cli_room_json_and_errors(bare, tmp_path):
+    # the slab of ``bare`` (the preset concrete-150mm): the compiled impact is reused
+    code, out, _ = run_cli(["room", "--floor", "concrete-150mm", "--room-volume-m3", "100", "--reverberation-s", "1.0", "--json", "--plot", str(tmp_path / "f.png")])
+    assert code == 0
+    data = json.loads(out)
+    assert isinstance(data["LiA_Fmax_dB"], int) and isinstance(data["LiA_Fmax_normalised_dB"], int)
+    # the room changes the levels only: the injected energy is that of ``bare``
+    assert data["injected_energy_J"] == pytest.approx(bare.injected_energy_J, rel=1e-12)
+    # V = 100 m³, T = 1 s: normalised = level + 3.01 dB − 1.94 dB in every band
+    np.testing.assert_allclose(np.subtract(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"]), 10 * np.log10(2) - 1.94, atol=0.01)
+    assert (tmp_path / "f.png").stat().st_size > 1000
+    code, _, err = run_cli(["room", "--floor", "rigid", "--room-volume-m3", "50", "--reverberation-s", "0.5"])
+    assert code == 2 and "radiates" in err
