@@ -33,6 +33,7 @@ FIGURES = [
     "fig10_lfe_increase.png",
     "fig11_increase_per_doubling.png",
     "fig12_contact_resonance.png",
+    "measured_ball.png",
 ]
 GASES = ("adiabatic", "none")
 

@@ -314,8 +314,8 @@ def fit(
         unit = math.sqrt(unc.integrated_autocorrelation(hist) * float(np.sum(hist**2)) / max(hist.size, 1))
         return (poisson_prior[0], poisson_prior[1], unit)
 
-    # 3. optimise every start: rounds of LM in the whitened frame of each round's start, all
-    # starts in one call per round; the best converged start is kept
+    # 3. optimise every start: rounds of LM in the whitened frame of each round's start; the
+    # best converged start is kept
     nu_moved = any(th[inu] != theta[inu] for th in thetas)  # ν now held at another value
     for th in thetas:
         th[inu] = theta[inu]

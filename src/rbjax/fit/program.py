@@ -22,8 +22,9 @@ whole Jacobian J_θ once by ``jax.jacfwd`` (the model is traced once) and return
 also comes back as auxiliary output for the uncertainties. The predicted forces come from the
 sampled path (:mod:`rbjax.fit.record_forces`: fixed steps at the records' own samples, only the
 physical columns carried through the solve) or, with ``Structure.path == "ode"``, from the
-diffrax ODE with its events (:func:`sample_force`). The optimiser runs on a batch of lanes
-(starts) in lockstep (``jax.vmap``).
+diffrax ODE with its events (:func:`sample_force`). The optimiser is vmapped over a batch of
+lanes (starts; :meth:`rbjax.fit.problem.Problem.run_batch` sends one lane a call on a CPU);
+an evaluate-only flag, shared by the lanes, skips the optimiser (one Jacobian).
 """
 
 from __future__ import annotations

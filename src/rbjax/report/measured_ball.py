@@ -35,7 +35,7 @@ def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
 
     from ..studies.summary_selection import select_summary
 
-    say(f"measured ball: fitting {', '.join(models)} to the paper's figures (§4.1)", enabled=progress)
+    say(f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's figures (§4.1)", enabled=progress)
     selection = select_summary(EXAMPLE_TABLE, models, held_out=[PREDICTED])
     rows = {}
     for name, cand in selection.candidates.items():
