@@ -71,6 +71,9 @@ def _enable_compile_cache() -> None:
     if path is None or jax.config.jax_compilation_cache_dir:  # type: ignore[attr-defined]
         return
     jax.config.update("jax_compilation_cache_dir", path)
+    # JAX keeps only programs that took ≥ 1 s to compile; the fit's small helpers (features,
+    # the substeps' Jacobian, θ's transforms) take less each but ~1 s together on every run.
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
 
 
 def _one_line(message) -> str:
