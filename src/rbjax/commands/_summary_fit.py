@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+from . import UsageError, progress
+from ._fit_output import finish
 
-from . import UsageError, emit_json, progress, write_json_file
 
-
-def run_summary(args, fix: dict, not_converged_exit: int) -> int:
-    """Run ``rbjax fit --summary`` (``fix``: the parsed ``--fix``; the exit code of a fit that
-    did not converge is ``fit``'s)."""
+def run_summary(args, fix: dict) -> int:
+    """Run ``rbjax fit --summary`` (``fix``: the parsed ``--fix``)."""
     from ..fit.summary import fit_summary
     from ..fit.summary_table import read_summary
 
@@ -32,22 +30,4 @@ def run_summary(args, fix: dict, not_converged_exit: int) -> int:
         progress(f"recommended: {selection.recommended}")
     else:
         result = fit_summary(table, args.model, blocked_force=args.blocked_force or "paper", gas=args.gas, fix=fix, progress=not args.quiet)
-    out = result.to_dict()
-    if selection is not None:
-        out["selection"] = selection.to_dict()
-    if args.out is not None:
-        written = write_json_file(args.out, "fit.json", out)
-        for path in result.plot(Path(args.out)):
-            progress(f"wrote {path}")
-        progress(f"wrote {written}")
-    if args.json:
-        emit_json(out)
-    else:
-        if selection is not None:
-            print(selection.table())
-            print()
-        print(result.summary())
-    if not result.converged:
-        progress(f"the fit did not converge: {result.message}")
-        return not_converged_exit
-    return 0
+    return finish(args, result, selection)

@@ -6,7 +6,8 @@ import argparse
 import warnings
 from pathlib import Path
 
-from . import add_command, emit_json, progress, write_json_file
+from . import add_command, progress
+from ._fit_output import finish
 
 DESCRIPTION = """\
 Fit Young's modulus E (with ν held at 0.5: only E/√(1−ν²) is identifiable, paper Eqs. 1–3)
@@ -111,8 +112,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-#: Exit status of a fit that stopped without converging (its result is still written).
-NOT_CONVERGED_EXIT = 3
 
 
 def _check_model_and_fix(model, fix):
@@ -140,7 +139,7 @@ def run(args) -> int:
     if args.summary is not None or not args.paths:
         from ._summary_fit import run_summary
 
-        return run_summary(args, parse_fix(args.fix), NOT_CONVERGED_EXIT)
+        return run_summary(args, parse_fix(args.fix))
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
     data = load_fit_data(args)
@@ -164,25 +163,5 @@ def run(args) -> int:
             method=args.method,
             progress=not args.quiet,
         )
-    out = result.to_dict()
-    out["conditioning"] = list(data.conditioning)
-    out["excluded"] = list(data.excluded)
-    if selection is not None:
-        out["selection"] = selection.to_dict()
-    if args.out is not None:
-        written = write_json_file(args.out, "fit.json", out)
-        for path in result.plot(Path(args.out)):
-            progress(f"wrote {path}")
-        progress(f"wrote {written}")
-    if args.json:
-        emit_json(out)
-    else:
-        if selection is not None:
-            print(selection.table())
-            print()
-        print(result.summary())
-        print(data.conditioning_report())
-    if not result.converged:
-        progress(f"the fit did not converge: {result.message}")
-        return NOT_CONVERGED_EXIT
-    return 0
+    extra = {"conditioning": list(data.conditioning), "excluded": list(data.excluded)}
+    return finish(args, result, selection, extra=extra, after=data.conditioning_report())
