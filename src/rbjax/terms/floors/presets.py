@@ -11,11 +11,19 @@ or a file describing a floor (``.toml`` or ``.json``), one table with a ``type``
   (explicit values override the material's);
 - ``type = "dashpot"``: ``impedance_Ns_per_m`` (a real point impedance, u̇ = F/Z);
 - ``type = "modal"``: ``mass_kg``, ``frequency_Hz``, ``loss_factor`` (one value per mode;
-  one ``loss_factor`` for all modes is allowed): ``rbjax.terms.floors.kinds.ModalFloor``.
+  one ``loss_factor`` for all modes is allowed): ``rbjax.terms.floors.kinds.ModalFloor``;
+- ``type = "floating"``: a screed on a resilient layer over a base mode,
+  ``rbjax.terms.floors.floating.FloatingFloor``, by its constructor's names: ``screed_thickness_m``,
+  ``screed_density_kg_per_m3``, ``area_m2`` (the screed area moving with the ball),
+  ``dynamic_stiffness_N_per_m3`` (s′ of the layer, EN 29052-1), ``base_mass_kg``,
+  ``base_frequency_Hz`` (0: a free mass) and, optionally, ``layer_loss_factor`` (default 0.1)
+  and ``base_loss_factor`` (default 0.02); each within the bounds the floor declares
+  (``FloatingFloor.PARAMETERS``).
 
 An optional ``name`` labels the floor (default: the file's stem); ``description`` is free text.
 Any other key, a missing one or a value out of range raises ``ValueError`` naming the file,
-the key, the value and the valid range. ``src/rbjax/examples/floors/`` has an example file.
+the key, the value and the valid range. ``src/rbjax/examples/floors/`` has example files (``floating-screed.toml``: modal;
+``floating-screed-70mm.toml``: floating).
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from .floating import FloatingFloor
 from .kinds import AbstractFloor, Dashpot, InfinitePlate, ModalFloor, Rigid
 from .materials import MATERIALS, material
 
@@ -50,6 +59,10 @@ FLOOR_FILE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "infinite-plate": (("thickness_m",), ("material", "youngs_Pa", "density_kg_per_m3", "poisson")),
     "dashpot": (("impedance_Ns_per_m",), ()),
     "modal": (("mass_kg", "frequency_Hz", "loss_factor"), ()),
+    "floating": (
+        ("screed_thickness_m", "screed_density_kg_per_m3", "area_m2", "dynamic_stiffness_N_per_m3", "base_mass_kg", "base_frequency_Hz"),
+        ("layer_loss_factor", "base_loss_factor"),
+    ),
 }
 _COMMON_KEYS = ("type", "name", "description")
 
@@ -153,6 +166,14 @@ def floor_from_mapping(table: Mapping) -> AbstractFloor:
             frequency_Hz=_numbers("frequency_Hz", table["frequency_Hz"], lower=0.0, lower_open=False),
             loss_factor=_numbers("loss_factor", table["loss_factor"], lower=0.0, lower_open=False),
         )
+    if kind == "floating":
+        bounds = FloatingFloor.PARAMETERS
+        values = {
+            key: _number(key, table[key], lower=bounds[key].lower, lower_open=bounds[key].lower_open, upper=bounds[key].upper, upper_open=bounds[key].upper_open)
+            for key in (*required, *optional)
+            if key in table
+        }
+        return FloatingFloor(**values)
     return _plate_from_mapping(table)
 
 
