@@ -18,6 +18,7 @@ import pytest
 
 import rbjax
 from rbjax import InfinitePlate, ModalFloor, Model, Rigid, energy_balance
+from rbjax.terms import FloatingFloor
 from rbjax.terms.floors.kinds import Dashpot
 from rbjax.terms.floors.materials import MATERIALS, Material, cross_laminated_youngs_Pa, material
 from rbjax.terms.floors.presets import (
@@ -142,6 +143,14 @@ def test_example_floor_file_loads():
     name, floor = load_named_floor(path)
     assert name == "floating-screed" and isinstance(floor, ModalFloor)
     assert floor.num_modes == 9 and set(floor.mass_kg) == {500.0} and set(floor.loss_factor) == {0.1}
+    name, floor = load_named_floor(path.with_name("floating-screed-70mm.toml"))
+    assert name == "floating-screed-70mm"
+    assert floor == FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.1, base_loss_factor=0.05)
+    # its comment's figures: f0 = √(s′/m″)/2π over a rigid base, the base mode ρ t Lx Ly / 4 at f11
+    assert math.sqrt(10e6 / 140.0) / (2 * math.pi) == pytest.approx(42.5, abs=0.05)
+    B, m = 33e9 * 0.15**3 / (12 * (1 - 0.2**2)), 2300.0 * 0.15
+    assert m * 20.0 / 4 == 1725.0
+    assert math.pi / 2 * math.sqrt(B / m) * (1 / 16 + 1 / 25) == pytest.approx(27.0, abs=0.05)
 
 
 FILES = {
@@ -151,7 +160,14 @@ FILES = {
     "dashpot": {"type": "dashpot", "impedance_Ns_per_m": 5e4, "name": "my dashpot", "description": "a test"},
     "modal": {"type": "modal", "mass_kg": [200.0, 150.0], "frequency_Hz": [0.0, 40.0], "loss_factor": [0.0, 0.05]},
     "rigid": {"type": "rigid"},
+    "floating": {
+        "type": "floating", "screed_thickness_m": 0.07, "screed_density_kg_per_m3": 2000.0, "area_m2": 1.0,
+        "dynamic_stiffness_N_per_m3": 10e6, "base_mass_kg": 1725.0, "base_frequency_Hz": 27.0, "layer_loss_factor": 0.15,
+    },
 }
+
+
+FLOATING = {k: v for k, v in FILES["floating"].items() if k != "layer_loss_factor"}
 
 
 def _toml(table: dict) -> str:
@@ -181,6 +197,10 @@ def test_floor_file_round_trip(tmp_path, key, suffix):
         assert float(floor.impedance_Ns_per_m) == pytest.approx(plate_Z(table["thickness_m"], E, rho, nu), rel=1e-12)
     elif key == "dashpot":
         assert isinstance(floor, Dashpot) and float(floor.impedance_Ns_per_m) == 5e4
+    elif key == "floating":
+        # the floor built in Python, and its modes: the default base loss 0.02 where not given
+        assert floor == FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.15, base_loss_factor=0.02)
+        np.testing.assert_array_equal(np.asarray(floor.frequency_Hz), np.asarray(FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, 0.15).frequency_Hz))
     elif key == "modal":
         assert floor.mass_kg == (200.0, 150.0) and floor.frequency_Hz == (0.0, 40.0) and floor.loss_factor == (0.0, 0.05)
     else:
@@ -207,7 +227,12 @@ def test_floor_file_round_trip(tmp_path, key, suffix):
         ({"type": "modal", "mass_kg": [], "frequency_Hz": [], "loss_factor": 0.1}, ["mass_kg", "empty"]),
         ({"type": "dashpot", "impedance_Ns_per_m": 0.0}, ["impedance_Ns_per_m", "0.0", "(0, inf)"]),
         ({"type": "dashpot", "impedance_Ns_per_m": 1e4, "mass_kg": 3.0}, ["'mass_kg'", "dashpot", "impedance_Ns_per_m"]),
-        ({"type": "trampoline"}, ["type", "'trampoline'", "infinite-plate", "modal"]),
+        ({"type": "trampoline"}, ["type", "'trampoline'", "infinite-plate", "modal", "floating"]),
+        ({**FLOATING, "dynamic_stiffness_N_per_m3": 0.0}, ["dynamic_stiffness_N_per_m3", "0.0", "(0, inf)"]),
+        ({**FLOATING, "base_frequency_Hz": -1.0}, ["base_frequency_Hz", "-1.0", "[0, inf)"]),
+        ({**FLOATING, "layer_loss_factor": "high"}, ["layer_loss_factor", "'high'", "not a number"]),
+        ({**FLOATING, "screed_mass_kg": 140.0}, ["'screed_mass_kg'", "floating", "screed_thickness_m", "base_loss_factor"]),
+        ({k: v for k, v in FLOATING.items() if k != "area_m2"}, ["floating", "'area_m2'"]),
         ({"thickness_m": 0.1}, ["type", "None", "rigid"]),
     ],
 )
