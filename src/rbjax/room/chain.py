@@ -9,9 +9,17 @@ term of ``Chain`` that can be left out:
 2. **floor** (``rbjax.room.injection``): the energy it injects, W, and how the floor holds it:
    a resonant slab (``floor=None``: the ball on the bare ``Slab``, point impedance
    Z = 8√(B′m″); SEA) holds the band energy W_b = E_F,b/Z, decaying at
-   a_b = ω_b(η_s + 2η_rad); a modal floor (``ModalFloor``, ``FloatingFloor``) holds W_k in each mode k, decaying
-   at a_k = ω_kη_k (its own loss factor, radiation included), the mode counted in the band of
-   its frequency.
+   a_b = ω_b(η_s + 2η_rad); a floating floor over the slab (``FloatingFloor``,
+   ``Chain(floating="insertion")``, the default) is an insertion: the ball strikes the screed
+   (its force from the two-mode floor), the layer passes F_slab = T F to the slab,
+   T = 1/(1 − (f/f₀)²/(1 + jη)) (a locally reacting screed: EN 12354-2 Annex C's
+   ΔL = 40 lg(f/f₀) above f₀, amplification (1 + η²)/η² at f₀), and the slab holds
+   W_b = Σ_b E_F|T|²Δf/Z, decaying and radiating as the bare slab's field; a modal floor
+   (``ModalFloor``; a ``FloatingFloor`` with ``floating="modes"``) holds W_k in each mode k,
+   decaying at a_k = ω_kη_k (its own loss factor, radiation included), the mode counted in the
+   band of its frequency only (right for the modes of the radiating slab itself; for a
+   floating floor it is a rough check: the screed's mode would radiate with the slab's η_rad
+   and the other bands stay silent, so the result warns).
 3. **radiation** (``rbjax.room.radiation``): the floor radiates into the room below the power
    P = ω η_rad E (η_rad = ρ₀c₀σ/(ωm″), σ by ISO 12354-1 Annex B or 1).
 4. **room**: a diffuse field of energy E_r, V dE_r/dt… in energy: dE_r/dt = P − bE_r with
@@ -29,7 +37,10 @@ ISO 717-2 Annex D.
 
 Validity (stated in ``ImpactSound.warnings``): bands below the room's Schroeder frequency
 (modal room: the diffuse level is a room average), a floor decay not short against T where it
-is left out, a mode whose radiation loss exceeds its loss factor. Not modelled: the forced
+is left out, a mode whose radiation loss exceeds its loss factor; for a floating floor, the
+locally reacting T (a wet screed that bends gains ≈ 30 lg(f/f₀) rather than 40 lg(f/f₀) in
+EN 12354-2 Annex C: the bands above f₀ optimistic by up to 10 lg(f/f₀) dB), the screed's own
+radiation and the layer's coupling through the air in it left out. Not modelled: the forced
 (non-resonant) radiation near the drive point, flanking transmission, the band filters' own
 response time (≈1/B ≤ 23 ms ≪ τ for the 63 Hz octave and above).
 """
@@ -48,10 +59,11 @@ from ..solve.inputs import as_arrays
 from ..solve.simulate import make_model, simulate, trajectory
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
+from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractFloor, AbstractModalFloor
 from ..terms.model import Model, Solver
 from .detector import cascade, maximum_over_time
-from .injection import modal_energies_J, modal_grid_size, plate_band_energies_J
+from .injection import floating_band_energies_J, modal_energies_J, modal_grid_size, plate_band_energies_J
 from .radiation import (
     AIR_DENSITY_kg_per_m3,
     SPEED_OF_SOUND_m_per_s,
@@ -130,7 +142,7 @@ def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_
         sigma = radiation_efficiency(f, fc, slab.length_x_m, slab.length_y_m) if chain.radiation == "iso12354" else jnp.ones_like(f)
         return 2.0 * jnp.pi * f * radiation_loss_factor(f, sigma, mass)
 
-    if isinstance(floor, AbstractModalFloor):
+    if isinstance(floor, AbstractModalFloor) and not (isinstance(floor, FloatingFloor) and chain.floating == "insertion"):
         _, omega, eta = floor.modes()
         fk = omega / (2.0 * jnp.pi)
         energy = modal_energies_J(force, rate_Hz, floor, n_fft)
@@ -139,8 +151,11 @@ def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_
         radiate = jnp.where(fk > 0.0, rad_rate(f_safe), 0.0)
         member = (fk[None, :] >= edges[0][:, None]) & (fk[None, :] < edges[1][:, None])
         return energy, decay, radiate, member.astype(jnp.float64)
-    impedance = (slab.plate if floor is None else floor).impedance_Ns_per_m
-    energy = plate_band_energies_J(force, rate_Hz, edges[0], edges[1], impedance, n_record=max(force.shape[-1], int(rate_Hz)))
+    impedance = slab.plate.impedance_Ns_per_m
+    if isinstance(floor, FloatingFloor):
+        energy = floating_band_energies_J(force, rate_Hz, edges[0], edges[1], floor, impedance, n_fft)
+    else:
+        energy = plate_band_energies_J(force, rate_Hz, edges[0], edges[1], impedance, n_record=max(force.shape[-1], int(rate_Hz)))
     f = jnp.asarray(centres)
     radiate = rad_rate(f)
     decay = 2.0 * jnp.pi * f * slab.structural_loss(f) + 2.0 * radiate

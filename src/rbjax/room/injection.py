@@ -17,6 +17,11 @@ A force F(t) on a drive point of mobility Y(ω) = u̇/F injects (Parseval)
   gives ~1e-8). A mode narrower than the finest grid (γ_k < 3·rate/2²¹) or without loss gets
   the limit W_k = |F(f_k)|²/(2m_k) (Re Y_k → (π/2m_k)δ(ω − ω_k)); a free-mass mode (f_k = 0)
   gets (∫F dt)²/(2m_k). Σ_k W_k = ∫ F u̇ dt, the floor energy of ``rbjax.energy_balance``.
+* A floating floor (``FloatingFloor``) over a slab as an insertion: the slab receives the force
+  the layer passes, F_slab = T F (``FloatingFloor.force_transmissibility``, EN 12354-2 Annex C's
+  40 lg(f/f₀) above the mass–spring resonance), and injects into band b the energy
+  Σ_{f∈b} E_F |T|² Δf / Z of the slab's real mobility 1/Z (``floating_band_energies_J``), on the
+  grid of ``modal_grid_size`` (which resolves T's resonance, half-width η f₀/2, as a mode's).
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import numpy as np
 from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import is_traced
 from ..spectrum.levels import band_energies_N2s, energy_spectrum
+from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractModalFloor
 
 #: The finest frequency grid of the modal energies: 2^21 points of the zero-padded record.
@@ -44,7 +50,8 @@ def plate_band_energies_J(force_N, rate_Hz: float, lower_Hz, upper_Hz, impedance
 
 
 def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -> int:
-    """The FFT length of ``modal_energies_J``: Δf ≤ γ_min/3 over the lossy modes, at least the
+    """The FFT length of ``modal_energies_J`` and ``floating_band_energies_J``: Δf ≤ γ_min/3 over
+    the lossy modes (and a floating floor's layer resonance), at least the
     samples' count, at most ``MAX_FFT`` (a power of two). The floor's values must be concrete
     (a shape): under a transformation, compute it first and pass it on as ``n_fft``."""
     if is_traced(floor):
@@ -52,6 +59,8 @@ def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -
     _, omega, eta = (np.asarray(x, dtype=np.float64) for x in floor.modes())
     freq = omega / (2.0 * math.pi)
     widths = [0.5 * e * f for f, e in zip(freq, eta) if f > 0.0 and e > 0.0]
+    if isinstance(floor, FloatingFloor) and float(floor.layer_loss_factor) > 0.0:
+        widths.append(0.5 * float(floor.layer_loss_factor) * float(floor.layer_resonance_Hz))
     step = min([1.0] + [w / POINTS_PER_HALF_WIDTH for w in widths])
     return int(min(MAX_FFT, max(2 ** math.ceil(math.log2(rate_Hz / step)), 2 ** math.ceil(math.log2(n_samples)))))
 
@@ -86,3 +95,15 @@ def modal_energies_J(force_N, rate_Hz: float, floor: AbstractModalFloor, n_fft: 
     spectrum = _dtft_Ns(x, rate_Hz, fk)
     narrow = (spectrum.real**2 + spectrum.imag**2) / (2.0 * mass)
     return jnp.where(resolved, grid, narrow)
+
+
+def floating_band_energies_J(force_N, rate_Hz: float, lower_Hz, upper_Hz, floor: FloatingFloor, impedance_Ns_per_m, n_fft: int):
+    """Energy injected per band into a slab of real point impedance Z through the layer of a
+    floating floor: Σ_{lower ≤ f < upper} E_F(f) |T(f)|² Δf / Z on the ``n_fft``-point grid of the
+    zero-padded force record (module docstring)."""
+    freq, esd = energy_spectrum(jnp.asarray(force_N, dtype=jnp.float64), rate_Hz, n_record=int(n_fft))
+    t = floor.force_transmissibility(freq)
+    passed = esd * (t.real**2 + t.imag**2) * (rate_Hz / int(n_fft))
+    grid = np.fft.rfftfreq(int(n_fft), 1.0 / rate_Hz)
+    inside = (grid[None, :] >= np.asarray(lower_Hz)[:, None]) & (grid[None, :] < np.asarray(upper_Hz)[:, None])
+    return jnp.sum(jnp.where(jnp.asarray(inside), passed[None, :], 0.0), axis=-1) / impedance_Ns_per_m

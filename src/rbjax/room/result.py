@@ -11,6 +11,7 @@ import numpy as np
 from .._validate import as_float
 from ..solve.simulate import make_model, simulate, trajectory
 from ..terms.ball import JIS_RUBBER_BALL
+from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.model import Solver
 from .chain import RoomLevels, bands, fast_levels_dB, rating_unrounded_dB, room_levels
@@ -146,6 +147,17 @@ def _warnings(lv: RoomLevels, labels, edges, room: ReceivingRoom, chain: Chain, 
         t_room = float(np.min(t_band))
         if np.any(floor_t60 > SHORT_DECAY_SHARE * t_room):
             out.append("modes of the floor decay slower than 0.3 T: the diffuse-field step (floor_decay=False) is outside its validity")
+    if isinstance(floor, FloatingFloor) and chain.floating == "insertion":
+        f0 = float(floor.layer_resonance_Hz)
+        above = [lab for lab, lo in zip(labels, edges[0]) if lo > 2.0 * f0]
+        if above:
+            out.append(
+                f"the floating floor passes T = 1/(1 − (f/f0)²/(1 + jη)) to the slab (f0 = {f0:.1f} Hz; a locally reacting screed, "
+                f"40 lg(f/f0)): a wet screed gains ≈ 30 lg(f/f0) (EN 12354-2 Annex C), so bands {', '.join(above)} Hz may be "
+                "optimistic by up to 10 lg(f/f0) dB"
+            )
+    if isinstance(floor, FloatingFloor) and chain.floating == "modes":
+        out.append("floating='modes': the screed's modes radiate with the slab's η_rad, each in its own band only; a rough check, not a prediction (use floating='insertion')")
     if np.any(np.asarray(lv.radiated_fraction) > 1.0):
         out.append("a mode radiates more than its loss factor allows (η_rad > η_k): give the modes their radiation loss")
     return out

@@ -126,13 +126,20 @@ class Chain:
             once (the diffuse field built up at t = 0 and decaying), valid where the floor's
             decay is short against T (the result says where it is not).
         detector: ``"fast"`` (τ = 0.125 s) or ``None`` (the peak of p² itself).
+        floating: how a ``FloatingFloor`` over the slab is followed: ``"insertion"`` (default:
+            the slab's resonant field driven by the force the layer passes,
+            ``rbjax.room.injection.floating_band_energies_J``) or ``"modes"`` (its two
+            drive-point modes radiate as the slab would, each in its own band only: a rough
+            check, not a prediction; the result warns).
     """
 
     radiation: str = "iso12354"
     floor_decay: bool = True
     detector: str | None = "fast"
+    floating: str = "insertion"
 
     def __post_init__(self):
         check_choice("radiation", self.radiation, ("iso12354", "unity"))
         check_choice("floor_decay", self.floor_decay, (True, False))
         check_choice("detector", self.detector, ("fast", None))
+        check_choice("floating", self.floating, ("insertion", "modes"))
