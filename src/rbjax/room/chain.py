@@ -63,7 +63,12 @@ from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractFloor, AbstractModalFloor
 from ..terms.model import Model, Solver
 from .detector import cascade, maximum_over_time
-from .injection import floating_band_energies_J, modal_energies_J, modal_grid_size, plate_band_energies_J
+from .injection import (
+    floating_band_energies_J,
+    modal_energies_J,
+    modal_grid_size,
+    plate_band_energies_J,
+)
 from .radiation import (
     AIR_DENSITY_kg_per_m3,
     SPEED_OF_SOUND_m_per_s,

@@ -59,8 +59,10 @@ def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -
     _, omega, eta = (np.asarray(x, dtype=np.float64) for x in floor.modes())
     freq = omega / (2.0 * math.pi)
     widths = [0.5 * e * f for f, e in zip(freq, eta) if f > 0.0 and e > 0.0]
-    if isinstance(floor, FloatingFloor) and float(floor.layer_loss_factor) > 0.0:
-        widths.append(0.5 * float(floor.layer_loss_factor) * float(floor.layer_resonance_Hz))
+    if isinstance(floor, FloatingFloor):
+        layer_loss, f0 = (float(np.asarray(x)) for x in (floor.layer_loss_factor, floor.layer_resonance_Hz))
+        if layer_loss > 0.0:
+            widths.append(0.5 * layer_loss * f0)
     step = min([1.0] + [w / POINTS_PER_HALF_WIDTH for w in widths])
     return int(min(MAX_FFT, max(2 ** math.ceil(math.log2(rate_Hz / step)), 2 ** math.ceil(math.log2(n_samples)))))
 
