@@ -16,7 +16,8 @@ from rbjax.fit import model_histories
 from rbjax.fit.layout import model_from_name
 from rbjax.fit.problem import fit_path
 from rbjax.fit.program import sample_force
-from rbjax.fit.rounds import Lane, alternative_starts, pick_best
+from rbjax.fit.rounds import Lane, pick_best
+from rbjax.fit.start import alternative_starts
 from rbjax.solve.record_samples import record_samples
 
 from scipy_ball_mode_reference import reference_ball_mode_impact

@@ -115,8 +115,8 @@ def register(subparsers) -> None:
 
 
 def _check_model_and_fix(model, fix):
-    from ..fit.engine import validate_fix
     from ..fit.layout import CONSTANT_PARAMETERS, fitted_parameter_names, model_from_name
+    from ..fit.setup import validate_fix
 
     geometry = set(CONSTANT_PARAMETERS[:3])
     if model is not None:

@@ -1,7 +1,6 @@
-"""The starts of a fit and its rounds of the optimiser, one driver step each (see :func:`rbjax.fit.engine.fit`):
+"""The rounds of the optimiser of a fit, one driver step (see :func:`rbjax.fit.engine.fit`;
+its starts come from :mod:`rbjax.fit.start`):
 
-- :func:`start_values`: physically motivated start values from the records;
-- :func:`alternative_starts`: the other starts of parameters whose fit has several minima;
 - :func:`optimise`: rounds of the compiled optimiser for every start at once, each in the
   whitened frame of its current point, until the remaining Gauss–Newton step is below
   ``STEP_TOLERANCE_SIGMA`` σ (a parameter pressed onto a bound of its fit range held there);
@@ -16,10 +15,6 @@ import math
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import as_float
-from ..solve.outcome import G_N_PER_KG
-from ..terms.ball import Ball
-from ..terms.model import Model
 from . import uncertainty as unc
 from .physical import BOUND_TOLERANCE
 from .problem import Problem
@@ -31,50 +26,6 @@ MAX_ROUNDS = 8
 #: A start still going after two rounds at a cost this many times that of a converged start is
 #: abandoned (its lane would keep the others' batch running; it is reported as not converged).
 ABANDON_FACTOR = 1.5
-
-
-def start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float) -> dict:
-    """Physically motivated start values from the measured records.
-
-    Stiffness from the contact time of the lowest fitted height (least gas force):
-    t_c ≈ π√(M/k) (a linear spring-mass half period), k → E by Eqs. 1–3; each damping law's
-    own ``start`` rule from the restitution read off the impulse, e = ∫F dt/(M v0) − 1 (Eq. 10).
-    """
-    from ..terms.forces import reissner_stiffness_N_per_m
-
-    d = problem.data
-    meas = problem.measured
-    k_idx = np.flatnonzero(ref_mask)
-    lowest = k_idx[np.argmin(d.height_m[k_idx])]
-    tc = float(meas["contact_time_s"][lowest])
-    mass = as_float(ball.mass_kg)
-    k_spring = mass * (math.pi / tc) ** 2
-    e_young = k_spring * as_float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * as_float(ball.wall_m) ** 2)
-    v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
-    impulse = d.force_N.sum(axis=1) / d.rate_Hz
-    e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
-    values = {"youngs_Pa": e_young, "poisson": nu}
-    k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
-    for law in model.damping:
-        values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
-    if model.stiffening is not None:
-        values["beta"] = 0.05
-    if model.ball_mode is not None:
-        values.update(type(model.ball_mode).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
-    return values
-
-
-def alternative_starts(model: Model, given: set[str]) -> list[dict]:
-    """The starts of a fit of ``model``: ``{}`` (the start values), then one per alternative
-    value of a parameter whose fit has several minima, as its term declares them
-    (``START_ALTERNATIVES``; e.g. the ball mode's frequency), unless the caller gave or held it."""
-    starts: list[dict] = [{}]
-    terms = [*model.damping, model.stiffening, model.ball_mode]
-    for term in terms:
-        for name, values in getattr(type(term), "START_ALTERNATIVES", {}).items():
-            if name not in given:
-                starts += [{name: float(v)} for v in values]
-    return starts
 
 
 @dataclasses.dataclass(eq=False)

@@ -32,10 +32,11 @@ from ..solve.outcome import G_N_PER_KG
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import GAS_OPTIONS
 from ..terms.parameters import replace
-from .engine import BLOCKED_FORCES, validate_fix
+from .engine import BLOCKED_FORCES
 from .layout import CONSTANT_PARAMETERS, fit_declaration, fitted_parameter_names
 from .problem import candidate_model
 from .result import ParameterEstimate
+from .setup import validate_fix
 from .summary_model import FigureProgram
 from .summary_result import SummaryFitResult
 from .summary_table import SummaryTable, SummaryTableError, read_summary
