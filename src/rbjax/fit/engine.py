@@ -196,11 +196,11 @@ def _optimise(setup: FitSetup, starts: Starts, freedom: Freedom, *, optimizer, m
     in the whitened frame of each round's start; the best converged start is kept."""
     problem, lay, fit_mask = setup.problem, setup.layout, setup.fit_mask
     inu = lay.index("poisson")
+    # ν now held at another value than the starts were evaluated at: evaluate them again
+    nu_moved = any(th[inu] != freedom.nu for th in starts.thetas)
     thetas = [th.copy() for th in starts.thetas]
-    thetas[0][inu] = freedom.nu
-    nu_moved = any(th[inu] != thetas[0][inu] for th in thetas)  # ν now held at another value
     for th in thetas:
-        th[inu] = thetas[0][inu]
+        th[inu] = freedom.nu
     lanes = optimise(
         problem, thetas, starts.outs, freedom.free, freedom.free_idx, setup.constants, fit_mask,
         weights_of=lambda r: problem.weights(fit_mask, setup.extra, prior_row(setup, freedom, r)),

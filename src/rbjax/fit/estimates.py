@@ -71,10 +71,11 @@ def estimates(setup: FitSetup, freedom: Freedom, theta, out) -> Estimates:
     e_est = parameters["youngs_Pa"]
     e_eff = float(theta[ie] * factor)
     if "poisson" in physical_free:
-        # delta method through E/√(1−ν²) with the (E, ν) covariance block
-        je, jn = free_names.index("youngs_Pa"), free_names.index("poisson")
-        grad = np.array([factor * dtheta[ie], theta[ie] * nu * factor**3 * dtheta[inu]])
-        eff_std = float(math.sqrt(max(grad @ cov_phi[np.ix_([je, jn], [je, jn])] @ grad, 0.0)))
+        # delta method through E/√(1−ν²) with the covariance block of the free ones of (E, ν)
+        pairs = [("youngs_Pa", factor * dtheta[ie]), ("poisson", theta[ie] * nu * factor**3 * dtheta[inu])]
+        block = [free_names.index(n) for n, _ in pairs if n in free_names]
+        grad = np.array([g for n, g in pairs if n in free_names])
+        eff_std = float(math.sqrt(max(grad @ cov_phi[np.ix_(block, block)] @ grad, 0.0)))
         eff_ci = (e_eff - 1.96 * eff_std, e_eff + 1.96 * eff_std)
     else:  # ν held: E/√(1−ν²) is E times a constant
         eff_std, eff_ci = e_est.std * factor, (e_est.ci95[0] * factor, e_est.ci95[1] * factor)
