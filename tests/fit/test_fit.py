@@ -196,6 +196,32 @@ def test_max_steps_zero_evaluates_the_start_and_says_so(recovered):
     assert start.residual_rms_N > 2 * lm.residual_rms_N
 
 
+def test_the_histories_reported_are_those_of_the_parameters_reported(recovered):
+    """With ``max_steps=0`` the fit reports its start: the E–ν check holds ν at 0.5 after the
+    start was evaluated at ν = 0.45, so the start is evaluated again there (the reported
+    histories were once those of ν = 0.45, 2 % of the peak away)."""
+    data, _ = recovered["hunt-crossley"]
+    res = fit(data, "hunt-crossley", blocked_force="momentum", max_steps=0, progress=False)
+    assert res.parameters["poisson"].value == 0.5
+    values = {n: p.value for n, p in res.parameters.items()}
+    force, _, _ = model_histories(data, "hunt-crossley", values, res.onset_shift_s, blocked_force="momentum")
+    np.testing.assert_allclose(res.predicted_N, force, rtol=0, atol=1e-9 * np.max(force))
+
+
+def test_e_held_and_nu_fitted_recovers_the_effective_modulus(recovered):
+    """E held, ν fitted: ν alone sets E/√(1−ν²); holding E at the value that makes ν = 0.3 give
+    the true effective modulus, the fit finds ν = 0.3 and that modulus within their uncertainty."""
+    data, _ = recovered["paper"]
+    true_eff = CASES["paper"][2]["youngs_Pa"] / math.sqrt(1.0 - 0.5**2)
+    held_e = true_eff * math.sqrt(1.0 - 0.3**2)
+    res = fit(data, "paper", fix={"youngs_Pa": held_e}, progress=False)
+    assert res.converged, res.message
+    nu, eff = res.parameters["poisson"], res.parameters["effective_modulus_Pa"]
+    assert res.parameters["youngs_Pa"].fixed and not nu.fixed
+    assert abs(nu.value - 0.3) <= 3 * nu.std
+    assert 0 < eff.std and abs(eff.value - true_eff) <= 3 * eff.std
+
+
 def test_held_out_heights_are_predicted_not_fitted(recovered):
     data, full = recovered["hunt-crossley"]
     res = fit(data, "hunt-crossley", blocked_force="momentum", fit_heights=[0.1, 0.4, 1.0, 1.6], start=full, progress=False)
