@@ -18,6 +18,8 @@ from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
 
+pytestmark = pytest.mark.xla_optimised  # many optimiser steps: see tests/conftest.py
+
 #: README table: held-out history error (%) ± its standard error over the 6 folds.
 README_HELD_OUT = {
     "hunt-crossley/momentum": (2.59, 0.36),
