@@ -8,9 +8,12 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import jax
 import numpy as np
 
 from .._validate import check_choice
+from ..solve.ode import _RESTITUTION, _initial_state
+from ..solve.outcome import impact_velocity_m_per_s
 from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
@@ -58,22 +61,19 @@ def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
     """Runge–Kutta steps per sample of the sampled path for every value a fit of ``model`` can
     reach: the fastest rate of the vector field at first contact (its Jacobian's spectral
     radius), at the model's values and with each ``FIT_RANGES`` parameter at its upper bound."""
-    import jax
-
-    from ..solve.ode import _RESTITUTION, _initial_state
-    from ..solve.outcome import impact_velocity_m_per_s
-
     names = set(parameter_names(1.0, ball, model))
     corner = {n: hi for n, (_, hi) in FIT_RANGES.items() if n in names}
-
-    @jax.jit
-    def jacobian(b, m):
-        return jax.jacfwd(lambda y: _RESTITUTION(0.0, y, (b, m)))(_initial_state(impact_velocity_m_per_s(5.0), b, m))
-
-    # one compiled Jacobian for both points (the same structure)
+    # one compiled Jacobian for both points and for every fit of the same structure in the process
     points = [(ball, model), replace(corner, 1.0, ball, model)[1:]]
-    fastest = max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(jacobian(b, m)))))) for b, m in points)
+    fastest = max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(_first_contact_jacobian(b, m)))))) for b, m in points)
     return substeps_for_rate(fastest, rate_Hz)
+
+
+@jax.jit
+def _first_contact_jacobian(ball: Ball, model: Model):
+    """The vector field's Jacobian at first contact from 5 m/s (the fastest impact a fit meets)."""
+    state = _initial_state(impact_velocity_m_per_s(5.0), ball, model)
+    return jax.jacfwd(lambda y: _RESTITUTION(0.0, y, (ball, model)))(state)
 
 
 class Problem:
