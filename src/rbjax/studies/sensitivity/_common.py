@@ -1,10 +1,12 @@
 """Small helpers shared by the sensitivity modules: output names, uniform ranges as a SALib
-problem, inputs and outputs as dicts, and the dropping of failed evaluations."""
+problem, inputs and outputs as dicts, the dropping of failed evaluations, and the fields every
+result shares."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -75,3 +77,16 @@ def interval(value, half_width) -> np.ndarray:
     """(..., 2) intervals value ± half_width (SALib's normal-approximation intervals)."""
     value, half_width = np.asarray(value, dtype=float), np.asarray(half_width, dtype=float)
     return np.stack([value - half_width, value + half_width], axis=-1)
+
+
+def shared_fields(ranges: Mapping, outputs: Mapping, n_evaluations: int, res: Mapping) -> dict[str, Any]:
+    """The fields every result of :mod:`~rbjax.studies.sensitivity.results` has, from the
+    checked ``ranges``, the outputs (by name) and the per-output ``n_valid`` and ``salib``."""
+    return {
+        "parameters": tuple(ranges),
+        "outputs": tuple(outputs),
+        "ranges": ranges,
+        "n_evaluations": n_evaluations,
+        "n_valid": res["n_valid"],
+        "salib": res["salib"],
+    }

@@ -38,6 +38,7 @@ from ._common import (
     outputs_dict,
     salib_problem,
     salib_seed,
+    shared_fields,
 )
 from .results import IndexResult
 
@@ -164,11 +165,7 @@ def dgsm_measures(
             res["nu_ci"][name] = interval(nu, z * squares.std(axis=0, ddof=1) / math.sqrt(m))
             res["bound"][name] = nu * widths2 / (math.pi**2 * variance)
     return DGSMResult(
-        parameters=tuple(ranges),
-        outputs=tuple(outputs),
-        ranges=ranges,
-        n_evaluations=x.shape[0],
-        n_valid=res["n_valid"],
+        **shared_fields(ranges, outputs, x.shape[0], res),
         n_base=n,
         delta=float(delta),
         confidence=float(confidence),
@@ -182,5 +179,4 @@ def dgsm_measures(
         seconds_exact=seconds_exact,
         seconds_fd=seconds_fd,
         samples={**inputs, **outputs, "base": np.repeat(np.arange(n), d + 1)},
-        salib=res["salib"],
     )

@@ -39,6 +39,7 @@ from ._common import (
     outputs_dict,
     salib_problem,
     salib_seed,
+    shared_fields,
 )
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
 
@@ -59,6 +60,14 @@ def _random_saltelli(problem: dict, n: int, second_order: bool, seed: int) -> np
     unit = np.concatenate(blocks, axis=1).reshape(-1, d)
     low, high = np.array(problem["bounds"]).T
     return low + (high - low) * unit
+
+
+def _store_first_and_total(res: dict, name: str, si) -> None:
+    """First- and total-order indices of output ``name`` and their intervals (Sobol, eFAST),
+    from SALib's result ``si``, into ``res``."""
+    res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
+    res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
+    res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
 
 
 def sobol_indices(
@@ -118,17 +127,11 @@ def sobol_indices(
             continue
         si = analyze.analyze(problem, rows.reshape(-1), calc_second_order=second_order, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
         res["salib"][name] = si
-        res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
-        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
-        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
+        _store_first_and_total(res, name, si)
         if second_order:
             res["S2"][name], res["S2_ci"][name] = np.asarray(si["S2"]), np.asarray(si["S2_conf"])
     return SobolResult(
-        parameters=tuple(ranges),
-        outputs=tuple(outputs),
-        ranges=ranges,
-        n_evaluations=n * step,
-        n_valid=res["n_valid"],
+        **shared_fields(ranges, outputs, n * step, res),
         n_base=n,
         design=design,
         confidence=float(confidence),
@@ -141,7 +144,6 @@ def sobol_indices(
         mean=res["mean"],
         variance=res["var"],
         samples={**inputs, **outputs, "block": np.tile(block, n), "base": np.repeat(np.arange(n), step)},
-        salib=res["salib"],
     )
 
 
@@ -197,11 +199,7 @@ def morris_screening(
             res[key][name] = np.asarray(si[key], dtype=float)
         res["mu_star_ci"][name] = interval(si["mu_star"], si["mu_star_conf"])
     return MorrisResult(
-        parameters=tuple(ranges),
-        outputs=tuple(outputs),
-        ranges=ranges,
-        n_evaluations=x.shape[0],
-        n_valid=res["n_valid"],
+        **shared_fields(ranges, outputs, x.shape[0], res),
         n_trajectories=n_traj,
         n_levels=p,
         optimal_trajectories=optimal_trajectories,
@@ -211,7 +209,6 @@ def morris_screening(
         sigma=res["sigma"],
         mu_star_ci=res["mu_star_ci"],
         samples={**inputs, **outputs, "trajectory": np.repeat(np.arange(n_traj), d + 1)},
-        salib=res["salib"],
     )
 
 
@@ -254,15 +251,9 @@ def fast_indices(
             warnings.filterwarnings("ignore", "FAST confidence intervals", UserWarning)
             si = analyze.analyze(problem, y, M=m_int, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
         res["salib"][name] = si
-        res["S1"][name], res["ST"][name] = np.asarray(si["S1"]), np.asarray(si["ST"])
-        res["S1_ci"][name] = interval(si["S1"], si["S1_conf"])
-        res["ST_ci"][name] = interval(si["ST"], si["ST_conf"])
+        _store_first_and_total(res, name, si)
     return FastResult(
-        parameters=tuple(ranges),
-        outputs=tuple(outputs),
-        ranges=ranges,
-        n_evaluations=x.shape[0],
-        n_valid=res["n_valid"],
+        **shared_fields(ranges, outputs, x.shape[0], res),
         n_per_parameter=n,
         interference=m_int,
         confidence=float(confidence),
@@ -271,7 +262,6 @@ def fast_indices(
         first_order_ci=res["S1_ci"],
         total_order_ci=res["ST_ci"],
         samples={**inputs, **outputs, "curve": np.repeat(np.arange(d), n)},
-        salib=res["salib"],
     )
 
 
@@ -304,11 +294,7 @@ def pawn_indices(func: Callable, ranges: Mapping, n_samples: int, *, n_condition
         for k in keys:
             res[k][name] = np.asarray(si[k], dtype=float)
     return PawnResult(
-        parameters=tuple(ranges),
-        outputs=tuple(outputs),
-        ranges=ranges,
-        n_evaluations=n,
-        n_valid=res["n_valid"],
+        **shared_fields(ranges, outputs, n, res),
         n_samples=n,
         n_conditioning=s,
         minimum=res["minimum"],
@@ -317,5 +303,4 @@ def pawn_indices(func: Callable, ranges: Mapping, n_samples: int, *, n_condition
         maximum=res["maximum"],
         cv=res["CV"],
         samples={**inputs, **outputs},
-        salib=res["salib"],
     )
