@@ -87,18 +87,8 @@ class FitResult:
     def to_dict(self) -> dict:
         """JSON-ready dict; ``ball``/``model`` in the ``rbjax.terms.serialize`` format
         (``rbjax simulate --params FIT.json`` reproduces the fitted model)."""
-        from ..terms.serialize import ball_to_dict, model_to_dict
-
-        names, matrix = self.correlations
         return {
-            "model_name": self.model_name,
-            "blocked_force": self.blocked_force,
-            "gas": self.gas,
-            "ball": ball_to_dict(self.ball),
-            "model": model_to_dict(self.model),
-            "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
-            "correlations": {"names": list(names), "matrix": np.asarray(matrix).tolist()},
-            "identifiability": self.identifiability,
+            **_model_fields(self),
             "per_height": [_plain(row) for row in self.per_height],
             "octave_bands_Hz": list(OCTAVE_BANDS),
             "residual_rms_N": self.residual_rms_N,
@@ -120,12 +110,7 @@ class FitResult:
         from ..text import fmt, format_table
 
         lines = [f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): {self.message}"]
-        for k, p in self.parameters.items():
-            if p.fixed:
-                lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
-            else:
-                lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
-        lines.append("identifiability: " + self.identifiability)
+        lines += _parameter_lines(self)
         bands = OCTAVE_BANDS
         header = ["h (m)", "fit", "rms (N)", "t_c meas (ms)", "t_c fit (ms)", "peak meas (N)", "peak fit (N)"] + [f"ΔL {b}" for b in bands]
         rows = []
@@ -157,6 +142,37 @@ class Prediction:
     predicted_N: np.ndarray
     heights_m: np.ndarray
     converged: bool = True
+
+
+def _model_fields(fit) -> dict:
+    """The JSON of what a fit (:class:`FitResult`, ``SummaryFitResult``) says of its model:
+    name, blocked force, gas, ball and model (``rbjax.terms.serialize`` format), parameters,
+    correlations, identifiability."""
+    from ..terms.serialize import ball_to_dict, model_to_dict
+
+    names, matrix = fit.correlations
+    return {
+        "model_name": fit.model_name,
+        "blocked_force": fit.blocked_force,
+        "gas": fit.gas,
+        "ball": ball_to_dict(fit.ball),
+        "model": model_to_dict(fit.model),
+        "parameters": {k: v.to_dict() for k, v in fit.parameters.items()},
+        "correlations": {"names": list(names), "matrix": np.asarray(matrix).tolist()},
+        "identifiability": fit.identifiability,
+    }
+
+
+def _parameter_lines(fit) -> list[str]:
+    """The lines of a fit's text summary on its parameters (value ± std, 95 % interval; held
+    ones marked) and what the data determine."""
+    lines = []
+    for k, p in fit.parameters.items():
+        if p.fixed:
+            lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
+        else:
+            lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
+    return lines + ["identifiability: " + fit.identifiability]
 
 
 def _plain(x):

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..terms.ball import Ball
 from ..terms.model import Model
+from .result import _model_fields, _parameter_lines
 
 #: How each figure is shown: (label, unit, scale from SI to the unit shown).
 DISPLAY = {"contact_time_s": ("contact time", "ms", 1e3), "peak_force_N": ("peak force", "N", 1.0), "restitution": ("restitution", "1", 1.0)}
@@ -67,20 +68,10 @@ class SummaryFitResult:
         raise KeyError(f"no figure {figure!r} at {height_m:g} m in {self.source}")
 
     def to_dict(self) -> dict:
-        from ..terms.serialize import ball_to_dict, model_to_dict
-
-        names, matrix = self.correlations
         return {
             "kind": "summary fit",
             "source": self.source,
-            "model_name": self.model_name,
-            "blocked_force": self.blocked_force,
-            "gas": self.gas,
-            "ball": ball_to_dict(self.ball),
-            "model": model_to_dict(self.model),
-            "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
-            "correlations": {"names": list(names), "matrix": np.asarray(matrix).tolist()},
-            "identifiability": self.identifiability,
+            **_model_fields(self),
             "figures": [dict(r) for r in self.rows],
             "chi2": self.chi2,
             "n_figures": self.n_figures,
@@ -95,12 +86,7 @@ class SummaryFitResult:
 
         lines = [f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted to {self.n_figures} figures of {self.source}: "
                  f"χ² = {self.chi2:.3g}, {self.n_free} free; {self.message}"]
-        for k, p in self.parameters.items():
-            if p.fixed:
-                lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
-            else:
-                lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
-        lines.append("identifiability: " + self.identifiability)
+        lines += _parameter_lines(self)
         rows = []
         for r in self.rows:
             label, unit, k = display(r["figure"])
