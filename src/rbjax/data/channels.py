@@ -12,8 +12,7 @@ import numpy as np
 
 from .columns import _FORCE_UNITS, _infer_rate
 from .errors import ClippedRecordError, DataError, MissingFormatError
-from .recording import MIN_SAMPLES, Recording, _check_force, _check_height
-from .sources import height_from_name
+from .recording import MIN_SAMPLES, Recording, _check_force, _file_recording
 
 #: The optional dependencies of the formats, installed by ``pip install 'rbjax[formats]'``.
 FORMATS_EXTRA = "formats"
@@ -178,14 +177,6 @@ def channel_recording(
         if rate_Hz is None:
             raise DataError(f"{source}: the file gives no sampling rate for channel {ch.name!r}: pass rate_Hz=")
         rate = float(rate_Hz)
-    if height_m is None:
-        height_m = height_from_name(source)
-    return Recording(
-        source=source,
-        height_m=_check_height(height_m, source),
-        rate_Hz=float(rate),
-        force_N=force,
-        calibration_N_per_FS=calibration_N_per_FS,
-        lowpass_Hz=lowpass_Hz,
-        notes=tuple(notes),
+    return _file_recording(
+        source, force, rate, height_m, calibration_N_per_FS=calibration_N_per_FS, lowpass_Hz=lowpass_Hz, notes=notes
     )

@@ -20,7 +20,7 @@ import numpy as np
 
 from .columns import _decimals, _infer_rate, _parse_column
 from .errors import DataError
-from .recording import Recording, _check_force, _check_height
+from .recording import Recording, _check_force, _check_height, _file_recording
 from .sources import _as_source, height_from_name
 
 __all__ = ["read_csv", "read_npy"]
@@ -176,16 +176,7 @@ def read_csv(
         if rate_Hz is None:
             raise DataError(f"{source}: no time column: pass rate_Hz=")
         rate = float(rate_Hz)
-    if height_m is None:
-        height_m = height_from_name(source)
-    return Recording(
-        source=source,
-        height_m=_check_height(height_m, source),
-        rate_Hz=rate,
-        force_N=force,
-        lowpass_Hz=lowpass_Hz,
-        notes=tuple(notes),
-    )
+    return _file_recording(source, force, rate, height_m, lowpass_Hz=lowpass_Hz, notes=notes)
 
 
 # --------------------------------------------------------------------------------------

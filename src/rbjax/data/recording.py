@@ -10,6 +10,7 @@ import numpy as np
 from .crossings import _rising_crossing, _solve_crossing, estimate_noise_rms_N
 from .errors import ClippedRecordError, DataError
 from .shift import fractional_shift
+from .sources import height_from_name
 
 __all__ = ["Recording", "MIN_SAMPLES"]
 
@@ -203,6 +204,25 @@ def _check_height(height_m, source):
     if not (math.isfinite(h) and h > 0):
         raise DataError(f"{source}: drop height {height_m!r} m must be positive and finite")
     return h
+
+
+def _file_recording(
+    source: str, force_N, rate_Hz: float, height_m: float | None, *,
+    calibration_N_per_FS: float | None = None, lowpass_Hz: float | None = None, notes=(),
+) -> Recording:
+    """The Recording a reader returns for a file: the drop height, when not given, from the
+    file name (``hNNN``), checked."""
+    if height_m is None:
+        height_m = height_from_name(source)
+    return Recording(
+        source=source,
+        height_m=_check_height(height_m, source),
+        rate_Hz=float(rate_Hz),
+        force_N=force_N,
+        calibration_N_per_FS=calibration_N_per_FS,
+        lowpass_Hz=lowpass_Hz,
+        notes=tuple(notes),
+    )
 
 
 def _require_same_rate(recs) -> None:

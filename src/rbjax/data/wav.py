@@ -13,8 +13,8 @@ from scipy.io import wavfile
 
 from .channels import check_calibration, integer_newtons
 from .errors import DataError
-from .recording import Recording, _check_force, _check_height
-from .sources import _as_source, height_from_name
+from .recording import Recording, _check_force, _file_recording
+from .sources import _as_source
 
 _UNKNOWN_FORMAT_RE = re.compile(r"Unknown wave file format: (\w+)")
 
@@ -103,14 +103,6 @@ def read_wav(
         if calibration_N_per_FS is not None:
             force = force * check_calibration(calibration_N_per_FS, source)
         _check_force(force, source)
-    if height_m is None:
-        height_m = height_from_name(source)
-    return Recording(
-        source=source,
-        height_m=_check_height(height_m, source),
-        rate_Hz=float(rate),
-        force_N=force,
-        calibration_N_per_FS=calibration_N_per_FS,
-        lowpass_Hz=lowpass_Hz,
-        notes=tuple(notes),
+    return _file_recording(
+        source, force, rate, height_m, calibration_N_per_FS=calibration_N_per_FS, lowpass_Hz=lowpass_Hz, notes=notes
     )
