@@ -207,8 +207,14 @@ def _check_height(height_m, source):
 
 
 def _file_recording(
-    source: str, force_N, rate_Hz: float, height_m: float | None, *,
-    calibration_N_per_FS: float | None = None, lowpass_Hz: float | None = None, notes=(),
+    source: str,
+    force_N,
+    rate_Hz: float,
+    height_m: float | None,
+    *,
+    calibration_N_per_FS: float | None = None,
+    lowpass_Hz: float | None = None,
+    notes=(),
 ) -> Recording:
     """The Recording a reader returns for a file: the drop height, when not given, from the
     file name (``hNNN``), checked."""
