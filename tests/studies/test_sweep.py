@@ -101,7 +101,13 @@ def test_flagged_rows_are_computed_again_in_place():
     batch = {"a": np.arange(10.0), "b": np.arange(10.0)}
     _redo(out, np.array([1, 4, 7]), _double_plus, batch, np.float64(0.5), sharded_map)
     np.testing.assert_array_equal(out["y"], [0, 2.5, 0, 0, 8.5, 0, 0, 14.5, 0, 0])
-    np.testing.assert_array_equal(out["n"][[1, 4, 7]], 4.0)  # padded to a power of two
+    # padded to a power of two, at least FALLBACK_MIN_BATCH (one compiled shape for few rows)
+    np.testing.assert_array_equal(out["n"][[1, 4, 7]], 64.0)
+    many = {"y": np.zeros(200), "n": np.zeros(200)}
+    rows = np.arange(0, 200, 2)  # 100 rows: the next power of two
+    _redo(many, rows, _double_plus, {"a": np.arange(200.0), "b": np.arange(200.0)}, np.float64(0.5), sharded_map)
+    np.testing.assert_array_equal(many["y"][rows], 2.0 * rows + 0.5)
+    np.testing.assert_array_equal(many["n"][rows], 128.0)
 
 
 def test_evaluate_rejects_bad_samples():

@@ -45,6 +45,7 @@ from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from .angle import impact_angle
+from .inputs import padded_rows
 from .ode import _trajectory, impact_ode
 from .outcome import STATUS_CODES
 from .quadrature import impact_quadrature
@@ -164,11 +165,11 @@ def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
 
 
 def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, model: Model, run: Callable) -> None:
-    """Compute the ``rows`` of ``out`` again with ``fn`` (the batch padded to a power of two, so
-    that few shapes compile) and write them in place."""
+    """Compute the ``rows`` of ``out`` again with ``fn`` (the batch padded by
+    ``inputs.padded_rows``, so that few shapes compile) and write them in place."""
     if rows.size == 0:
         return
-    padded = np.concatenate([rows, np.full((1 << int(rows.size - 1).bit_length()) - rows.size, rows[0])])
+    padded = padded_rows(rows)
     again = run(fn, {k: v[padded] for k, v in batch.items()}, model, desc="ODE for flagged impacts", chunk_size=len(padded))
     for k in out:
         out[k][rows] = again[k][: rows.size]

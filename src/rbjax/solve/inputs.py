@@ -63,3 +63,16 @@ def as_arrays(tree):
     paths)."""
     arrays, static = eqx.partition(tree, eqx.is_array_like)
     return eqx.combine(jax.tree_util.tree_map(_as_float64, arrays), static)
+
+
+#: The smallest batch the ODE fallback of the fast paths runs (padded): a handful of flagged
+#: impacts costs ~10 s of compile per new shape and microseconds per extra impact, so batches of
+#: 1–64 flagged impacts share one compiled program.
+FALLBACK_MIN_BATCH = 64
+
+
+def padded_rows(rows: np.ndarray) -> np.ndarray:
+    """``rows`` padded with its first entry to a power of two, at least ``FALLBACK_MIN_BATCH``,
+    so that the batches solved again by the ODE come in few shapes (few compiles)."""
+    size = max(FALLBACK_MIN_BATCH, 1 << int(rows.size - 1).bit_length())
+    return np.concatenate([rows, np.full(size - rows.size, rows[0])])

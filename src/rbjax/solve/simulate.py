@@ -26,6 +26,7 @@ from .inputs import (
     as_arrays,
     broadcast_inputs,
     check_inputs,
+    padded_rows,
 )
 from .ode import impact_batch, trajectory_batch
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
@@ -297,7 +298,7 @@ def _fast_program(path: str, height_m, ball, model):
 def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
     """The quadrature or phase-angle path (broadcast height, outputs, path); with ``fallback``
     (and concrete values) the impacts it flags ``solver_failed`` are solved again by the ODE (the
-    batch padded to a power of two, so that few shapes compile)."""
+    batch padded by ``inputs.padded_rows``, so that few shapes compile)."""
     if path == "quadrature":
         from .quadrature import DEFAULT_NODES, _check
 
@@ -309,7 +310,7 @@ def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
     if failed.size == 0:
         return height, out, path
     shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
-    padded = np.concatenate([failed, np.full((1 << int(failed.size - 1).bit_length()) - failed.size, failed[0])])
+    padded = padded_rows(failed)
     pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
     redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
     index = jnp.asarray(failed)
