@@ -30,6 +30,7 @@ import jax.numpy as jnp
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import (
     contact_force_N,
+    damping_force_N,
     dynamic_mass_kg,
     internal_rates,
     momentum_flux_N,
@@ -75,7 +76,14 @@ def body_velocity_m_per_s(y, ball, model):
     v = y[1] + floor_velocity_m_per_s(y, ball, model)
     if model.ball_mode is not None:
         v = v - model.ball_mode_states(y[2:])[1]
+    if model.series is not None:
+        v = v - _series_velocity(y, ball, model)
     return v
+
+
+def _series_velocity(y, ball, model):
+    """ẇ = −(w + C F_c)/τ of the series element (``rbjax.terms.series_kelvin_voigt``)."""
+    return model.series.velocity_m_per_s(model.series_states(y[2:])[0], _contact_force(y, ball, model))
 
 
 def _vector_field(flux_on: bool, energy: bool = False):
@@ -86,21 +94,41 @@ def _vector_field(flux_on: bool, energy: bool = False):
 
     with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface (``rbjax.terms.floors.kinds``); on
     the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A massless floor (u̇ = F/Z) has
-    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; it is solved for δ̈ in closed form.
+    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; the series element (τẇ = −(w + C F_c),
+    ``rbjax.terms.series_kelvin_voigt``) has ẅ = −(ẇ + C dF_c/dt)/τ, linear in δ̈ too; both are
+    solved for δ̈ in closed form.
     With ``energy`` four accumulators follow the state (see ``energy_balance``).
     """
 
     def rhs(t, y, args):
         ball, model = args
         d, v, z = _split(y)
-        force = _contact_force(y, ball, model)
+        parts = [internal_rates(d, v, z, ball, model)]
+        if model.series is None:
+            force = _contact_force(y, ball, model)
+        else:
+            # F_c and G = ∂F_c/∂δ δ̇ + ∂F_c/∂z ż in one forward pass, H = ∂F_c/∂δ̇ (the damping
+            # laws only) in another: the series element's dF_c/dt = G + H δ̈
+            zd = z[: model.num_damping_states]
+            force, g_c = jax.jvp(lambda dd, zz: contact_force_N(dd, v, zz, ball, model), (d, zd), (v, parts[0]))
+            h_c = jax.jvp(lambda vv: damping_force_N(d, vv, zd, ball, model), (v,), (jnp.ones_like(v),))[1]
         thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
         accel = (thrust - force) / dynamic_mass_kg(d, ball)
-        parts = [internal_rates(d, v, z, ball, model)]
         if model.ball_mode is not None:
             mode_rates = model.ball_mode.rates(model.ball_mode_states(z), force, ball)
             accel = accel + mode_rates[1]
             parts.append(mode_rates)
+        # Massless elements make δ̈ appear on both sides: each adds −a(G + H δ̈) (+ c) to δ̈,
+        # with dF/dt = G + H δ̈ of the force it carries (F depends on δ, δ̇ and the damping
+        # states only); δ̈ (1 + Σ a H) = Ẍ + … − Σ a G is solved in closed form.
+        denominator = 1.0
+        if model.series is not None:
+            element = model.series
+            w_rate = element.velocity_m_per_s(model.series_states(z)[0], force)
+            parts.append(w_rate[None])
+            a = element.series_compliance_m_per_N / element.series_time_constant_s
+            accel = accel - w_rate / element.series_time_constant_s - a * g_c
+            denominator = denominator + a * h_c
         floor = model.floor
         if not floor.rigid:
             states = model.floor_states(z)
@@ -108,14 +136,15 @@ def _vector_field(flux_on: bool, energy: bool = False):
             parts.append(floor.rates(states, ff))
             accel = accel - floor.acceleration_m_per_s2(states, ff)
             if floor.massless:
-                # dF/dt = G + H δ̈ (F depends on δ, δ̇ and the damping states only)
                 nd = model.num_damping_states
                 ydot = jnp.concatenate([jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)])
                 force_of = lambda yy: floor_force_N(yy, ball, model)  # noqa: E731
                 _, g = jax.jvp(force_of, (y,), (ydot,))
                 _, h = jax.jvp(force_of, (y,), (jnp.zeros_like(y).at[1].set(1.0),))
                 b = floor.admittance_m_per_Ns
-                accel = (accel - b * g) / (1.0 + b * h)
+                accel = accel - b * g
+                denominator = denominator + b * h
+        accel = accel / denominator
         rates = jnp.concatenate([jnp.stack([v, accel]), *parts])
         if energy:
             rates = jnp.concatenate([rates, _energy_rates(y, ball, model)])
@@ -202,17 +231,23 @@ def _ok(sol):
 
 
 def _initial_state(v0, ball, model: Model, energy: bool = False):
-    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0). On a massless floor
-    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term): δ̇ + F(0, δ̇)/Z = v0 is solved by
-    Newton's method (a contraction: ∂F/∂δ̇ / Z ≪ 1 for any floor stiffer than the ball)."""
+    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0) + ẇ(0). On a massless floor
+    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term), and the series element gives
+    ẇ(0) = −C F_c(0, δ̇)/τ: δ̇ + F(0, δ̇)/Z + F_c(0, δ̇)/c_b = v0 is solved by Newton's method
+    (exact in one step where the forces are affine in δ̇)."""
     zeros = jnp.zeros(model.num_internal_states + (NUM_ENERGY_STATES if energy else 0))
     y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), zeros])
-    if not model.floor.massless:
+    if not model.floor.massless and model.series is None:
         return y0
-    b = model.floor.admittance_m_per_Ns
 
     def residual(v):
-        return v + b * floor_force_N(y0.at[1].set(v), ball, model) - v0
+        y = y0.at[1].set(v)
+        r = v - v0
+        if model.floor.massless:
+            r = r + model.floor.admittance_m_per_Ns * floor_force_N(y, ball, model)
+        if model.series is not None:
+            r = r - _series_velocity(y, ball, model)
+        return r
 
     v = v0
     for _ in range(8):
@@ -386,6 +421,8 @@ def recontact_horizon_s(model: Model):
         omega = floor.modes()[1]
         periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)
         horizon = jnp.maximum(jnp.max(periods), horizon)
+    if model.series is not None:
+        horizon = jnp.maximum(horizon, 2.0 * model.series.series_time_constant_s)
     if model.ball_mode is not None:
         return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
     return horizon
@@ -408,6 +445,9 @@ def _recontacts(y_end, args):
         bm = model.ball_mode
         w, wd = model.ball_mode_states(z)
         gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
+    if model.series is not None:
+        w = model.series_states(z)[0]  # relaxes freely: τẇ = −w
+        gap_close = gap_close + w * jnp.expm1(-taus / model.series.series_time_constant_s)
     if isinstance(model.floor, AbstractModalFloor):
         s = model.floor_states(z)
         n = model.floor.num_modes
