@@ -12,9 +12,9 @@ import jax
 import numpy as np
 
 from .._validate import check_choice
-from ..solve.ode import _RESTITUTION, _initial_state
 from ..solve.outcome import impact_velocity_m_per_s
 from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
+from ..solve.vector_field import _RESTITUTION, _initial_state
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model, Solver

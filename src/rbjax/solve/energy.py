@@ -29,7 +29,8 @@ from jaxtyping import ArrayLike
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
-from .ode import _final, _phases, _split_energy, _status, body_velocity_m_per_s
+from .ode import _final, _phases, _status
+from .vector_field import _split_energy, body_velocity_m_per_s
 
 
 class EnergyBalance(eqx.Module):
