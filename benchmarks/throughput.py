@@ -39,8 +39,9 @@ import numpy as np
 
 import rbjax
 from rbjax.solve import impact_quadrature, impact_quadrature_batch
-from rbjax.solve.ode import COMPRESSION_FIELD, impact_batch, impact_ode
+from rbjax.solve.ode import impact_batch, impact_ode
 from rbjax.solve.simulate import broadcast_inputs, make_model
+from rbjax.solve.vector_field import COMPRESSION_FIELD
 from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
 from _common import (

@@ -27,6 +27,7 @@ from .terms.forces import (
 )
 from .terms.model import Model, Solver
 from .terms.parameters import parameter_names, parameter_table
+from .terms.series_kelvin_voigt import SeriesKelvinVoigt
 
 __version__ = "0.1.0"
 
@@ -43,6 +44,7 @@ __all__ = [
     "KelvinVoigt",
     "Zener",
     "BallMode",
+    "SeriesKelvinVoigt",
     "Rigid",
     "Dashpot",
     "InfinitePlate",

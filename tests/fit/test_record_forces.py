@@ -1,7 +1,8 @@
 """The fit's sampled path (README "Fitting measured force histories"): the force at a record's
 own samples by fixed steps (``rbjax.solve.record_samples``) and the fit's Jacobian built from
 it (``rbjax.fit.record_forces``), against the independent scipy references (paper Eq. 7 and
-the two-degree-of-freedom ball-mode impact, DOP853 at rtol 1e-12), against the diffrax ODE
+the two-degree-of-freedom ball-mode impact and the series element's, DOP853 at rtol 1e-12),
+against the diffrax ODE
 path of the fit, and against central differences; the choice of path and the starts."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 import rbjax
-from rbjax import JIS_RUBBER_BALL, BallMode, HuntCrossley, KelvinVoigt, Zener
+from rbjax import JIS_RUBBER_BALL, BallMode, HuntCrossley, KelvinVoigt, SeriesKelvinVoigt, Zener
 from rbjax.fit import model_histories
 from rbjax.fit.layout import model_from_name
 from rbjax.fit.problem import fit_path
@@ -22,6 +23,7 @@ from rbjax.solve.record_samples import record_samples
 
 from scipy_ball_mode_reference import reference_ball_mode_impact
 from scipy_reference import reference_impact
+from scipy_series_reference import reference_series_impact
 from synthetic_records import (
     HEIGHTS_M,
     RATE_HZ,
@@ -33,6 +35,7 @@ from synthetic_records import (
 
 N = 1323  # 30 ms at 44.1 kHz, the fit's default window
 MODE = BallMode(20.0, 800.0, 0.3)
+SERIES = (3.0e-6, 4.6e-3)  # C (m/N), τ (s) of the series element
 CASES = {
     "paper": (rbjax.Model(), lambda h, b: reference_impact(h, b, rtol=1e-12)),
     "kelvin-voigt/momentum": (
@@ -46,6 +49,10 @@ CASES = {
     "hunt-crossley+ball-mode/momentum": (
         rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), ball_mode=MODE),
         lambda h, b: reference_ball_mode_impact(h, b, 20.0, 800.0, 0.3, damping=HuntCrossley(0.05), blocked_force="momentum", rtol=1e-12),
+    ),
+    "hunt-crossley+series-kelvin-voigt/momentum": (
+        rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), series=SeriesKelvinVoigt(*SERIES)),
+        lambda h, b: reference_series_impact(h, b, *SERIES, damping=HuntCrossley(0.05), blocked_force="momentum"),
     ),
 }
 
@@ -73,7 +80,7 @@ def test_samples_match_the_scipy_reference_at_every_sample(case, shift_s):
         assert np.max(np.abs(np.asarray(force) - expected)) <= 1e-6 * np.max(expected), (case, h)
 
 
-@pytest.mark.parametrize("case", ["kelvin-voigt/momentum", "hunt-crossley+ball-mode/momentum"])
+@pytest.mark.parametrize("case", ["kelvin-voigt/momentum", "hunt-crossley+ball-mode/momentum", "hunt-crossley+series-kelvin-voigt/momentum"])
 def test_shift_derivative_is_the_negative_force_rate(case):
     """dF(t − s)/ds from −Ḟ (no tangent through the solve) against central differences in s."""
     model, _ = CASES[case]
@@ -131,6 +138,29 @@ def test_ball_mode_jacobian_matches_finite_differences_of_the_reference(ball_mod
         i = names.index(name)
         fd = central_difference(reference, TRUE, shifts, name)
         assert np.max(np.abs(jac[..., i] - fd)) <= 2e-4 * np.max(np.abs(fd)), name
+
+
+def test_series_columns_match_finite_differences_of_the_reference():
+    """d(force)/dC and d(force)/dτ of the sampled path (forward mode through the steps) against
+    central differences of the independent series reference, at every sample."""
+    model, _ = CASES["hunt-crossley+series-kelvin-voigt/momentum"]
+    t = np.arange(N) / RATE_HZ
+    h, shift = 1.0, 0.01034567
+
+    def samples(theta):
+        m = rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), series=SeriesKelvinVoigt(theta[0], theta[1]))
+        return _record_samples(h, shift, m)[0]
+
+    jac = np.asarray(jax.jacfwd(samples)(jax.numpy.asarray(SERIES)))
+    for i in range(2):
+        step = 1e-4 * SERIES[i]
+        hi, lo = list(SERIES), list(SERIES)
+        hi[i] += step
+        lo[i] -= step
+        ref = [sampled_force(reference_series_impact(h, JIS_RUBBER_BALL, *p, damping=HuntCrossley(0.05), blocked_force="momentum"), t - shift)
+               for p in (hi, lo)]
+        fd = (ref[0] - ref[1]) / (2 * step)
+        assert np.max(np.abs(jac[:, i] - fd)) <= 1e-4 * np.max(np.abs(fd)), i
 
 
 def test_path_choice_and_its_reason():

@@ -18,10 +18,12 @@ Without --model every candidate is fitted and cross-validated over the heights (
 
 models: paper (elastic, §2), kelvin-voigt, hunt-crossley, zener, each optionally
 +stiffening and then +ball-mode (one mode of the ball in series with the shell, the
-ringing of measured pulses; e.g. hunt-crossley+ball-mode). Parameters for --fix:
+ringing of measured pulses; e.g. hunt-crossley+ball-mode) or +series-kelvin-voigt (its
+overdamped, massless limit: a spring and a damper in series with the shell). Parameters for --fix:
 youngs_Pa, poisson, damping_Ns_per_m (kelvin-voigt), alpha_s_per_m (hunt-crossley),
 stiffness_ratio and relaxation_time_s (zener), beta (+stiffening), mode_mass_ratio,
-mode_frequency_Hz, mode_loss_factor (+ball-mode), and the ball's radius_m, wall_m, mass_kg.
+mode_frequency_Hz, mode_loss_factor (+ball-mode), series_compliance_m_per_N,
+series_time_constant_s (+series-kelvin-voigt), and the ball's radius_m, wall_m, mass_kg.
 
 examples:
   rbjax fit recordings/ --model hunt-crossley --blocked-force momentum
@@ -101,7 +103,7 @@ def register(subparsers) -> None:
     p = add_command(subparsers, "fit", help="fit E and a damping model to measured force histories", description=DESCRIPTION)
     add_data_options(p, paths="*")
     p.add_argument("--summary", default=None, metavar="TABLE", help="fit to a table of summary figures per drop height (.csv or .toml) instead of recordings")
-    p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode); default: choose by cross-validation")
+    p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode or +series-kelvin-voigt); default: choose by cross-validation")
     p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
     p.add_argument("--optimizer", choices=("lm", "gauss-newton"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")

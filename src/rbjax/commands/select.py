@@ -14,7 +14,8 @@ rule). The table gives the held-out history error (% of peak), contact time, pea
 octave-band L_FE errors, and AIC/BIC; the unfitted paper model (E = 1.6 MPa) is the
 baseline. Takes several minutes (one compilation for all candidates). Any model name of
 `rbjax fit` is a candidate, e.g. hunt-crossley+ball-mode (a mode of the ball in series with
-the shell; the other candidates then run with it held off, μ = 0, in the same program).
+the shell; the other candidates then run with it held off, μ = 0, in the same program) or
+hunt-crossley+series-kelvin-voigt (its massless limit, held off at C = 0).
 
 examples:
   rbjax select recordings/
@@ -27,7 +28,7 @@ examples:
 def register(subparsers) -> None:
     p = add_command(subparsers, "select", help="choose the impact model by cross-validation over drop heights", description=DESCRIPTION)
     add_data_options(p)
-    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode)")
+    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode, +series-kelvin-voigt), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,hunt-crossley+series-kelvin-voigt)")
     p.add_argument("--blocked-force", choices=("paper", "momentum", "both"), default="both", help="blocked-force definitions to compare (default both)")
     p.add_argument("--hold-out", default=None, metavar="HEIGHTS", help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them")
     p.add_argument("--out", default=None, metavar="DIR", help="write selection.json into DIR")

@@ -105,7 +105,8 @@ def _rebuilt(model, **changes):
     from ..solve.simulate import make_model
 
     options = dict(gas=model.gas, blocked_force=model.blocked_force, damping=model.damping, stiffening=model.stiffening,
-                   max_deflection_ratio=model.max_deflection_ratio, ball_mode=model.ball_mode, floor=model.floor)
+                   max_deflection_ratio=model.max_deflection_ratio, ball_mode=model.ball_mode, floor=model.floor,
+                   series=model.series)
     return make_model(**(options | changes))
 
 

@@ -44,7 +44,7 @@ from ..terms.model import GAS_OPTIONS, Model, Solver
 from ..terms.parameters import replace
 from .estimates import Estimates, estimates
 from .freedom import Freedom, free_parameters, prior_row
-from .physical import at_bounds, ball_mode_structure
+from .physical import at_bounds, ball_mode_structure, series_structure
 from .problem import STEPS_PER_ROUND, per_height_rows, realign
 from .program import OPTIMIZERS
 from .result import FitResult
@@ -247,7 +247,8 @@ def _result(setup: FitSetup, freedom: Freedom, optimum: _Optimum, est: Estimates
     values = {n: float(theta[lay.index(n)]) for n in setup.fittable}
     _, fitted_ball, fitted_model = replace(values, 1.0, setup.ball, setup.candidate)
     physical_free = est.correlations[0]
-    reading = " ".join(x for x in (ball_mode_structure(fitted_ball, fitted_model), at_bounds({n: values[n] for n in physical_free})) if x)
+    structures = (ball_mode_structure(fitted_ball, fitted_model), series_structure(fitted_model))
+    reading = " ".join(x for x in (*structures, at_bounds({n: values[n] for n in physical_free})) if x)
     if reading:
         ident += " " + reading
     data = setup.data

@@ -23,6 +23,7 @@ from ..terms.declare import HEIGHT_ERROR, ONSET_SHIFT
 from ..terms.forces import CubicStiffening
 from ..terms.model import Model
 from ..terms.parameters import declaration, parameter_table, replace, to_vector
+from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 
 #: The fitted models that model selection compares by default: the paper's elastic model, one
 #: damping law each, and Hunt–Crossley with the ball's own mode (the model that meets the
@@ -30,10 +31,13 @@ from ..terms.parameters import declaration, parameter_table, replace, to_vector
 #: it is worth its parameters). Any registered damping law's name is a model name too. Append
 #: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²), and then
 #: ``+ball-mode`` for one mode of the ball in series with the shell (``rbjax.BallMode``:
-#: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``.
-MODEL_NAMES = ("paper", "kelvin-voigt", "hunt-crossley", "zener", "hunt-crossley+ball-mode")
+#: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``, and then
+#: ``+series-kelvin-voigt`` for its overdamped, massless limit, a spring and a damper in series
+#: with the shell (``rbjax.SeriesKelvinVoigt``: C, τ fitted).
+MODEL_NAMES = ("paper", "kelvin-voigt", "hunt-crossley", "zener", "hunt-crossley+ball-mode", "hunt-crossley+series-kelvin-voigt")
 STIFFENING_SUFFIX = "+stiffening"
 BALL_MODE_SUFFIX = "+ball-mode"
+SERIES_SUFFIX = "+series-kelvin-voigt"
 #: Parameters that are never fitted: constants of the program (``fix`` may still set them).
 CONSTANT_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "momentum_flux_weight")
 #: Ranges a fit keeps some parameters in (an ``interval`` transform in place of the term's own
@@ -45,11 +49,21 @@ CONSTANT_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "momentum_flux_weight")
 #: contact's own ~25 Hz) to the top of the standard's 1 kHz octave band, its loss factor up to
 #: twice critical damping (η = 4). At a bound the fit says so, and the result states the
 #: structure in physical terms (mass, stiffness, damping: ``ball_mode_structure``).
+#: The series element (the ball mode's massless limit) keeps its spring stiffer than 50 kN/m
+#: (C < 2e-5 m/N; about the JIS ball's shell stiffness) and its relaxation time from 0.5 ms
+#: (faster, the element is a bare spring and the equations stiff) to 0.1 s (slower, a rigid
+#: damper); the fit on the bundled recordings lands at C = 3.0e-6 m/N, τ = 4.6 ms. Wider
+#: ranges would raise the sampled path's sub-steps (``fit_substeps``, set by the fastest
+#: corner) for every candidate of a selection.
 FIT_RANGES = {
     "mode_mass_ratio": (0.0, 100.0),
     "mode_frequency_Hz": (20.0, 2500.0),
     "mode_loss_factor": (0.0, 4.0),
+    "series_compliance_m_per_N": (0.0, 2e-5),
+    "series_time_constant_s": (5e-4, 0.1),
 }
+#: The ``FIT_RANGES`` parameters whose lower bound (not the upper) is the model's fastest rate.
+FASTEST_AT_LOWER = ("series_time_constant_s",)
 
 
 def fit_declaration(name: str, ball, model):
@@ -65,7 +79,7 @@ def fit_declaration(name: str, ball, model):
 def all_model_names() -> tuple[str, ...]:
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
     with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
-    return with_stiffening + tuple(m + BALL_MODE_SUFFIX for m in with_stiffening)
+    return with_stiffening + tuple(m + suffix for suffix in (BALL_MODE_SUFFIX, SERIES_SUFFIX) for m in with_stiffening)
 
 
 class ModelTerms(NamedTuple):
@@ -74,18 +88,24 @@ class ModelTerms(NamedTuple):
     laws: tuple[type[AbstractDamping], ...]
     stiffening: bool
     ball_mode: bool
+    series: bool = False
 
 
 def parse_model_terms(name: str) -> ModelTerms:
-    """(damping law classes, stiffening?, ball mode?) of a model name such as
+    """(damping law classes, stiffening?, ball mode?, series element?) of a model name such as
     ``zener+stiffening+ball-mode`` (the suffixes in this order, as ``Model.name`` writes them)."""
     if not isinstance(name, str):
         raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")
-    rest, mode = (name[: -len(BALL_MODE_SUFFIX)], True) if name.endswith(BALL_MODE_SUFFIX) else (name, False)
-    base, stiff = (rest[: -len(STIFFENING_SUFFIX)], True) if rest.endswith(STIFFENING_SUFFIX) else (rest, False)
+
+    def strip(rest, suffix):
+        return (rest[: -len(suffix)], True) if rest.endswith(suffix) else (rest, False)
+
+    rest, series = strip(name, SERIES_SUFFIX)
+    rest, mode = strip(rest, BALL_MODE_SUFFIX)
+    base, stiff = strip(rest, STIFFENING_SUFFIX)
     if base != "paper" and base not in DAMPING_MODELS:
         raise ValueError(f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}")
-    return ModelTerms((() if base == "paper" else (DAMPING_MODELS[base],)), stiff, mode)
+    return ModelTerms((() if base == "paper" else (DAMPING_MODELS[base],)), stiff, mode, series)
 
 
 def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
@@ -97,21 +117,25 @@ def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool
 
 def model_from_name(name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None) -> Model:
     """The ``Model`` a model name stands for, its parameters from ``values`` (name → value;
-    the ball mode's default is ``BallMode.start``'s)."""
-    laws, stiff, mode = parse_model_terms(name)
+    the ball mode's and the series element's defaults are their ``start``'s for a 50 kN/m shell)."""
+    terms = parse_model_terms(name)
     values = dict(values or {})
-    damping = tuple(law(**{k: values.get(k, 1.0) for k in law.PARAMETERS}) for law in laws)
-    stiffening = CubicStiffening(values.get("beta", 0.05)) if stiff else None
-    ball_mode = None
-    if mode:
-        default = BallMode.start(1.0, 1.0, 0.8, 0.02, 1.0)
-        ball_mode = BallMode(**{k: values.get(k, default[k]) for k in BallMode.PARAMETERS})
-    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening, ball_mode=ball_mode)
+    damping = tuple(law(**{k: values.get(k, 1.0) for k in law.PARAMETERS}) for law in terms.laws)
+    stiffening = CubicStiffening(values.get("beta", 0.05)) if terms.stiffening else None
+
+    def term(cls, present):
+        if not present:
+            return None
+        default = cls.start(5e4, 2.5, 0.8, 0.02, 1.0)
+        return cls(**{k: values.get(k, default[k]) for k in cls.PARAMETERS})
+
+    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening,
+                 ball_mode=term(BallMode, terms.ball_mode), series=term(SeriesKelvinVoigt, terms.series))
 
 
 def fitted_parameter_names(model: Model) -> tuple[str, ...]:
     """The physical parameters a fit of ``model`` frees by default: E, ν and every parameter
-    of its damping laws, stiffening and ball mode."""
+    of its damping laws, stiffening, ball mode and series element."""
     names = [row.name for row in parameter_table(1.0, Ball(1.0, 0.5, 1.0, 1.0, 0.0), model)]
     return tuple(n for n in names if n not in CONSTANT_PARAMETERS and n != "height_m")
 

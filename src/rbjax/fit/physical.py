@@ -1,5 +1,5 @@
 """The fitted values read in physical terms, for the result's notes: the ball mode as the mass,
-spring and damper it stands for, and the parameters that ended on a bound of their fit range
+spring and damper it stands for, the series element as its spring and damper, and the parameters that ended on a bound of their fit range
 (:data:`rbjax.fit.layout.FIT_RANGES`)."""
 
 from __future__ import annotations
@@ -26,6 +26,20 @@ def ball_mode_structure(ball, model) -> str:
         f"The ball mode as fitted: a {1e3 * mass:.3g} g mass at the contact (M/μ) on a spring of "
         f"{omega**2 * mass:.3g} N/m and a damper of {eta * omega * mass:.3g} N s/m "
         f"(f = {float(mode.mode_frequency_Hz):.4g} Hz, η = {eta:.3g}): {kind}."
+    )
+
+
+def series_structure(model) -> str:
+    """The fitted series element as a spring and a damper (``""`` without one or when off):
+    k_b = 1/C, c_b = τ/C."""
+    element = model.series
+    if element is None or float(element.series_compliance_m_per_N) == 0.0:
+        return ""
+    compliance, tau = float(element.series_compliance_m_per_N), float(element.series_time_constant_s)
+    return (
+        f"The series element as fitted: a spring of {1.0 / compliance:.3g} N/m and a damper of "
+        f"{tau / compliance:.3g} N s/m in series with the shell (τ = {1e3 * tau:.3g} ms): the ball "
+        "mode's massless limit."
     )
 
 

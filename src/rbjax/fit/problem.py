@@ -12,15 +12,15 @@ import jax
 import numpy as np
 
 from .._validate import check_choice
-from ..solve.ode import _RESTITUTION, _initial_state
 from ..solve.outcome import impact_velocity_m_per_s
 from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
+from ..solve.vector_field import _RESTITUTION, _initial_state
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model, Solver
 from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
-from .layout import FIT_RANGES, FitLayout, model_from_name, parse_model_name
+from .layout import FASTEST_AT_LOWER, FIT_RANGES, FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program
 from .records import FitData, prepare_data, record_features
 from .result import _plain
@@ -60,9 +60,10 @@ def fit_path(method: str, model: Model, solver) -> tuple[str, str | None]:
 def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
     """Runge–Kutta steps per sample of the sampled path for every value a fit of ``model`` can
     reach: the fastest rate of the vector field at first contact (its Jacobian's spectral
-    radius), at the model's values and with each ``FIT_RANGES`` parameter at its upper bound."""
+    radius), at the model's values and with each ``FIT_RANGES`` parameter at the bound where it
+    is fastest (the upper, or the lower for those in ``FASTEST_AT_LOWER``)."""
     names = set(parameter_names(1.0, ball, model))
-    corner = {n: hi for n, (_, hi) in FIT_RANGES.items() if n in names}
+    corner = {n: (lo if n in FASTEST_AT_LOWER else hi) for n, (lo, hi) in FIT_RANGES.items() if n in names}
     # one compiled Jacobian for both points and for every fit of the same structure in the process
     points = [(ball, model), replace(corner, 1.0, ball, model)[1:]]
     fastest = max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(_first_contact_jacobian(b, m)))))) for b, m in points)

@@ -17,8 +17,9 @@ from .layout import CONSTANT_PARAMETERS, FitLayout, fitted_parameter_names
 from .problem import Problem, candidate_model, embed, fit_path, fit_solver
 from .records import FitData, prepare_data
 
-#: Parameters that may be held at 0 (the ball mode off, μ = 0, or lossless, η = 0).
-NON_NEGATIVE_FIX = ("mode_mass_ratio", "mode_loss_factor")
+#: Parameters that may be held at 0 (the ball mode off, μ = 0, or lossless, η = 0; the
+#: series element rigid, C = 0).
+NON_NEGATIVE_FIX = ("mode_mass_ratio", "mode_loss_factor", "series_compliance_m_per_N")
 
 
 def validate_fix(names, fix):

@@ -45,12 +45,9 @@ def start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float
     e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
     values = {"youngs_Pa": e_young, "poisson": nu}
     k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
-    for law in model.damping:
-        values.update(type(law).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
+    values.update(model.term_starts(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     if model.stiffening is not None:
         values["beta"] = 0.05
-    if model.ball_mode is not None:
-        values.update(type(model.ball_mode).start(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     return values
 
 
@@ -59,7 +56,7 @@ def alternative_starts(model: Model, given: set[str]) -> list[dict]:
     value of a parameter whose fit has several minima, as its term declares them
     (``START_ALTERNATIVES``; e.g. the ball mode's frequency), unless the caller gave or held it."""
     starts: list[dict] = [{}]
-    terms = [*model.damping, model.stiffening, model.ball_mode]
+    terms = [*model.damping, model.stiffening, model.ball_mode, model.series]
     for term in terms:
         for name, values in getattr(type(term), "START_ALTERNATIVES", {}).items():
             if name not in given:

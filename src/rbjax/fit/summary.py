@@ -87,12 +87,9 @@ def start_values(table: SummaryTable, model, ball: Ball, nu: float) -> dict:
     out = {"youngs_Pa": e_young, "poisson": nu}
     k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
     speed = float(np.median(v0))
-    for law in model.damping:
-        out.update(type(law).start(k_shell, mass, e, tc, speed))
+    out.update(model.term_starts(k_shell, mass, e, tc, speed))
     if model.stiffening is not None:
         out["beta"] = 0.05
-    if model.ball_mode is not None:
-        out.update(type(model.ball_mode).start(k_shell, mass, e, tc, speed))
     return out
 
 

@@ -55,8 +55,8 @@ from ..terms.forces import (
     reissner_stiffness_N_per_m,
 )
 from ..terms.model import Model
-from .ode import floor_force_N
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, ImpactScalars, impact_velocity_m_per_s
+from .vector_field import floor_force_N
 
 #: Steps of the 8th-order method per quarter turn (compression, restitution).
 DEFAULT_STEPS = 6

@@ -29,7 +29,8 @@ from jaxtyping import ArrayLike
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
-from .ode import _final, _phases, _split_energy, _status, body_velocity_m_per_s
+from .ode import _final, _phases, _status
+from .vector_field import _split_energy, body_velocity_m_per_s
 
 
 class EnergyBalance(eqx.Module):
@@ -75,15 +76,15 @@ _balance_batch = eqx.filter_jit(eqx.filter_vmap(_balance, in_axes=(0, 0, 0, None
 def energy_balance(height_m: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> EnergyBalance:
     """The energy balance of the impact from ``height_m`` (see the module docstring).
 
-    Models with a ``BallMode`` are not covered (the mode's own energy is not accounted for):
-    ``ValueError``.
+    Models with a ``BallMode`` or a ``SeriesKelvinVoigt`` are not covered (their own energy
+    is not accounted for): ``ValueError``.
     """
     from .simulate import broadcast_inputs, check_inputs
 
     check_inputs(height_m, ball)
     model = Model() if model is None else model
-    if model.ball_mode is not None:
-        raise ValueError("energy_balance: models with a ball_mode are not covered; valid: ball_mode=None")
+    if model.ball_mode is not None or model.series is not None:
+        raise ValueError("energy_balance: models with a ball_mode or a series element are not covered; valid: ball_mode=None, series=None")
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
     out = _balance_batch(height, flat_ball, flat_model, solver)

@@ -16,6 +16,7 @@ the solver's dense interpolant, never by a sign change on a sample grid:
 
 The contact time is the time of the last event; the peak force is the floor force at the
 end of phase 1; the restitution coefficient is the rebound momentum over the impact momentum.
+The vector field and the state at first contact are :mod:`rbjax.solve.vector_field`.
 """
 
 from __future__ import annotations
@@ -28,13 +29,7 @@ import jax
 import jax.numpy as jnp
 
 from ..terms.floors.kinds import AbstractModalFloor
-from ..terms.forces import (
-    contact_force_N,
-    dynamic_mass_kg,
-    internal_rates,
-    momentum_flux_N,
-    reissner_stiffness_N_per_m,
-)
+from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m
 from ..terms.model import Model, Solver
 from .outcome import (
     SINGULAR_FRACTION,
@@ -43,113 +38,16 @@ from .outcome import (
     Trajectory,
     impact_velocity_m_per_s,
 )
-
-
-def _split(y):
-    return y[0], y[1], y[2:]
-
-
-def _contact_force(y, ball, model):
-    d, v, z = _split(y)
-    return contact_force_N(d, v, z, ball, model)
-
-
-def floor_force_N(y, ball, model):
-    """The force on the floor for state y: the contact force plus the share
-    ``model.momentum_flux_weight`` of the momentum flux during compression (the blocked force
-    on the rigid floor)."""
-    v = y[1]
-    flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
-    return _contact_force(y, ball, model) + model.momentum_flux_weight * flux
-
-
-def floor_velocity_m_per_s(y, ball, model):
-    """u̇, the velocity of the floor's surface under the ball (0 on the rigid floor)."""
-    if model.floor.rigid:
-        return jnp.zeros_like(y[1])
-    return model.floor.velocity_m_per_s(model.floor_states(y[2:]), floor_force_N(y, ball, model))
-
-
-def body_velocity_m_per_s(y, ball, model):
-    """Ẋ = δ̇ + u̇ − ẇ, the velocity of the ball's moving part (δ̇ on the rigid floor)."""
-    v = y[1] + floor_velocity_m_per_s(y, ball, model)
-    if model.ball_mode is not None:
-        v = v - model.ball_mode_states(y[2:])[1]
-    return v
-
-
-def _vector_field(flux_on: bool, energy: bool = False):
-    """dy/dt. The ball's moving part, mass M − M_c (Eq. 6), feels the contact force F_c and,
-    while mass leaves the cap (δ̇ < 0, restitution), the thrust (M/2R)δ̇² (Eq. 7):
-
-        (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
-
-    with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface (``rbjax.terms.floors.kinds``); on
-    the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A massless floor (u̇ = F/Z) has
-    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; it is solved for δ̈ in closed form.
-    With ``energy`` four accumulators follow the state (see ``energy_balance``).
-    """
-
-    def rhs(t, y, args):
-        ball, model = args
-        d, v, z = _split(y)
-        force = _contact_force(y, ball, model)
-        thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
-        accel = (thrust - force) / dynamic_mass_kg(d, ball)
-        parts = [internal_rates(d, v, z, ball, model)]
-        if model.ball_mode is not None:
-            mode_rates = model.ball_mode.rates(model.ball_mode_states(z), force, ball)
-            accel = accel + mode_rates[1]
-            parts.append(mode_rates)
-        floor = model.floor
-        if not floor.rigid:
-            states = model.floor_states(z)
-            ff = floor_force_N(y, ball, model)
-            parts.append(floor.rates(states, ff))
-            accel = accel - floor.acceleration_m_per_s2(states, ff)
-            if floor.massless:
-                # dF/dt = G + H δ̈ (F depends on δ, δ̇ and the damping states only)
-                nd = model.num_damping_states
-                ydot = jnp.concatenate([jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)])
-                force_of = lambda yy: floor_force_N(yy, ball, model)  # noqa: E731
-                _, g = jax.jvp(force_of, (y,), (ydot,))
-                _, h = jax.jvp(force_of, (y,), (jnp.zeros_like(y).at[1].set(1.0),))
-                b = floor.admittance_m_per_Ns
-                accel = (accel - b * g) / (1.0 + b * h)
-        rates = jnp.concatenate([jnp.stack([v, accel]), *parts])
-        if energy:
-            rates = jnp.concatenate([rates, _energy_rates(y, ball, model)])
-        return rates
-
-    return rhs
-
-
-#: Energy accumulators (``energy_balance``): floor work ∫F u̇ dt, flux loss ∫½(M/2R)|δ̇|³ dt,
-#: contact work ∫F_c δ̇ dt, and the work the quasi-static cap and the share 1 − w of the flux
-#: leave out, ∫[½(M/2R)δ̇ u̇² + (1 − w)(M/2R)δ̇² H(δ̇) u̇] dt.
-NUM_ENERGY_STATES = 4
-
-
-def _energy_rates(y, ball, model):
-    _, v, _ = _split(y)
-    ff = floor_force_N(y, ball, model)
-    u_dot = floor_velocity_m_per_s(y, ball, model)
-    flux = momentum_flux_N(v, ball)
-    per_speed = ball.mass_kg / (2.0 * ball.radius_m)
-    cap = 0.5 * per_speed * v * u_dot**2 + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
-    return jnp.stack([ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap])
-
-
-def _split_energy(y, model):
-    """The state without the energy accumulators, and the accumulators."""
-    n = 2 + model.num_internal_states
-    return y[:n], y[n:]
-
-
-COMPRESSION_FIELD = _vector_field(flux_on=False)
-_RESTITUTION = _vector_field(flux_on=True)
-_COMPRESSION_ENERGY = _vector_field(flux_on=False, energy=True)
-_RESTITUTION_ENERGY = _vector_field(flux_on=True, energy=True)
+from .vector_field import (
+    _COMPRESSION_ENERGY,
+    _RESTITUTION,
+    _RESTITUTION_ENERGY,
+    COMPRESSION_FIELD,
+    _contact_force,
+    _initial_state,
+    body_velocity_m_per_s,
+    floor_force_N,
+)
 
 
 def _force_rate(y, args):
@@ -199,26 +97,6 @@ def _final(sol):
 
 def _ok(sol):
     return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
-
-
-def _initial_state(v0, ball, model: Model, energy: bool = False):
-    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0). On a massless floor
-    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term): δ̇ + F(0, δ̇)/Z = v0 is solved by
-    Newton's method (a contraction: ∂F/∂δ̇ / Z ≪ 1 for any floor stiffer than the ball)."""
-    zeros = jnp.zeros(model.num_internal_states + (NUM_ENERGY_STATES if energy else 0))
-    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), zeros])
-    if not model.floor.massless:
-        return y0
-    b = model.floor.admittance_m_per_Ns
-
-    def residual(v):
-        return v + b * floor_force_N(y0.at[1].set(v), ball, model) - v0
-
-    v = v0
-    for _ in range(8):
-        r, dr = jax.jvp(residual, (v,), (jnp.ones_like(v),))
-        v = v - r / dr
-    return y0.at[1].set(v)
 
 
 def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False, steps: bool = False):
@@ -386,6 +264,8 @@ def recontact_horizon_s(model: Model):
         omega = floor.modes()[1]
         periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)
         horizon = jnp.maximum(jnp.max(periods), horizon)
+    if model.series is not None:
+        horizon = jnp.maximum(horizon, 2.0 * model.series.series_time_constant_s)
     if model.ball_mode is not None:
         return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
     return horizon
@@ -408,6 +288,9 @@ def _recontacts(y_end, args):
         bm = model.ball_mode
         w, wd = model.ball_mode_states(z)
         gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
+    if model.series is not None:
+        w = model.series_states(z)[0]  # relaxes freely: τẇ = −w
+        gap_close = gap_close + w * jnp.expm1(-taus / model.series.series_time_constant_s)
     if isinstance(model.floor, AbstractModalFloor):
         s = model.floor_states(z)
         n = model.floor.num_modes

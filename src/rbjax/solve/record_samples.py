@@ -39,8 +39,8 @@ import jax
 import jax.numpy as jnp
 
 from ..terms.model import Model
-from .ode import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s
+from .vector_field import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 
 #: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate λ of the
 #: model over its fit range (a ball mode's damping ηω at η = 4, f = 2.5 kHz; a Zener

@@ -44,8 +44,8 @@ from .._validate import check_range
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
 from .inputs import PAPER_RATE_Hz, as_arrays, broadcast_inputs, check_inputs
-from .ode import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
+from .vector_field import _RESTITUTION, _contact_force, _initial_state, floor_force_N
 
 #: Fourth-order Runge–Kutta steps per sample unless the caller asks for more.
 DEFAULT_SUBSTEPS = 1

@@ -19,6 +19,7 @@ from ..terms.damping import AbstractDamping
 from ..terms.floors.kinds import AbstractFloor
 from ..terms.forces import CubicStiffening
 from ..terms.model import Model, Solver
+from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 from .angle import angle_unsupported
 from .inputs import (
     PAPER_DURATION_S,
@@ -49,7 +50,7 @@ class _Unset:
 UNSET: Any = _Unset()
 
 
-def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None) -> Model:
+def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None, series=None) -> Model:
     """A ``Model`` from the keyword options of ``simulate`` (validated)."""
     return Model(
         gas=gas,
@@ -59,6 +60,7 @@ def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffeni
         max_deflection_ratio=max_deflection_ratio,
         ball_mode=ball_mode,
         floor=floor,
+        series=series,
     )
 
 
@@ -204,6 +206,7 @@ def simulate(
     max_deflection_ratio: float = UNSET,
     ball_mode: BallMode | None = None,
     floor: AbstractFloor | None = None,
+    series: SeriesKelvinVoigt | None = None,
     solver: Solver | None = None,
     method: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
@@ -215,7 +218,7 @@ def simulate(
     The model is a :class:`~rbjax.terms.model.Model`, the one calling convention of rbjax
     (``trajectory``, ``fit``, ``batch``, the studies take the same): ``simulate(h, fit.ball,
     fit.model)`` runs a fitted model. The keywords ``gas``, ``blocked_force``, ``damping``,
-    ``stiffening``, ``max_deflection_ratio``, ``ball_mode`` and ``floor`` are a thin shortcut that
+    ``stiffening``, ``max_deflection_ratio``, ``ball_mode``, ``series`` and ``floor`` are a thin shortcut that
     builds the ``Model`` (``make_model``) when no ``model`` is given; giving both is a
     ``ValueError``.
 
@@ -230,7 +233,7 @@ def simulate(
       Eq. 7 integrated in δ, ~1e-12, no time stepping) for models without damping on the rigid
       floor; the phase-angle integration (``rbjax.solve.angle``: fixed 8th-order steps in the phase
       angle, ~1e-8) for damped models on the rigid floor; the diffrax ODE otherwise (ball mode,
-      moving floors) or when a ``solver`` is given. Impacts the quadrature or the phase-angle
+      series element, moving floors) or when a ``solver`` is given. Impacts the quadrature or the phase-angle
       path flags ``solver_failed`` (its error estimate too large) are solved again by the ODE
       when the inputs are concrete (``"quadrature+ode"``, ``"angle+ode"``).
     * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
@@ -243,9 +246,9 @@ def simulate(
     check_inputs(height_m, ball, rate_Hz, duration_s)
     options = {
         "gas": gas, "blocked_force": blocked_force, "damping": damping, "stiffening": stiffening,
-        "max_deflection_ratio": max_deflection_ratio, "ball_mode": ball_mode, "floor": floor,
+        "max_deflection_ratio": max_deflection_ratio, "ball_mode": ball_mode, "floor": floor, "series": series,
     }
-    given = {k: v for k, v in options.items() if v is not UNSET and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor"))}
+    given = {k: v for k, v in options.items() if v is not UNSET and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor", "series"))}
     if model is None:
         model = make_model(**given)
     elif not isinstance(model, Model):

@@ -66,6 +66,8 @@ DESIGN_RANGES = {
     "mode_mass_ratio": (0.0, 100.0),
     "mode_frequency_Hz": (20.0, 2500.0),
     "mode_loss_factor": (0.0, 4.0),
+    "series_compliance_m_per_N": (0.0, 2e-5),
+    "series_time_constant_s": (5e-4, 0.1),
 }
 #: The wall's range with ``vary_wall``: the mass follows it at the ball's density and is checked.
 WALL_RANGE_M = (0.020, 0.045)
@@ -277,12 +279,7 @@ def _start_values(model, ball) -> dict:
     from ..terms.forces import reissner_stiffness_N_per_m
 
     k = float(reissner_stiffness_N_per_m(ball))
-    out: dict = {}
-    for law in model.damping:
-        out.update(type(law).start(k, float(ball.mass_kg), 0.8, 0.02, math.sqrt(2 * 9.80665)))
-    if model.ball_mode is not None:
-        out.update(type(model.ball_mode).start(k, float(ball.mass_kg), 0.8, 0.02, math.sqrt(2 * 9.80665)))
-    return out
+    return model.term_starts(k, float(ball.mass_kg), 0.8, 0.02, math.sqrt(2 * 9.80665))
 
 
 def _value_of(name, ball, model) -> float:

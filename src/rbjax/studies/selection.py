@@ -275,16 +275,35 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
 
 def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
     """One model holding the terms of every candidate named (their damping laws, and the
-    stiffening and the ball mode if any candidate has them): the structure of the one compiled
-    fit program that all candidates and folds run through, each with the terms it lacks held
-    off (the ball mode at μ = 0)."""
-    laws, stiff, mode = [], False, False
+    stiffening, the ball mode and the series element if any candidate has them): the structure
+    of the one compiled fit program that all candidates and folds run through, each with the
+    terms it lacks held off (the ball mode at μ = 0, the series element at C = 0)."""
+    laws, stiff, mode, series = [], False, False, False
     for name in names:
         terms = parse_model_terms(name)
         laws += [t for t in terms.laws if t not in laws]
         stiff = stiff or terms.stiffening
         mode = mode or terms.ball_mode
-    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode)
+        series = series or terms.series
+    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
+
+
+def shared_structures(names: Sequence[str], gas: str = "adiabatic", given: Model | None = None) -> dict[str, Model]:
+    """The structure each candidate named is fitted in (``given``, if one is given, for all):
+    one :func:`shared_structure` for the candidates without the series element and one for
+    those with it. The element's closed-form coupling makes every solve of a program that
+    holds it, even held off, ~2.7× as costly (the force's rate dF_c/dt is differentiated
+    again for the Jacobian), so the other candidates do not carry it."""
+    if given is not None:
+        return {name: given for name in names}
+    groups: dict[bool, list[str]] = {}
+    for name in names:
+        groups.setdefault(parse_model_terms(name).series, []).append(name)
+    out = {}
+    for group in groups.values():
+        structure = shared_structure(group, gas)
+        out.update({name: structure for name in group})
+    return out
 
 
 def candidate_pairs(candidates: Sequence[str], blocked_forces: Sequence[str]) -> list[tuple[str, str]]:
@@ -325,16 +344,16 @@ def select_model(
     t0 = time.perf_counter()
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
-    fit_kwargs.setdefault("superset", shared_structure([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic")))
+    structures = shared_structures([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic"), fit_kwargs.pop("superset", None))
     out = []
     for name, bf in pairs:
         say(f"select: fitting {name}/{bf} to all heights", enabled=progress)
-        base = fit(data, name, blocked_force=bf, progress=False, **fit_kwargs)
+        base = fit(data, name, blocked_force=bf, progress=False, superset=structures[name], **fit_kwargs)
         say(f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}", enabled=progress)
-        folds = cross_validate(data, name, blocked_force=bf, base=base, progress=progress, **fit_kwargs)
+        folds = cross_validate(data, name, blocked_force=bf, base=base, progress=progress, superset=structures[name], **fit_kwargs)
         out.append(Candidate(name, bf, base, folds))
     chosen, within = recommend(out)
-    baseline = tuple(held_out_rows(predict(data, superset=fit_kwargs["superset"]), data.heights_m))
+    baseline = tuple(held_out_rows(predict(data, superset=structures[pairs[0][0]]), data.heights_m))
     return Selection(
         candidates=tuple(out),
         recommended=chosen,
@@ -390,7 +409,7 @@ def held_out_comparison(
     ``starts``: optional {(model, blocked_force): FitResult} warm starts."""
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
-    fit_kwargs.setdefault("superset", shared_structure([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic")))
+    structures = shared_structures([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic"), fit_kwargs.pop("superset", None))
     fit_heights = tuple(float(h) for h in fit_heights)
     rest = tuple(float(h) for h in data.heights_m if not any(abs(h - f) < 5e-4 for f in fit_heights))
     if not rest:
@@ -398,8 +417,8 @@ def held_out_comparison(
     rows = {}
     for name, bf in pairs:
         start = (starts or {}).get((name, bf))
-        res = fit(data, name, blocked_force=bf, fit_heights=fit_heights, start=start, progress=False, **fit_kwargs)
+        res = fit(data, name, blocked_force=bf, fit_heights=fit_heights, start=start, progress=False, superset=structures[name], **fit_kwargs)
         rows[f"{name}/{bf}"] = tuple(held_out_rows(res, rest))
         say(f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})", enabled=progress)
-    rows["paper (unfitted)"] = tuple(held_out_rows(predict(data, superset=fit_kwargs["superset"]), rest))
+    rows["paper (unfitted)"] = tuple(held_out_rows(predict(data, superset=structures[pairs[0][0]]), rest))
     return HoldOutComparison(fit_heights, rest, rows)

@@ -1,7 +1,8 @@
 """The physics of the impact, one term a module (paper §2): the ball and its shell stiffness
 (:mod:`~rbjax.terms.ball`, :mod:`~rbjax.terms.forces`: Reissner stiffness, gas force, dynamic
 mass, momentum flux), the damping laws (:mod:`~rbjax.terms.damping`), the ball's own mode
-(:mod:`~rbjax.terms.ball_mode`), the floors and their builders (:mod:`rbjax.terms.floors`), the
+(:mod:`~rbjax.terms.ball_mode`) and its overdamped limit
+(:mod:`~rbjax.terms.series_kelvin_voigt`), the floors and their builders (:mod:`rbjax.terms.floors`), the
 model that assembles them (:mod:`~rbjax.terms.model`), and the parameter layer: each term's
 declarations (:mod:`~rbjax.terms.declare`) and the walker over a whole impact
 (:mod:`~rbjax.terms.parameters`). :mod:`~rbjax.terms.serialize` writes and reads them;
@@ -63,10 +64,11 @@ from .parameters import (
     to_vector,
 )
 from .serialize import load_params, model_from_dict, model_to_dict, save_params
+from .series_kelvin_voigt import SeriesKelvinVoigt
 from .shell_modes import ShellModes, shell_frequencies_Hz
 
 __all__ = [
-    "JIS_RUBBER_BALL", "Ball", "validate_ball", "BallMode", "from_modal_mass",
+    "JIS_RUBBER_BALL", "Ball", "validate_ball", "BallMode", "from_modal_mass", "SeriesKelvinVoigt",
     "DAMPING_MODELS", "AbstractDamping", "HuntCrossley", "KelvinVoigt", "Zener", "damping_ratio",
     "Parameter", "check_declared", "declarations",
     "FLOOR_MODELS", "MATERIALS", "AbstractFloor", "Dashpot", "FloatingFloor", "InfinitePlate", "Material", "ModalFloor",

@@ -134,6 +134,12 @@ def contact_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
     force = shell_force_N(deflection_m, ball, model.stiffening)
     if model.gas == "adiabatic":
         force = force + gas_force_N(deflection_m, ball)
+    return force + damping_force_N(deflection_m, velocity_m_per_s, internal, ball, model)
+
+
+def damping_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
+    """F_d, the sum of the model's damping laws' forces (0 without any)."""
+    force = jnp.zeros_like(deflection_m)
     for term, z in zip(model.damping, model.split_internal(internal)):
         force = force + term.force_N(deflection_m, velocity_m_per_s, z, ball)
     return force

@@ -17,6 +17,7 @@ from .damping import AbstractDamping
 from .declare import Parameter, check_declared
 from .floors.kinds import AbstractFloor, Rigid
 from .forces import CubicStiffening
+from .series_kelvin_voigt import SeriesKelvinVoigt
 
 GAS_OPTIONS = ("adiabatic", "none")
 #: ``paper``: the floor force is F_B + F_G (+ damping), as the paper computes it (§2.4).
@@ -53,6 +54,9 @@ class Model(eqx.Module):
             and the result is flagged ``deflection_limit``.
         ball_mode: ``None`` or a ``BallMode``: the ball's own vibration in series with the
             shell (``rbjax.terms.ball_mode``; two states).
+        series: ``None`` or a ``SeriesKelvinVoigt``: a massless spring and damper in series
+            with the shell, the ball mode's overdamped limit
+            (``rbjax.terms.series_kelvin_voigt``; one state).
         floor: an ``rbjax.terms.floors.kinds.AbstractFloor``; ``Rigid()`` (the default) is the paper's
             immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
 
@@ -65,6 +69,7 @@ class Model(eqx.Module):
     momentum_flux_weight: ArrayLike
     max_deflection_ratio: float = eqx.field(static=True)
     ball_mode: BallMode | None
+    series: SeriesKelvinVoigt | None
     floor: AbstractFloor
     PARAMETERS: ClassVar = {
         "momentum_flux_weight": Parameter(
@@ -84,6 +89,7 @@ class Model(eqx.Module):
         momentum_flux_weight=None,
         ball_mode: BallMode | None = None,
         floor: AbstractFloor | None = None,
+        series: SeriesKelvinVoigt | None = None,
     ):
         if blocked_force is not None and momentum_flux_weight is not None:
             raise ValueError("give blocked_force or momentum_flux_weight, not both")
@@ -97,6 +103,7 @@ class Model(eqx.Module):
         self.momentum_flux_weight = momentum_flux_weight
         self.max_deflection_ratio = max_deflection_ratio
         self.ball_mode = ball_mode
+        self.series = series
         self.floor = Rigid() if floor is None else floor
 
     def __check_init__(self):
@@ -114,6 +121,8 @@ class Model(eqx.Module):
             raise ValueError(f"stiffening={self.stiffening!r} must be None or a CubicStiffening")
         if self.ball_mode is not None and not isinstance(self.ball_mode, BallMode):
             raise ValueError(f"ball_mode={self.ball_mode!r} must be None or an rbjax.BallMode")
+        if self.series is not None and not isinstance(self.series, SeriesKelvinVoigt):
+            raise ValueError(f"series={self.series!r} must be None or an rbjax.SeriesKelvinVoigt")
         if not isinstance(self.floor, AbstractFloor):
             raise ValueError(f"floor={self.floor!r} is not a floor; valid: an rbjax.terms.floors.kinds.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)")
         check_range("max_deflection_ratio", self.max_deflection_ratio, lower=0.0, upper=float("inf"), upper_open=False)
@@ -129,27 +138,43 @@ class Model(eqx.Module):
 
     @property
     def name(self) -> str:
-        """``paper`` or the damping laws' names joined by ``+``, with ``+stiffening`` if present."""
+        """``paper`` or the damping laws' names joined by ``+``, then ``+stiffening``,
+        ``+ball-mode`` and ``+series-kelvin-voigt`` for the terms present."""
         base = "+".join(d.name for d in self.damping) or "paper"
-        return base + ("+stiffening" if self.stiffening is not None else "") + ("+ball-mode" if self.ball_mode is not None else "")
+        terms = (self.stiffening, self.ball_mode, self.series)
+        return base + "".join(f"+{_TERM_NAMES[i]}" for i, t in enumerate(terms) if t is not None)
 
     @property
     def num_damping_states(self) -> int:
         return sum(d.num_states for d in self.damping)
 
     @property
+    def _num_mode_states(self) -> int:
+        return BallMode.num_states if self.ball_mode is not None else 0
+
+    @property
+    def _num_series_states(self) -> int:
+        return SeriesKelvinVoigt.num_states if self.series is not None else 0
+
+    @property
     def num_internal_states(self) -> int:
-        """States beyond (δ, δ̇): the damping laws', then the ball mode's (w, ẇ), then the floor's."""
-        return self.num_damping_states + (BallMode.num_states if self.ball_mode is not None else 0) + self.floor.num_states
+        """States beyond (δ, δ̇): the damping laws', the ball mode's (w, ẇ), the series
+        element's (w), then the floor's."""
+        return self.num_damping_states + self._num_mode_states + self._num_series_states + self.floor.num_states
 
     def ball_mode_states(self, internal):
         """(w, ẇ) of the ball mode from the internal-state vector (empty without one)."""
         i = self.num_damping_states
-        return internal[i : i + (BallMode.num_states if self.ball_mode is not None else 0)]
+        return internal[i : i + self._num_mode_states]
+
+    def series_states(self, internal):
+        """(w,) of the series element from the internal-state vector (empty without one)."""
+        i = self.num_damping_states + self._num_mode_states
+        return internal[i : i + self._num_series_states]
 
     def floor_states(self, internal):
         """The floor's states from the internal-state vector."""
-        i = self.num_damping_states + (BallMode.num_states if self.ball_mode is not None else 0)
+        i = self.num_damping_states + self._num_mode_states + self._num_series_states
         return internal[i : i + self.floor.num_states]
 
     def split_internal(self, internal) -> list:
@@ -158,6 +183,16 @@ class Model(eqx.Module):
         for d in self.damping:
             out.append(internal[i : i + d.num_states])
             i += d.num_states
+        return out
+
+    def term_starts(self, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
+        """Start values for fitting the parameters of the damping laws, the ball mode and the
+        series element (each term's ``start`` from the shell's stiffness, the ball's mass and
+        the measured restitution, contact time and impact speed)."""
+        out: dict = {}
+        for term in (*self.damping, self.ball_mode, self.series):
+            if term is not None:
+                out.update(type(term).start(stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s))
         return out
 
     @property
@@ -172,6 +207,8 @@ class Model(eqx.Module):
         that solve only δ = X (quadrature, phase angle, sampled histories) give it as their reason."""
         if self.ball_mode is not None:
             return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
+        if self.series is not None:
+            return "the series element adds a state of its own (the shell is pressed by δ = X + w)"
         if not self.floor.rigid:
             return f"the floor ({self.floor.name}) moves under the force (δ = X − u)"
         return None
@@ -181,6 +218,8 @@ class Model(eqx.Module):
         """True if the shell is pressed by more than the ball's rigid motion (``coupling``)."""
         return self.coupling is not None
 
+
+_TERM_NAMES = ("stiffening", BallMode.name, SeriesKelvinVoigt.name)
 
 _SOLVERS = {
     "euler": dfx.Euler,
@@ -247,10 +286,10 @@ class Solver(eqx.Module):
         return optx.Newton(rtol=1e-12, atol=1e-13)
 
 
-def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False) -> Model:
+def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False, series: bool = False) -> Model:
     """``base`` with every damping law of ``laws`` (default: all registered), the stiffening
-    and (with ``ball_mode``) the ball mode present but switched off (their ``off()`` values,
-    β = 0, μ = 0).
+    and (with ``ball_mode``, ``series``) the ball mode and the series element present but
+    switched off (their ``off()`` values, β = 0, μ = 0, C = 0).
 
     Models that differ in which of these terms are on share the superset's structure, so one
     compiled program serves them all; the terms a candidate leaves off are held at their
@@ -264,7 +303,8 @@ def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: b
     damping = base.damping + tuple(law.off() for law in laws if law not in have)
     stiff = base.stiffening if base.stiffening is not None else (CubicStiffening(0.0) if stiffening else None)
     mode = base.ball_mode if base.ball_mode is not None else (BallMode.off() if ball_mode else None)
+    element = base.series if base.series is not None else (SeriesKelvinVoigt.off() if series else None)
     return Model(
         gas=base.gas, damping=damping, stiffening=stiff, max_deflection_ratio=base.max_deflection_ratio,
-        momentum_flux_weight=base.momentum_flux_weight, ball_mode=mode, floor=base.floor,
+        momentum_flux_weight=base.momentum_flux_weight, ball_mode=mode, series=element, floor=base.floor,
     )

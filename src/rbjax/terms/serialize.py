@@ -5,6 +5,7 @@
                "damping": null | {"name": "zener", "stiffness_ratio": .., "relaxation_time_s": ..},
                "stiffening": null | {"beta": ..},
                "ball_mode": null | {"mode_mass_ratio": .., "mode_frequency_Hz": .., "mode_loss_factor": ..},
+               "series": null | {"series_compliance_m_per_N": .., "series_time_constant_s": ..},
                "floor": {"name": "rigid"} | {"name": "infinite-plate", "plate_thickness_m": .., ...}}}
 
 A fit's JSON output carries these two keys, so ``rbjax simulate --params FIT.json`` predicts
@@ -28,6 +29,7 @@ from .damping import DAMPING_MODELS
 from .floors.kinds import FLOOR_MODELS
 from .forces import CubicStiffening
 from .model import Model
+from .series_kelvin_voigt import SeriesKelvinVoigt
 
 
 def _fields(module) -> dict:
@@ -84,6 +86,8 @@ def model_to_dict(model: Model) -> dict:
     out.update({"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w})
     out.update({"max_deflection_ratio": as_float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
     out["ball_mode"] = None if model.ball_mode is None else _fields(model.ball_mode)
+    if model.series is not None:  # absent, not null, without one: files written before it stay valid
+        out["series"] = _fields(model.series)
     out["floor"] = {"name": model.floor.name, **_fields(model.floor)}
     return out
 
@@ -105,6 +109,9 @@ def model_from_dict(d: dict) -> Model:
     ball_mode = d.get("ball_mode")
     if ball_mode is not None:
         ball_mode = _construct("ball_mode", BallMode, _table("ball_mode", ball_mode))
+    series = d.get("series")
+    if series is not None:
+        series = _construct("series", SeriesKelvinVoigt, _table("series", series))
     floor = dict(_table("floor", d.get("floor", {"name": "rigid"})))
     floor_name = floor.pop("name", None)
     if floor_name not in FLOOR_MODELS:
@@ -118,6 +125,7 @@ def model_from_dict(d: dict) -> Model:
         max_deflection_ratio=float(d.get("max_deflection_ratio", 2.0)),
         momentum_flux_weight=None if weight is None else float(weight),
         ball_mode=ball_mode,
+        series=series,
         floor=_construct(f"floor {floor_name!r}", FLOOR_MODELS[floor_name], floor),
     )
 
