@@ -94,7 +94,7 @@ def test_jacobian_matches_finite_differences_of_the_reference():
         ref = reference_impact(1.0, BALL.replace(youngs_Pa=th[0]), damping=rbjax.Zener(law.stiffness_ratio, th[1]))
         return np.array([ref.contact_time_s, ref.peak_force_N, ref.restitution])
 
-    jac = np.asarray(jax.jacfwd(ours)(theta))
+    jac = np.asarray(jax.jit(jax.jacfwd(ours))(theta))
     steps = 1e-4 * theta
     fd = np.stack([(reference(theta + e) - reference(theta - e)) / (2 * e[j]) for j, e in enumerate(np.diag(steps))], axis=1)
     assert np.allclose(jac, fd, rtol=2e-5, atol=0.0), (jac, fd)

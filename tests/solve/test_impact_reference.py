@@ -172,7 +172,7 @@ def reverse_gradients():
     """rows: contact_time_s, peak_force_N; columns: d/dE, d/dM (jax.grad, reverse mode)."""
     rows = []
     for i in range(2):
-        g = jax.grad(lambda e, m: _outputs(e, m)[i], argnums=(0, 1))(E0, M0)
+        g = jax.jit(jax.grad(lambda e, m: _outputs(e, m)[i], argnums=(0, 1)))(E0, M0)
         rows.append([float(x) for x in g])
     return np.array(rows)
 
@@ -197,6 +197,6 @@ def test_grad_matches_reference_finite_differences(reverse_gradients, finite_dif
 
 def test_jacfwd_forward_adjoint_equals_grad(reverse_gradients):
     solver = rbjax.Solver(adjoint="forward")
-    jac = jax.jacfwd(lambda e, m: _outputs(e, m, solver), argnums=(0, 1))(E0, M0)
+    jac = jax.jit(jax.jacfwd(lambda e, m: _outputs(e, m, solver), argnums=(0, 1)))(E0, M0)
     forward = np.stack([np.asarray(j) for j in jac], axis=1)
     np.testing.assert_allclose(forward, reverse_gradients, rtol=1e-8)

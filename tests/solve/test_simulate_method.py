@@ -162,14 +162,14 @@ def _elasticities(jac, values):
 
 def test_jacfwd_through_auto_matches_finite_differences(fd_jacobian):
     fd, values = fd_jacobian
-    jac = jax.jacfwd(_outputs)(jnp.asarray(THETA))  # no Solver(adjoint="forward") needed
+    jac = jax.jit(jax.jacfwd(_outputs))(jnp.asarray(THETA))  # no Solver(adjoint="forward") needed
     assert np.max(np.abs(_elasticities(fd, values))) > 0.1
     np.testing.assert_allclose(_elasticities(jac, values), _elasticities(fd, values), rtol=0, atol=1e-6)
 
 
 def test_grad_through_auto_matches_finite_differences(fd_jacobian):
     fd, values = fd_jacobian
-    grad = jax.grad(lambda th: _outputs(th)[0])(jnp.asarray(THETA))
+    grad = jax.jit(jax.grad(lambda th: _outputs(th)[0]))(jnp.asarray(THETA))
     np.testing.assert_allclose(np.asarray(grad) * THETA / values[0], fd[0] * THETA / values[0], rtol=0, atol=1e-6)
 
 

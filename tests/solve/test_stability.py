@@ -234,7 +234,7 @@ def test_reverse_gradient_tiny_height():
         res = rbjax.simulate(1e-3, BALL.replace(youngs_Pa=e, mass_kg=m))
         return jnp.stack([res.contact_time_s, res.peak_force_N])
 
-    grad = np.array([float(g) for g in jax.grad(lambda e, m: outputs(e, m)[0], argnums=(0, 1))(e0, m0)])
+    grad = np.array([float(g) for g in jax.jit(jax.grad(lambda e, m: outputs(e, m)[0], argnums=(0, 1)))(e0, m0)])
 
     def ref(e, m):
         r = reference_impact(1e-3, BALL.replace(youngs_Pa=e, mass_kg=m))

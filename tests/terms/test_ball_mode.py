@@ -158,7 +158,7 @@ def reference_fd():
 
 
 def test_jacfwd_of_contact_time_matches_finite_differences(reference_fd):
-    g = np.asarray(jax.jacfwd(lambda t: _grad_outputs(t, rbjax.Solver(adjoint="forward")))(jnp.asarray(GRAD[1:])))
+    g = np.asarray(jax.jit(jax.jacfwd(lambda t: _grad_outputs(t, rbjax.Solver(adjoint="forward"))))(jnp.asarray(GRAD[1:])))
     assert np.all(np.isfinite(g)) and np.all(g != 0.0)
     np.testing.assert_allclose(g, reference_fd[0], rtol=1e-4)
 
@@ -175,7 +175,7 @@ def test_grad_of_contact_time_matches_finite_differences(reference_fd):
     # a working one passes it, so strict xfail reports both (README: "an expected-failure test
     # keeps it visible").
     try:
-        g = np.asarray(jax.grad(_grad_outputs)(jnp.asarray(GRAD[1:])))
+        g = np.asarray(jax.jit(jax.grad(_grad_outputs))(jnp.asarray(GRAD[1:])))
     except jax.errors.JaxRuntimeError as err:
         if "linear solver received non-finite" in str(err):
             raise ReverseModeNaN from err
@@ -184,7 +184,7 @@ def test_grad_of_contact_time_matches_finite_differences(reference_fd):
 
 
 def test_jacfwd_of_a_history_sample_matches_finite_differences(reference_fd):
-    j = np.asarray(jax.jacfwd(_sample)(jnp.asarray(GRAD[1:])))
+    j = np.asarray(jax.jit(jax.jacfwd(_sample))(jnp.asarray(GRAD[1:])))
     assert np.all(np.isfinite(j)) and np.all(j != 0.0)
     np.testing.assert_allclose(j, reference_fd[1], rtol=1e-4)
 

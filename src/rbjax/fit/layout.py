@@ -26,9 +26,9 @@ from ..terms.parameters import declaration, parameter_table, replace, to_vector
 from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 
 #: The fitted models that model selection compares by default: the paper's elastic model, one
-#: damping law each, and Hunt–Crossley with the ball's own mode (the model that meets the
-#: held-out accuracy bars on the bundled recordings; selection, not this list, decides whether
-#: it is worth its parameters). Any registered damping law's name is a model name too. Append
+#: damping law each, Hunt–Crossley with the ball's own mode (the model that meets the held-out
+#: accuracy bars on the bundled recordings; selection, not this list, decides whether it is
+#: worth its parameters) and with the mode's massless limit (one parameter fewer). Any registered damping law's name is a model name too. Append
 #: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²), and then
 #: ``+ball-mode`` for one mode of the ball in series with the shell (``rbjax.BallMode``:
 #: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``, and then

@@ -1,6 +1,6 @@
 """The fitted values read in physical terms, for the result's notes: the ball mode as the mass,
-spring and damper it stands for, the series element as its spring and damper, and the parameters that ended on a bound of their fit range
-(:data:`rbjax.fit.layout.FIT_RANGES`)."""
+spring and damper it stands for, the series element as its spring and damper, and the
+parameters that ended on a bound of their fit range (:data:`rbjax.fit.layout.FIT_RANGES`)."""
 
 from __future__ import annotations
 
