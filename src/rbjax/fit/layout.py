@@ -88,7 +88,7 @@ class ModelTerms(NamedTuple):
     laws: tuple[type[AbstractDamping], ...]
     stiffening: bool
     ball_mode: bool
-    series: bool = False
+    series: bool
 
 
 def parse_model_terms(name: str) -> ModelTerms:

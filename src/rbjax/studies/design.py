@@ -35,7 +35,7 @@ import numpy as np
 
 from .._progress import progress as say
 from .._validate import as_float, check_choice
-from ..fit.layout import fitted_parameter_names, model_from_name, parse_model_terms
+from ..fit.layout import FIT_RANGES, fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
 from ..solve.inputs import as_arrays
 from ..solve.simulate import simulate
@@ -55,7 +55,8 @@ GEOMETRIES = {
     "jis": JIS_RUBBER_BALL,
     "iso": Ball(radius_m=0.090, wall_m=0.030, mass_kg=2.5, youngs_Pa=1.6e6, poisson=0.5),
 }
-#: The search ranges of a design (interval transforms): wide enough for any conforming ball.
+#: The search ranges of a design (interval transforms): wide enough for any conforming ball;
+#: the ball mode's and the series element's are a fit's (``rbjax.fit.layout.FIT_RANGES``).
 DESIGN_RANGES = {
     "youngs_Pa": (0.5e6, 8.0e6),
     "damping_Ns_per_m": (0.0, 400.0),
@@ -63,11 +64,7 @@ DESIGN_RANGES = {
     "stiffness_ratio": (0.0, 3.0),
     "relaxation_time_s": (1e-4, 0.05),
     "beta": (0.0, 2.0),
-    "mode_mass_ratio": (0.0, 100.0),
-    "mode_frequency_Hz": (20.0, 2500.0),
-    "mode_loss_factor": (0.0, 4.0),
-    "series_compliance_m_per_N": (0.0, 2e-5),
-    "series_time_constant_s": (5e-4, 0.1),
+    **FIT_RANGES,
 }
 #: The wall's range with ``vary_wall``: the mass follows it at the ball's density and is checked.
 WALL_RANGE_M = (0.020, 0.045)
