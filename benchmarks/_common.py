@@ -86,7 +86,14 @@ def block(x):
     return jax.block_until_ready(x)
 
 
-def time_call(fn, *, min_repeats: int = 3, min_time_s: float = 0.3, max_repeats: int = 15, max_time_s: float = 20.0) -> dict:
+def time_call(
+    fn,
+    *,
+    min_repeats: int = 3,
+    min_time_s: float = 0.3,
+    max_repeats: int = 15,
+    max_time_s: float = 20.0,
+) -> dict:
     """First call (compile + run) and the median of later calls, in seconds.
 
     Repeats at least ``min_repeats`` times and until ``min_time_s`` of repeats have run (at most
@@ -103,7 +110,14 @@ def time_call(fn, *, min_repeats: int = 3, min_time_s: float = 0.3, max_repeats:
         block(fn())
         times.append(time.perf_counter() - t0)
     med = statistics.median(times)
-    return {"first_s": first, "median_s": med, "min_s": min(times), "compile_s": max(first - med, 0.0), "repeats": len(times), "out": out}
+    return {
+        "first_s": first,
+        "median_s": med,
+        "min_s": min(times),
+        "compile_s": max(first - med, 0.0),
+        "repeats": len(times),
+        "out": out,
+    }
 
 
 # ------------------------------------------------------------------------------------------------
@@ -131,7 +145,9 @@ class SweepSolver(Solver):
         return self.step_array if self.method in FIXED_STEP_METHODS else None
 
 
-def sweep_solver(method: str, *, rtol=1e-9, atol=1e-12, step_s=1e-5, max_steps=4096, adjoint="reverse") -> SweepSolver:
+def sweep_solver(
+    method: str, *, rtol=1e-9, atol=1e-12, step_s=1e-5, max_steps=4096, adjoint="reverse"
+) -> SweepSolver:
     fixed = method in FIXED_STEP_METHODS
     return SweepSolver(
         method=method,
@@ -148,7 +164,9 @@ def sweep_solver(method: str, *, rtol=1e-9, atol=1e-12, step_s=1e-5, max_steps=4
 # scipy baseline: the lean loop the throughput targets are measured against
 
 
-def scipy_impact_lean(height_m: float, ball, *, rtol: float = 1e-10, atol: float = 1e-13, gas: bool = True) -> float:
+def scipy_impact_lean(
+    height_m: float, ball, *, rtol: float = 1e-10, atol: float = 1e-13, gas: bool = True
+) -> float:
     """Contact time of one elastic impact by scipy DOP853: two phases with one terminal event
     each (δ̇ = 0, then δ = 0), nothing else saved (no dense output, no extra events).
 
@@ -157,7 +175,9 @@ def scipy_impact_lean(height_m: float, ball, *, rtol: float = 1e-10, atol: float
     """
     from scipy.integrate import solve_ivp
 
-    r, h, m, e, nu = (float(getattr(ball, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson"))
+    r, h, m, e, nu = (
+        float(getattr(ball, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+    )
     k = 4.0 * e * h**2 / (r * math.sqrt(3.0 * (1.0 - nu**2)))
     pa, gamma = 101_325.0, 1.4
     flux = m / (2.0 * r)
@@ -185,10 +205,20 @@ def scipy_impact_lean(height_m: float, ball, *, rtol: float = 1e-10, atol: float
     defl.terminal, defl.direction = True, -1.0
     v0 = math.sqrt(2.0 * G * height_m)
     t_span = 100.0 * math.sqrt(m / k)
-    s1 = solve_ivp(compression, (0.0, t_span), [0.0, v0], method="DOP853", rtol=rtol, atol=atol, events=vel)
+    s1 = solve_ivp(
+        compression, (0.0, t_span), [0.0, v0], method="DOP853", rtol=rtol, atol=atol, events=vel
+    )
     t_max = s1.t_events[0][0]
     y_max = [s1.y_events[0][0][0], 0.0]
-    s2 = solve_ivp(restitution, (t_max, t_max + t_span), y_max, method="DOP853", rtol=rtol, atol=atol, events=defl)
+    s2 = solve_ivp(
+        restitution,
+        (t_max, t_max + t_span),
+        y_max,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        events=defl,
+    )
     return float(s2.t_events[0][0])
 
 
@@ -205,7 +235,10 @@ def quadrature_reference(heights_m, ball=None, *, gas="adiabatic", n_nodes: int 
     ball = rbjax.JIS_RUBBER_BALL if ball is None else ball
     _, h, b, m = broadcast_inputs(np.asarray(heights_m, dtype=float), ball, make_model(gas=gas))
     out = impact_quadrature_batch(h, b, m, n_nodes)
-    return {k: np.asarray(getattr(out, k)) for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m", "status")}
+    return {
+        k: np.asarray(getattr(out, k))
+        for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m", "status")
+    }
 
 
 # ------------------------------------------------------------------------------------------------
@@ -256,5 +289,7 @@ def parse_args(description: str):
     import argparse
 
     p = argparse.ArgumentParser(description=description)
-    p.add_argument("--quick", action="store_true", help="a smoke run: fewer points, small batches (minutes)")
+    p.add_argument(
+        "--quick", action="store_true", help="a smoke run: fewer points, small batches (minutes)"
+    )
     return p.parse_args()

@@ -27,21 +27,49 @@ def main() -> None:
     for name in ("hunt-crossley", "hunt-crossley+ball-mode"):
         p = fitted[name]["parameters"]
         ball = rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=p["youngs_Pa"], poisson=p["poisson"])
-        mode = rbjax.BallMode(p["mode_mass_ratio"], p["mode_frequency_Hz"], p["mode_loss_factor"]) if "mode_mass_ratio" in p else None
-        model = rbjax.Model(blocked_force="momentum", damping=rbjax.HuntCrossley(p["alpha_s_per_m"]), ball_mode=mode)
+        mode = (
+            rbjax.BallMode(p["mode_mass_ratio"], p["mode_frequency_Hz"], p["mode_loss_factor"])
+            if "mode_mass_ratio" in p
+            else None
+        )
+        model = rbjax.Model(
+            blocked_force="momentum", damping=rbjax.HuntCrossley(p["alpha_s_per_m"]), ball_mode=mode
+        )
         growth = model_growth(HEIGHTS_M, ball, model, label=name)
         diff = np.asarray(growth.slope_dB) - np.asarray(data.slope_dB)
-        res = rbjax.simulate(1.0, ball, damping=model.damping, blocked_force="momentum", ball_mode=mode)
+        res = rbjax.simulate(
+            1.0, ball, damping=model.damping, blocked_force="momentum", ball_mode=mode
+        )
         lfe_1m = model_lfe_dB(np.array([1.0]), ball, model)[0]
-        check = check_conformance(lfe_1m, contact_time_s=float(res.contact_time_s), restitution=float(res.restitution), mass_kg=2.5, height_m=1.0)
-        out[name] = {"growth_dB": np.asarray(growth.slope_dB).tolist(), "minus_recordings_dB": diff.tolist(), "max_abs_diff_dB": float(np.max(np.abs(diff))),
-                     "conformance_1m": check.to_dict()}
-        print(name, "growth", np.round(growth.slope_dB, 2), "Δ", np.round(diff, 2), "max |Δ|", round(float(np.max(np.abs(diff))), 2))
+        check = check_conformance(
+            lfe_1m,
+            contact_time_s=float(res.contact_time_s),
+            restitution=float(res.restitution),
+            mass_kg=2.5,
+            height_m=1.0,
+        )
+        out[name] = {
+            "growth_dB": np.asarray(growth.slope_dB).tolist(),
+            "minus_recordings_dB": diff.tolist(),
+            "max_abs_diff_dB": float(np.max(np.abs(diff))),
+            "conformance_1m": check.to_dict(),
+        }
+        print(
+            name,
+            "growth",
+            np.round(growth.slope_dB, 2),
+            "Δ",
+            np.round(diff, 2),
+            "max |Δ|",
+            round(float(np.max(np.abs(diff))), 2),
+        )
         print(check)
     heights, levels = recording_lfe_dB()
     at_1m = np.asarray(levels)[np.isclose(np.asarray(heights), 1.0, atol=0.02)]
-    out["recordings"] = {"growth_dB": np.asarray(data.slope_dB).tolist(),
-                         "conformance_1m_per_drop": [check_conformance(row).to_dict() for row in at_1m]}
+    out["recordings"] = {
+        "growth_dB": np.asarray(data.slope_dB).tolist(),
+        "conformance_1m_per_drop": [check_conformance(row).to_dict() for row in at_1m],
+    }
     for row in at_1m:
         print("recording at 1 m:", check_conformance(row))
     print(f"wrote {write_json('ball_mode_growth', out)}")

@@ -38,16 +38,29 @@ def main() -> None:
     print(selection.table())
     print(f"recommended: {rec.label} ({time.perf_counter() - t0:.1f} s)")
 
-    held = fit(data, rec.model_name, blocked_force=rec.blocked_force, fit_heights=FIT_HEIGHTS, progress=False)
+    held = fit(
+        data,
+        rec.model_name,
+        blocked_force=rec.blocked_force,
+        fit_heights=FIT_HEIGHTS,
+        progress=False,
+    )
     rows = []
     print(f"\n{rec.label} fitted to {FIT_HEIGHTS} m ({held.message}):")
     print("h (m) | Δt_c (%) | Δpeak (%) | " + " | ".join(f"ΔL {b}" for b in OCTAVE_BANDS) + " (dB)")
     for r in held_out_rows(held, PREDICT_HEIGHTS):
         lfe = np.asarray(r.lfe_octave_dB)
-        met = {"contact_time": abs(r.contact_time_pct) <= BARS["contact_time_pct"], "peak_force": abs(r.peak_force_pct) <= BARS["peak_force_pct"],
-               "lfe_31.5-250": bool(np.all(np.abs(lfe[:4]) <= BARS["lfe_31.5-250_dB"]))}
+        met = {
+            "contact_time": abs(r.contact_time_pct) <= BARS["contact_time_pct"],
+            "peak_force": abs(r.peak_force_pct) <= BARS["peak_force_pct"],
+            "lfe_31.5-250": bool(np.all(np.abs(lfe[:4]) <= BARS["lfe_31.5-250_dB"])),
+        }
         rows.append({**r.to_dict(), "bars_met": met})
-        print(f"{r.height_m:.1f} | {r.contact_time_pct:+.2f} | {r.peak_force_pct:+.2f} | " + " | ".join(f"{x:+.2f}" for x in lfe) + f"   met: {met}")
+        print(
+            f"{r.height_m:.1f} | {r.contact_time_pct:+.2f} | {r.peak_force_pct:+.2f} | "
+            + " | ".join(f"{x:+.2f}" for x in lfe)
+            + f"   met: {met}"
+        )
 
     t1 = time.perf_counter()
     sampled = fit(data, rec.model_name, blocked_force=rec.blocked_force, progress=False)
@@ -56,23 +69,39 @@ def main() -> None:
     ode = fit(data, rec.model_name, blocked_force=rec.blocked_force, method="ode", progress=False)
     t_ode = time.perf_counter() - t1
     compare = {}
-    print(f"\nall heights, sampled path ({t_sampled:.1f} s, rms {sampled.residual_rms_N:.3f} N) vs ODE path ({t_ode:.1f} s, rms {ode.residual_rms_N:.3f} N):")
+    print(
+        f"\nall heights, sampled path ({t_sampled:.1f} s, rms {sampled.residual_rms_N:.3f} N) vs ODE path ({t_ode:.1f} s, rms {ode.residual_rms_N:.3f} N):"
+    )
     for name, est in sampled.parameters.items():
         if est.fixed:
             continue
         other = ode.parameters[name].value
         within = abs(est.value - other) <= 2 * est.std
-        compare[name] = {"samples": est.value, "std": est.std, "ode": other, "difference_in_sigma": abs(est.value - other) / est.std if est.std else None,
-                         "within_2_sigma": within}
-        print(f"  {name:22s} {est.value:.6g} ± {est.std:.2g} | ODE {other:.6g} | {abs(est.value - other) / est.std:.3f} σ {'ok' if within else 'MISSED'}")
-    write_json("default_fit", {
-        "machine": finish_machine_info(info),
-        "recommended": rec.label,
-        "selection_s": selection.elapsed_s,
-        "held_out": {"fit_heights_m": FIT_HEIGHTS, "rows": rows, "message": held.message},
-        "sampled_vs_ode": {"parameters": compare, "rms_N": [sampled.residual_rms_N, ode.residual_rms_N], "time_s": [t_sampled, t_ode],
-                           "messages": [sampled.message, ode.message]},
-    })
+        compare[name] = {
+            "samples": est.value,
+            "std": est.std,
+            "ode": other,
+            "difference_in_sigma": abs(est.value - other) / est.std if est.std else None,
+            "within_2_sigma": within,
+        }
+        print(
+            f"  {name:22s} {est.value:.6g} ± {est.std:.2g} | ODE {other:.6g} | {abs(est.value - other) / est.std:.3f} σ {'ok' if within else 'MISSED'}"
+        )
+    write_json(
+        "default_fit",
+        {
+            "machine": finish_machine_info(info),
+            "recommended": rec.label,
+            "selection_s": selection.elapsed_s,
+            "held_out": {"fit_heights_m": FIT_HEIGHTS, "rows": rows, "message": held.message},
+            "sampled_vs_ode": {
+                "parameters": compare,
+                "rms_N": [sampled.residual_rms_N, ode.residual_rms_N],
+                "time_s": [t_sampled, t_ode],
+                "messages": [sampled.message, ode.message],
+            },
+        },
+    )
 
 
 if __name__ == "__main__":

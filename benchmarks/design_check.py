@@ -22,7 +22,9 @@ CHECK = 0.05
 def main() -> None:
     info = machine_info()
     rows = []
-    print(f"{'model':<14} {'geom':<5} {'smallest':>9} {'blocking':<16} {'|opt − check|':>13} {'32-start best':>13} {'bar':>5}  parameters   time (8 / 32 starts)")
+    print(
+        f"{'model':<14} {'geom':<5} {'smallest':>9} {'blocking':<16} {'|opt − check|':>13} {'32-start best':>13} {'bar':>5}  parameters   time (8 / 32 starts)"
+    )
     for model, geometry in CASES:
         t0 = time.perf_counter()
         result = design(model, geometry, n_starts=8)
@@ -30,15 +32,32 @@ def main() -> None:
         t0 = time.perf_counter()
         wide = design(model, geometry, n_starts=32, seed=1)
         t32 = time.perf_counter() - t0
-        agreement = max(abs(result.optimiser_margins[k] - result.normalised_margins[k]) for k in ITEMS)
+        agreement = max(
+            abs(result.optimiser_margins[k] - result.normalised_margins[k]) for k in ITEMS
+        )
         best32 = max(wide.start_margins)
         ok = best32 <= result.smallest_margin + CHECK and agreement < 1e-6
-        rows.append({"model": model, "geometry": geometry, "result": result.to_dict(), "optimiser_vs_check": agreement,
-                     "best_of_32_starts": best32, "bar_met": ok, "time_8_starts_s": t8, "time_32_starts_s": t32})
+        rows.append(
+            {
+                "model": model,
+                "geometry": geometry,
+                "result": result.to_dict(),
+                "optimiser_vs_check": agreement,
+                "best_of_32_starts": best32,
+                "bar_met": ok,
+                "time_8_starts_s": t8,
+                "time_32_starts_s": t32,
+            }
+        )
         params = ", ".join(f"{k}={v:.4g}" for k, v in result.parameters.items())
-        print(f"{model:<14} {geometry:<5} {result.smallest_margin:>+9.3f} {result.blocking:<16} {agreement:>13.1e} {best32:>+13.3f} {'met' if ok else 'MISS':>5}  {params}   {t8:.0f} / {t32:.0f} s")
+        print(
+            f"{model:<14} {geometry:<5} {result.smallest_margin:>+9.3f} {result.blocking:<16} {agreement:>13.1e} {best32:>+13.3f} {'met' if ok else 'MISS':>5}  {params}   {t8:.0f} / {t32:.0f} s"
+        )
         print(f"    {result.verdict()}")
-    path = write_json("design_check", {"machine": finish_machine_info(info), "check_half_widths": CHECK, "cases": rows})
+    path = write_json(
+        "design_check",
+        {"machine": finish_machine_info(info), "check_half_widths": CHECK, "cases": rows},
+    )
     print(f"wrote {path}")
 
 

@@ -33,7 +33,9 @@ HERE = Path(__file__).parent
 def timed(argv, cache_dir) -> tuple[float, int, dict]:
     env = dict(os.environ, RBJAX_CACHE_DIR=str(cache_dir))
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "rbjax.cli", *argv], env=env, capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "rbjax.cli", *argv], env=env, capture_output=True, text=True
+    )
     elapsed = time.perf_counter() - t0
     try:
         out = json.loads(proc.stdout)
@@ -46,9 +48,22 @@ def _selection_summary(out: dict) -> dict:
     sel = out.get("selection")
     if not sel:
         return {}
-    keys = ("model_name", "blocked_force", "n_physical", "converged", "residual_rms_N", "cv_history_error_pct", "cv_history_error_se_pct",
-            "cv_mean_abs_contact_time_pct", "cv_mean_abs_peak_force_pct", "cv_mean_abs_lfe_octave_dB")
-    return {"recommended": sel["recommended"], "candidates": [{k: c[k] for k in keys} for c in sel["candidates"]]}
+    keys = (
+        "model_name",
+        "blocked_force",
+        "n_physical",
+        "converged",
+        "residual_rms_N",
+        "cv_history_error_pct",
+        "cv_history_error_se_pct",
+        "cv_mean_abs_contact_time_pct",
+        "cv_mean_abs_peak_force_pct",
+        "cv_mean_abs_lfe_octave_dB",
+    )
+    return {
+        "recommended": sel["recommended"],
+        "candidates": [{k: c[k] for k in keys} for c in sel["candidates"]],
+    }
 
 
 def selection_markdown(sel: dict) -> str:
@@ -61,16 +76,49 @@ def selection_markdown(sel: dict) -> str:
     rec = (sel["recommended"]["model_name"], sel["recommended"]["blocked_force"])
     for c in sel["candidates"]:
         bold = (c["model_name"], c["blocked_force"]) == rec
-        name = [f"**{c['model_name']}**", f"**{c['blocked_force']}**"] if bold else [c["model_name"], c["blocked_force"]]
+        name = (
+            [f"**{c['model_name']}**", f"**{c['blocked_force']}**"]
+            if bold
+            else [c["model_name"], c["blocked_force"]]
+        )
         err = f"{c['cv_history_error_pct']:.2f} ± {c['cv_history_error_se_pct']:.2f}"
-        lines.append("| " + " | ".join([*name, str(c["n_physical"]), f"{c['residual_rms_N']:.1f}", f"**{err}**" if bold else err,
-                                          f"{c['cv_mean_abs_contact_time_pct']:.2f}", f"{c['cv_mean_abs_peak_force_pct']:.2f}",
-                                          *(f"{x:.2f}" for x in c["cv_mean_abs_lfe_octave_dB"])]) + " |")
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    *name,
+                    str(c["n_physical"]),
+                    f"{c['residual_rms_N']:.1f}",
+                    f"**{err}**" if bold else err,
+                    f"{c['cv_mean_abs_contact_time_pct']:.2f}",
+                    f"{c['cv_mean_abs_peak_force_pct']:.2f}",
+                    *(f"{x:.2f}" for x in c["cv_mean_abs_lfe_octave_dB"]),
+                ]
+            )
+            + " |"
+        )
     base = sel["baseline_paper_unfitted"]
     mean = lambda key: sum(abs(r[key]) for r in base) / len(base)  # noqa: E731
-    lfe = [sum(abs(r["lfe_octave_dB"][i]) for r in base) / len(base) for i in range(len(base[0]["lfe_octave_dB"]))]
-    lines.append("| " + " | ".join(["paper, unfitted", "paper", "0", "—", f"{mean('history_error_pct'):.2f}", f"{mean('contact_time_pct'):.2f}",
-                                      f"{mean('peak_force_pct'):.2f}", *(f"{x:.2f}" for x in lfe)]) + " |")
+    lfe = [
+        sum(abs(r["lfe_octave_dB"][i]) for r in base) / len(base)
+        for i in range(len(base[0]["lfe_octave_dB"]))
+    ]
+    lines.append(
+        "| "
+        + " | ".join(
+            [
+                "paper, unfitted",
+                "paper",
+                "0",
+                "—",
+                f"{mean('history_error_pct'):.2f}",
+                f"{mean('contact_time_pct'):.2f}",
+                f"{mean('peak_force_pct'):.2f}",
+                *(f"{x:.2f}" for x in lfe),
+            ]
+        )
+        + " |"
+    )
     return "\n".join(lines)
 
 
@@ -92,7 +140,9 @@ def lm_evaluation_ratio(model: str) -> dict:
 
     data = prepare_data(examples_dir())
     m = model_from_name(model, blocked_force="momentum", values={"alpha_s_per_m": 0.05})
-    problem = Problem(data, JIS_RUBBER_BALL, m, fit_solver(None), height_error=False, decimate=1, scale="noise")
+    problem = Problem(
+        data, JIS_RUBBER_BALL, m, fit_solver(None), height_error=False, decimate=1, scale="noise"
+    )
     lay = problem.layout
     theta = lay.theta(JIS_RUBBER_BALL, m, data.onset_s)
     free = np.zeros(len(lay.names), bool)
@@ -100,11 +150,21 @@ def lm_evaluation_ratio(model: str) -> dict:
     constants = lay.constant_values(JIS_RUBBER_BALL, m)
     evaluation = time_call(lambda: problem.run(theta, free, weights, constants)["r"])
     s = problem.structure
-    forward = jax.jit(lambda th: record_forces(s, th, jnp.asarray(constants), jnp.asarray(problem.arrays["heights"])))
+    forward = jax.jit(
+        lambda th: record_forces(
+            s, th, jnp.asarray(constants), jnp.asarray(problem.arrays["heights"])
+        )
+    )
     histories = time_call(lambda: forward(jnp.asarray(theta)))
-    return {"model": model, "records": int(data.n_records), "samples": int(data.n_samples), "columns": len(lay.names),
-            "evaluation_ms": 1e3 * evaluation["median_s"], "forward_ms": 1e3 * histories["median_s"],
-            "ratio": evaluation["median_s"] / histories["median_s"]}
+    return {
+        "model": model,
+        "records": int(data.n_records),
+        "samples": int(data.n_samples),
+        "columns": len(lay.names),
+        "evaluation_ms": 1e3 * evaluation["median_s"],
+        "forward_ms": 1e3 * histories["median_s"],
+        "ratio": evaluation["median_s"] / histories["median_s"],
+    }
 
 
 def scipy_anchor(model: str, rbjax_out: dict) -> dict:
@@ -125,8 +185,26 @@ def main() -> None:
     quick = "--quick" in sys.argv
     data = str(examples_dir())
     settings = {
-        "hunt-crossley+ball-mode/momentum": ["fit", data, "--model", "hunt-crossley+ball-mode", "--blocked-force", "momentum", "--json", "--quiet"],
-        "kelvin-voigt/momentum": ["fit", data, "--model", "kelvin-voigt", "--blocked-force", "momentum", "--json", "--quiet"],
+        "hunt-crossley+ball-mode/momentum": [
+            "fit",
+            data,
+            "--model",
+            "hunt-crossley+ball-mode",
+            "--blocked-force",
+            "momentum",
+            "--json",
+            "--quiet",
+        ],
+        "kelvin-voigt/momentum": [
+            "fit",
+            data,
+            "--model",
+            "kelvin-voigt",
+            "--blocked-force",
+            "momentum",
+            "--json",
+            "--quiet",
+        ],
     }
     if not quick:
         settings["full selection"] = ["fit", data, "--json", "--quiet"]
@@ -138,10 +216,25 @@ def main() -> None:
             cold, rc1, out = timed(argv, cache)
             warm, rc2, _ = timed(argv, cache)
         outs[label] = out
-        rows.append({"setting": label, "cold_s": cold, "warm_s": warm, "exit_codes": [rc1, rc2], "selection": _selection_summary(out),
-                     "recommended": (out.get("model_name"), out.get("blocked_force")), "residual_rms_N": out.get("residual_rms_N"),
-                     "message": out.get("message"), "selection_table": selection_markdown(out["selection"]) if out.get("selection") else None})
-        print(f"{label:34s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}   rms {out.get('residual_rms_N')}", flush=True)
+        rows.append(
+            {
+                "setting": label,
+                "cold_s": cold,
+                "warm_s": warm,
+                "exit_codes": [rc1, rc2],
+                "selection": _selection_summary(out),
+                "recommended": (out.get("model_name"), out.get("blocked_force")),
+                "residual_rms_N": out.get("residual_rms_N"),
+                "message": out.get("message"),
+                "selection_table": selection_markdown(out["selection"])
+                if out.get("selection")
+                else None,
+            }
+        )
+        print(
+            f"{label:34s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}   rms {out.get('residual_rms_N')}",
+            flush=True,
+        )
     anchors = []
     for model in ("kelvin-voigt", "hunt-crossley+ball-mode"):
         a = scipy_anchor(model, outs[f"{model}/momentum"])
@@ -149,15 +242,26 @@ def main() -> None:
         a["rbjax_warm_s"] = warm
         a["speedup_warm"] = a["time_s"] / warm
         anchors.append(a)
-        print(f"scipy {model:26s} {a['time_s']:7.1f} s ({a['evaluations']} evaluations + FD Jacobians), cost {a['cost']:.6g}, rms {a['rms_N']:.2f} N; "
-              f"rbjax's optimum under the same residuals: cost {a['rbjax_cost_under_scipy_residuals']:.6g}; rbjax warm {warm:.1f} s: {a['speedup_warm']:.1f}×", flush=True)
+        print(
+            f"scipy {model:26s} {a['time_s']:7.1f} s ({a['evaluations']} evaluations + FD Jacobians), cost {a['cost']:.6g}, rms {a['rms_N']:.2f} N; "
+            f"rbjax's optimum under the same residuals: cost {a['rbjax_cost_under_scipy_residuals']:.6g}; rbjax warm {warm:.1f} s: {a['speedup_warm']:.1f}×",
+            flush=True,
+        )
     ratios = [lm_evaluation_ratio(m) for m in ("hunt-crossley", "hunt-crossley+ball-mode")]
     for r in ratios:
-        print(f"one LM evaluation, {r['model']}: {r['evaluation_ms']:.1f} ms vs forward histories {r['forward_ms']:.1f} ms: {r['ratio']:.2f}×", flush=True)
+        print(
+            f"one LM evaluation, {r['model']}: {r['evaluation_ms']:.1f} ms vs forward histories {r['forward_ms']:.1f} ms: {r['ratio']:.2f}×",
+            flush=True,
+        )
     for row in rows:
         if row["selection_table"]:
             print(row["selection_table"])
-    out = {"machine": finish_machine_info(info), "rows": rows, "scipy_anchor": anchors, "lm_evaluation": ratios}
+    out = {
+        "machine": finish_machine_info(info),
+        "rows": rows,
+        "scipy_anchor": anchors,
+        "lm_evaluation": ratios,
+    }
     name = "fit_time_quick.json" if quick else "fit_time.json"
     (HERE / "results" / name).write_text(json.dumps(out, indent=2))
 

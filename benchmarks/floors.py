@@ -33,7 +33,18 @@ QUANTITIES = ("contact_time_s", "peak_force_N", "restitution")
 
 
 def five_mode_slab() -> rbjax.ModalFloor:
-    plate = simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=1.7, drive_y_m=2.3, max_frequency_Hz=400.0)
+    plate = simply_supported_plate_modes(
+        4.0,
+        5.0,
+        0.14,
+        30e9,
+        2300.0,
+        0.2,
+        0.02,
+        drive_x_m=1.7,
+        drive_y_m=2.3,
+        max_frequency_Hz=400.0,
+    )
     return rbjax.ModalFloor(plate.mass_kg[:5], plate.frequency_Hz[:5], plate.loss_factor[:5])
 
 
@@ -51,7 +62,11 @@ def floors() -> list[tuple[str, object]]:
 
 def describe(floor) -> dict:
     if isinstance(floor, rbjax.ModalFloor):
-        return {"mass_kg": list(floor.mass_kg), "frequency_Hz": list(floor.frequency_Hz), "loss_factor": list(floor.loss_factor)}
+        return {
+            "mass_kg": list(floor.mass_kg),
+            "frequency_Hz": list(floor.frequency_Hz),
+            "loss_factor": list(floor.loss_factor),
+        }
     if isinstance(floor, (rbjax.Dashpot, rbjax.InfinitePlate)):
         return {"impedance_Ns_per_m": float(floor.impedance_Ns_per_m)}
     return {}
@@ -70,9 +85,19 @@ def agreement(floor) -> dict:
 
 def throughput(floor, batch: int, method: str) -> dict:
     heights = np.linspace(0.1, 1.6, batch)
-    t = time_call(lambda: rbjax.simulate(heights, BALL, floor=floor, method=method).contact_time_s, min_repeats=3, max_time_s=20.0)
+    t = time_call(
+        lambda: rbjax.simulate(heights, BALL, floor=floor, method=method).contact_time_s,
+        min_repeats=3,
+        max_time_s=20.0,
+    )
     ok = bool(np.all(np.isfinite(np.asarray(t["out"]))))
-    return {"impacts_per_s": batch / t["median_s"], "median_s": t["median_s"], "compile_s": t["compile_s"], "repeats": t["repeats"], "all_ok": ok}
+    return {
+        "impacts_per_s": batch / t["median_s"],
+        "median_s": t["median_s"],
+        "compile_s": t["compile_s"],
+        "repeats": t["repeats"],
+        "all_ok": ok,
+    }
 
 
 def main() -> None:
@@ -86,15 +111,52 @@ def main() -> None:
             speed = throughput(floor, batch, method)
             err = agreement(floor) if method == "ode" else {}
             path = "quadrature" if method == "auto" else "ode"
-            rows.append({"floor": name, "path": path, "batch": batch, **speed, **{f"rel_err_{q}": v for q, v in err.items()}, **describe(floor)})
+            rows.append(
+                {
+                    "floor": name,
+                    "path": path,
+                    "batch": batch,
+                    **speed,
+                    **{f"rel_err_{q}": v for q, v in err.items()},
+                    **describe(floor),
+                }
+            )
             print(f"{name} ({path}): {speed['impacts_per_s']:.0f} impacts/s", flush=True)
-    headers = ["floor", "path", f"impacts/s (batch {batch})", "compile (s)", "contact time", "peak force", "restitution"]
-    print(table(headers, [
-        [r["floor"], r["path"], fmt(r["impacts_per_s"], ".0f"), fmt(r["compile_s"], ".1f"),
-         fmt(r.get("rel_err_contact_time_s"), ".1e"), fmt(r.get("rel_err_peak_force_N"), ".1e"), fmt(r.get("rel_err_restitution"), ".1e")]
-        for r in rows
-    ]))
-    path = write_json("floors", {"machine": finish_machine_info(info), "batch": batch, "check_heights_m": list(CHECK_HEIGHTS), "rows": rows})
+    headers = [
+        "floor",
+        "path",
+        f"impacts/s (batch {batch})",
+        "compile (s)",
+        "contact time",
+        "peak force",
+        "restitution",
+    ]
+    print(
+        table(
+            headers,
+            [
+                [
+                    r["floor"],
+                    r["path"],
+                    fmt(r["impacts_per_s"], ".0f"),
+                    fmt(r["compile_s"], ".1f"),
+                    fmt(r.get("rel_err_contact_time_s"), ".1e"),
+                    fmt(r.get("rel_err_peak_force_N"), ".1e"),
+                    fmt(r.get("rel_err_restitution"), ".1e"),
+                ]
+                for r in rows
+            ],
+        )
+    )
+    path = write_json(
+        "floors",
+        {
+            "machine": finish_machine_info(info),
+            "batch": batch,
+            "check_heights_m": list(CHECK_HEIGHTS),
+            "rows": rows,
+        },
+    )
     print(f"wrote {path}")
 
 

@@ -73,12 +73,28 @@ def blocked(res):
 
 
 def row(rows, workload, variant, n, timing, **extra):
-    r = {"workload": workload, "variant": variant, "batch": n, "first_s": timing["first_s"], "median_s": timing["median_s"],
-         "min_s": timing["min_s"], "compile_s": timing["compile_s"], "impacts_per_s": n / timing["median_s"], **extra}
+    r = {
+        "workload": workload,
+        "variant": variant,
+        "batch": n,
+        "first_s": timing["first_s"],
+        "median_s": timing["median_s"],
+        "min_s": timing["min_s"],
+        "compile_s": timing["compile_s"],
+        "impacts_per_s": n / timing["median_s"],
+        **extra,
+    }
     rows.append(r)
-    notes = " ".join(f"{k}={fmt(v, '.3g') if isinstance(v, float) else v}" for k, v in extra.items() if not isinstance(v, (dict, list)))
-    print(f"{workload:9s} {variant:58s} B={n:<6d} {r['impacts_per_s']:12,.0f}/s  first {timing['first_s']:6.2f} s  "
-          f"median {timing['median_s'] * 1e3:9.3f} ms  {notes}", flush=True)
+    notes = " ".join(
+        f"{k}={fmt(v, '.3g') if isinstance(v, float) else v}"
+        for k, v in extra.items()
+        if not isinstance(v, (dict, list))
+    )
+    print(
+        f"{workload:9s} {variant:58s} B={n:<6d} {r['impacts_per_s']:12,.0f}/s  first {timing['first_s']:6.2f} s  "
+        f"median {timing['median_s'] * 1e3:9.3f} ms  {notes}",
+        flush=True,
+    )
     return r
 
 
@@ -107,7 +123,9 @@ def scipy_loop(rows, quick):
         scipy_impact_lean(h, BALL)
     wall = time.perf_counter() - t0
     timing = {"first_s": wall, "median_s": wall, "min_s": wall, "compile_s": 0.0}
-    return row(rows, "scalar", "scipy solve_ivp DOP853 rtol 1e-10 (Python loop, elastic)", n, timing)
+    return row(
+        rows, "scalar", "scipy solve_ivp DOP853 rtol 1e-10 (Python loop, elastic)", n, timing
+    )
 
 
 def elastic_scalars(rows, sizes, scipy_per_impact):
@@ -116,10 +134,22 @@ def elastic_scalars(rows, sizes, scipy_per_impact):
         for method in ("auto", "ode"):
             if method == "ode" and n > 10_000:
                 continue
-            t = time_call(lambda: blocked(rbjax.simulate(h, method=method)), min_repeats=3 if n >= 10_000 else 5, min_time_s=0.5)
+            t = time_call(
+                lambda: blocked(rbjax.simulate(h, method=method)),
+                min_repeats=3 if n >= 10_000 else 5,
+                min_time_s=0.5,
+            )
             res = rbjax.simulate(h, method=method)
-            r = row(rows, "scalar", f"simulate(method={method!r}) elastic, gas", n, t, path=res.method,
-                    max_rel_err_vs_scipy=reference_error(res, n), speedup_vs_scipy=scipy_per_impact / (t["median_s"] / n))
+            r = row(
+                rows,
+                "scalar",
+                f"simulate(method={method!r}) elastic, gas",
+                n,
+                t,
+                path=res.method,
+                max_rel_err_vs_scipy=reference_error(res, n),
+                speedup_vs_scipy=scipy_per_impact / (t["median_s"] / n),
+            )
             r["statuses_ok"] = bool(np.all(np.asarray(res.status) == 0))
 
 
@@ -127,10 +157,22 @@ def damped_scalars(rows, sizes):
     for name, (law, bf) in DAMPED.items():
         for n in sizes:
             h = heights(n)
-            t = time_call(lambda: blocked(rbjax.simulate(h, damping=law, blocked_force=bf)), min_repeats=2, min_time_s=0.3)
+            t = time_call(
+                lambda: blocked(rbjax.simulate(h, damping=law, blocked_force=bf)),
+                min_repeats=2,
+                min_time_s=0.3,
+            )
             res = rbjax.simulate(h, damping=law, blocked_force=bf)
-            row(rows, "damped", f"simulate() {name} (auto)", n, t, path=res.method,
-                max_rel_err_vs_scipy=reference_error(res, n, damping=law, blocked_force=bf), mean_steps=float(np.mean(np.asarray(res.num_steps))))
+            row(
+                rows,
+                "damped",
+                f"simulate() {name} (auto)",
+                n,
+                t,
+                path=res.method,
+                max_rel_err_vs_scipy=reference_error(res, n, damping=law, blocked_force=bf),
+                mean_steps=float(np.mean(np.asarray(res.num_steps))),
+            )
 
 
 def histories(rows, sizes):
@@ -138,7 +180,10 @@ def histories(rows, sizes):
     record's contact samples (``res.history(pad=False)``: every non-zero sample) and
     ``lfe_octave_dB(..., n_record=44 100)`` (exact for the zero-padded record)."""
     n_record = int(RATE_HZ)
-    for model_name, kwargs in (("elastic", {}), ("zener", {"damping": DAMPED["zener"][0], "blocked_force": "momentum"})):
+    for model_name, kwargs in (
+        ("elastic", {}),
+        ("zener", {"damping": DAMPED["zener"][0], "blocked_force": "momentum"}),
+    ):
         for n in sizes:
             h = heights(n)
 
@@ -147,12 +192,27 @@ def histories(rows, sizes):
                 return force, lfe_octave_dB(force, RATE_HZ, n_record=n_record)
 
             t = time_call(run, min_repeats=2, min_time_s=0.3, max_repeats=5)
-            ref = reference_impact(h[-1], BALL, **({} if not kwargs else {"damping": kwargs["damping"], "blocked_force": "momentum"}))
+            ref = reference_impact(
+                h[-1],
+                BALL,
+                **(
+                    {}
+                    if not kwargs
+                    else {"damping": kwargs["damping"], "blocked_force": "momentum"}
+                ),
+            )
             ref_lfe = np.asarray(lfe_octave_dB(ref.force_N(np.arange(n_record) / RATE_HZ), RATE_HZ))
             err = float(np.max(np.abs(np.asarray(t["out"][1])[-1] - ref_lfe)))
             samples = int(np.shape(t["out"][0])[-1])
-            row(rows, "history", f"simulate(...).history(pad=False) + lfe_octave_dB(n_record), {model_name}", n, t,
-                lfe_max_abs_err_dB_vs_scipy=err, contact_samples=samples)
+            row(
+                rows,
+                "history",
+                f"simulate(...).history(pad=False) + lfe_octave_dB(n_record), {model_name}",
+                n,
+                t,
+                lfe_max_abs_err_dB_vs_scipy=err,
+                contact_samples=samples,
+            )
 
 
 def jacobians(rows, sizes):
@@ -164,14 +224,19 @@ def jacobians(rows, sizes):
 
     def angle(th, h):
         zener = rbjax.Zener(stiffness_ratio=zener0.stiffness_ratio, relaxation_time_s=th[2])
-        r = rbjax.simulate(h, BALL.replace(youngs_Pa=th[0], poisson=th[1]), damping=zener, blocked_force="momentum")
+        r = rbjax.simulate(
+            h, BALL.replace(youngs_Pa=th[0], poisson=th[1]), damping=zener, blocked_force="momentum"
+        )
         assert r.method == "angle"
         return jnp.stack([getattr(r, k) for k in SCALARS])
 
     def value_and_jacobian(f):
         return jax.jacfwd(lambda th, h: (f(th, h), f(th, h)), has_aux=True)
 
-    cases = (("quadrature (elastic), d/d(E, ν)", quad, np.array([1.6e6, 0.45])), ("angle (zener), d/d(E, ν, τ)", angle, np.array([1.6e6, 0.45, 2e-3])))
+    cases = (
+        ("quadrature (elastic), d/d(E, ν)", quad, np.array([1.6e6, 0.45])),
+        ("angle (zener), d/d(E, ν, τ)", angle, np.array([1.6e6, 0.45, 2e-3])),
+    )
     for name, f, theta in cases:
         forward = jax.jit(jax.vmap(f))
         both = jax.jit(jax.vmap(value_and_jacobian(f)))
@@ -182,18 +247,41 @@ def jacobians(rows, sizes):
             tj = time_call(lambda: both(th, h), min_repeats=3, min_time_s=0.3)
             jac = np.asarray(tj["out"][0])
             row(rows, "jacobian", f"{name}: forward", n, tf)
-            row(rows, "jacobian", f"{name}: value + jacfwd", n, tj, ratio_to_forward=tj["median_s"] / tf["median_s"],
-                jacobian_finite=bool(np.all(np.isfinite(jac))))
+            row(
+                rows,
+                "jacobian",
+                f"{name}: value + jacfwd",
+                n,
+                tj,
+                ratio_to_forward=tj["median_s"] / tf["median_s"],
+                jacobian_finite=bool(np.all(np.isfinite(jac))),
+            )
             if n > CHUNK:
                 # the same in blocks of CHUNK impacts (jax.lax.map over jax.vmap): the tangents of a
                 # 10 000 batch outgrow the caches; a block's stay in them
                 shape = (n // CHUNK, CHUNK)
-                forward_c = jax.jit(lambda th, h: jax.lax.map(lambda a: jax.vmap(f)(*a), (th.reshape(*shape, -1), h.reshape(shape))))
-                both_c = jax.jit(lambda th, h: jax.lax.map(lambda a: jax.vmap(value_and_jacobian(f))(*a), (th.reshape(*shape, -1), h.reshape(shape))))
+                forward_c = jax.jit(
+                    lambda th, h: jax.lax.map(
+                        lambda a: jax.vmap(f)(*a), (th.reshape(*shape, -1), h.reshape(shape))
+                    )
+                )
+                both_c = jax.jit(
+                    lambda th, h: jax.lax.map(
+                        lambda a: jax.vmap(value_and_jacobian(f))(*a),
+                        (th.reshape(*shape, -1), h.reshape(shape)),
+                    )
+                )
                 tf = time_call(lambda: forward_c(th, h), min_repeats=3, min_time_s=0.3)
                 tj = time_call(lambda: both_c(th, h), min_repeats=3, min_time_s=0.3)
                 row(rows, "jacobian", f"{name}: forward, blocks of {CHUNK}", n, tf)
-                row(rows, "jacobian", f"{name}: value + jacfwd, blocks of {CHUNK}", n, tj, ratio_to_forward=tj["median_s"] / tf["median_s"])
+                row(
+                    rows,
+                    "jacobian",
+                    f"{name}: value + jacfwd, blocks of {CHUNK}",
+                    n,
+                    tj,
+                    ratio_to_forward=tj["median_s"] / tf["median_s"],
+                )
 
 
 FIRST_CALL = """
@@ -217,11 +305,22 @@ def first_calls(n):
     the library never switches it on), minus the second call: trace + compile."""
     out = {}
     for kind in ("elastic", "zener"):
-        res = subprocess.run([sys.executable, "-c", FIRST_CALL, kind, str(n)], capture_output=True, text=True, cwd=HERE,
-                             env={"PYTHONPATH": str(REPO / "src"), "PATH": "/usr/bin:/bin", "JAX_PLATFORMS": "cpu"})
+        res = subprocess.run(
+            [sys.executable, "-c", FIRST_CALL, kind, str(n)],
+            capture_output=True,
+            text=True,
+            cwd=HERE,
+            env={"PYTHONPATH": str(REPO / "src"), "PATH": "/usr/bin:/bin", "JAX_PLATFORMS": "cpu"},
+        )
         try:
             imp, first, second, path = res.stdout.split()
-            out[kind] = {"import_s": float(imp), "first_call_s": float(first), "second_call_s": float(second), "compile_s": float(first) - float(second), "path": path}
+            out[kind] = {
+                "import_s": float(imp),
+                "first_call_s": float(first),
+                "second_call_s": float(second),
+                "compile_s": float(first) - float(second),
+                "path": path,
+            }
         except ValueError:
             print(res.stderr[-2000:])
             out[kind] = None
@@ -237,7 +336,14 @@ def targets(data) -> list[list]:
     scipy = data["scipy_per_impact_s"]
 
     def find(workload, prefix, n):
-        return next((r for r in rows if r["workload"] == workload and r["variant"].startswith(prefix) and r["batch"] == n), None)
+        return next(
+            (
+                r
+                for r in rows
+                if r["workload"] == workload and r["variant"].startswith(prefix) and r["batch"] == n
+            ),
+            None,
+        )
 
     out = []
 
@@ -247,49 +353,109 @@ def targets(data) -> list[list]:
     n = 10_000
     auto = find("scalar", "simulate(method='auto')", n)
     if auto:
-        add("default simulate, elastic + gas, batch 10 000, scalars: ≥ 1 000 000 impacts/s", f"{auto['impacts_per_s']:,.0f}/s",
-            auto["impacts_per_s"] >= 1e6, f"path {auto['path']}; contact time within {fmt(auto['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy")
+        add(
+            "default simulate, elastic + gas, batch 10 000, scalars: ≥ 1 000 000 impacts/s",
+            f"{auto['impacts_per_s']:,.0f}/s",
+            auto["impacts_per_s"] >= 1e6,
+            f"path {auto['path']}; contact time within {fmt(auto['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
+        )
         speedup = scipy / (auto["median_s"] / n)
-        add("… and ≥ 3000× the scipy solve_ivp loop", f"{speedup:,.0f}×", speedup >= 3000, f"scipy loop {1 / scipy:,.0f} impacts/s in the same run")
+        add(
+            "… and ≥ 3000× the scipy solve_ivp loop",
+            f"{speedup:,.0f}×",
+            speedup >= 3000,
+            f"scipy loop {1 / scipy:,.0f} impacts/s in the same run",
+        )
     for kind in ("elastic", "zener"):
         c = compile_.get(kind)
         if c:
-            add(f"first-call compile of the default simulate ≤ 5 s ({kind}, batch {data['first_call_batch']})", f"{c['compile_s']:.1f} s",
-                c["compile_s"] <= 5.0, f"path {c['path']}; fresh process, first − second call")
+            add(
+                f"first-call compile of the default simulate ≤ 5 s ({kind}, batch {data['first_call_batch']})",
+                f"{c['compile_s']:.1f} s",
+                c["compile_s"] <= 5.0,
+                f"path {c['path']}; fresh process, first − second call",
+            )
     for r in rows:
         if r["workload"] == "jacobian" and "ratio_to_forward" in r:
             blocks = "blocks of" in r["variant"]
-            add(f"value + Jacobian ≤ 3× forward: {r['variant'].split(':')[0]}, batch {r['batch']}" + (f" (blocks of {CHUNK})" if blocks else ""),
-                f"{r['ratio_to_forward']:.2f}×", r["ratio_to_forward"] <= 3.0,
-                f"jax.lax.map over jax.vmap(jax.jacfwd), {CHUNK} per block" if blocks else "jax.vmap(jax.jacfwd)")
+            add(
+                f"value + Jacobian ≤ 3× forward: {r['variant'].split(':')[0]}, batch {r['batch']}"
+                + (f" (blocks of {CHUNK})" if blocks else ""),
+                f"{r['ratio_to_forward']:.2f}×",
+                r["ratio_to_forward"] <= 3.0,
+                f"jax.lax.map over jax.vmap(jax.jacfwd), {CHUNK} per block"
+                if blocks
+                else "jax.vmap(jax.jacfwd)",
+            )
     for name in DAMPED:
         r = find("damped", f"simulate() {name}", n)
         if r:
-            add(f"damped model ({name}), batch 10 000: ≥ 300 000 impacts/s", f"{r['impacts_per_s']:,.0f}/s", r["impacts_per_s"] >= 3e5,
-                f"path {r['path']}, {r['mean_steps']:.0f} steps/impact; contact time within {fmt(r['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy")
-    best = max((r for r in rows if r["workload"] == "history"), key=lambda r: r["impacts_per_s"], default=None)
+            add(
+                f"damped model ({name}), batch 10 000: ≥ 300 000 impacts/s",
+                f"{r['impacts_per_s']:,.0f}/s",
+                r["impacts_per_s"] >= 3e5,
+                f"path {r['path']}, {r['mean_steps']:.0f} steps/impact; contact time within {fmt(r['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
+            )
+    best = max(
+        (r for r in rows if r["workload"] == "history"),
+        key=lambda r: r["impacts_per_s"],
+        default=None,
+    )
     if best:
-        add("histories (44.1 kHz × 1 s) + octave L_FE: ≥ 20 000/s", f"{best['impacts_per_s']:,.0f}/s", best["impacts_per_s"] >= 2e4,
-            f"{best['variant']}, batch {best['batch']}")
+        add(
+            "histories (44.1 kHz × 1 s) + octave L_FE: ≥ 20 000/s",
+            f"{best['impacts_per_s']:,.0f}/s",
+            best["impacts_per_s"] >= 2e4,
+            f"{best['variant']}, batch {best['batch']}",
+        )
     return out
 
 
 def render(data) -> str:
     m = data["machine"]
-    head = (f"{m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}; load average (1/5/15 min) "
-            f"{'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, {'/'.join(f'{x:.1f}' for x in m['loadavg_end'])} at end; "
-            f"{data['wall_s']:.0f} s")
+    head = (
+        f"{m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}; load average (1/5/15 min) "
+        f"{'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, {'/'.join(f'{x:.1f}' for x in m['loadavg_end'])} at end; "
+        f"{data['wall_s']:.0f} s"
+    )
     lines = [head, "", table(["target", "measured", "", "how"], targets(data)), ""]
     body = []
     for r in data["rows"]:
         notes = []
-        for k in ("path", "speedup_vs_scipy", "ratio_to_forward", "mean_steps", "lfe_max_abs_err_dB_vs_scipy", "contact_samples"):
+        for k in (
+            "path",
+            "speedup_vs_scipy",
+            "ratio_to_forward",
+            "mean_steps",
+            "lfe_max_abs_err_dB_vs_scipy",
+            "contact_samples",
+        ):
             if r.get(k) is not None:
                 notes.append(f"{k} {fmt(r[k], '.3g') if isinstance(r[k], float) else r[k]}")
         if r.get("max_rel_err_vs_scipy"):
-            notes.append("max rel err vs scipy " + ", ".join(f"{k.split('_')[0]} {v:.1e}" for k, v in r["max_rel_err_vs_scipy"].items()))
-        body.append([r["workload"], r["variant"], r["batch"], fmt(r["impacts_per_s"], ",.0f"), fmt(r["first_s"], ".2f"), fmt(r["median_s"] * 1e3, ".3g"), "; ".join(notes)])
-    lines += [table(["workload", "variant", "batch", "impacts/s", "first call (s)", "median (ms)", "notes"], body)]
+            notes.append(
+                "max rel err vs scipy "
+                + ", ".join(
+                    f"{k.split('_')[0]} {v:.1e}" for k, v in r["max_rel_err_vs_scipy"].items()
+                )
+            )
+        body.append(
+            [
+                r["workload"],
+                r["variant"],
+                r["batch"],
+                fmt(r["impacts_per_s"], ",.0f"),
+                fmt(r["first_s"], ".2f"),
+                fmt(r["median_s"] * 1e3, ".3g"),
+                "; ".join(notes),
+            ]
+        )
+    lines += [
+        table(
+            ["workload", "variant", "batch", "impacts/s", "first call (s)", "median (ms)", "notes"],
+            body,
+        )
+    ]
     return "\n".join(lines)
 
 
@@ -301,14 +467,23 @@ def main():
     rows: list[dict] = []
     scipy_row = scipy_loop(rows, quick)
     scipy_per_impact = scipy_row["median_s"] / scipy_row["batch"]
-    elastic_scalars(rows, [1, 1000, 10_000] if quick else [1, 1000, 10_000, 100_000], scipy_per_impact)
+    elastic_scalars(
+        rows, [1, 1000, 10_000] if quick else [1, 1000, 10_000, 100_000], scipy_per_impact
+    )
     damped_scalars(rows, [1000] if quick else [1000, 10_000])
     histories(rows, [10, 100] if quick else [100, 1000])
     jacobians(rows, [1, 100] if quick else [1, 1000, 10_000])
     n_first = 1000 if quick else 10_000
     first = first_calls(n_first)
-    data = {"machine": finish_machine_info(info), "quick": quick, "rows": rows, "scipy_per_impact_s": scipy_per_impact,
-            "first_call": first, "first_call_batch": n_first, "wall_s": time.perf_counter() - t_start}
+    data = {
+        "machine": finish_machine_info(info),
+        "quick": quick,
+        "rows": rows,
+        "scipy_per_impact_s": scipy_per_impact,
+        "first_call": first,
+        "first_call_batch": n_first,
+        "wall_s": time.perf_counter() - t_start,
+    }
     write_json("forward_speed" + ("_quick" if quick else ""), data)
     print()
     print(render(data))

@@ -34,13 +34,18 @@ SOLVER = rbjax.Solver()
 ERROR_HEIGHTS = np.array([0.1, 0.8, 1.6])
 MODELS = {
     "elastic": {},
-    "zener (momentum)": dict(damping=rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3), blocked_force="momentum"),
+    "zener (momentum)": dict(
+        damping=rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3), blocked_force="momentum"
+    ),
 }
 
 
 def _max_error(history, refs) -> float:
     t = np.arange(np.shape(history.force_N)[-1]) / RATE_Hz
-    return max(float(np.max(np.abs(np.asarray(history.force_N[i]) - r.force_N(t))) / r.peak_force_N) for i, r in enumerate(refs))
+    return max(
+        float(np.max(np.abs(np.asarray(history.force_N[i]) - r.force_N(t))) / r.peak_force_N)
+        for i, r in enumerate(refs)
+    )
 
 
 def _errors(model, options) -> dict:
@@ -48,9 +53,16 @@ def _errors(model, options) -> dict:
     contact = np.array([r.contact_time_s for r in refs])
     n = int(math.ceil(contact.max() * RATE_Hz)) + 2
     return {
-        "ode": _max_error(force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact, method="ode"), refs),
-        "sampled": _max_error(force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact), refs),
-        "sampled, 2 steps per sample": _max_error(sampled_solve(ERROR_HEIGHTS, BALL, model, RATE_Hz, n, 2), refs),
+        "ode": _max_error(
+            force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact, method="ode"),
+            refs,
+        ),
+        "sampled": _max_error(
+            force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact), refs
+        ),
+        "sampled, 2 steps per sample": _max_error(
+            sampled_solve(ERROR_HEIGHTS, BALL, model, RATE_Hz, n, 2), refs
+        ),
     }
 
 
@@ -58,13 +70,27 @@ def _paths(heights, model, contact):
     n = int(math.ceil(np.max(contact) * RATE_Hz)) + 2
     substeps = substeps_for_contact(contact, RATE_Hz)
     times = jnp.arange(n) / RATE_Hz
-    return n, substeps, {
-        ("ode", "contact"): lambda: trajectory(heights, times, BALL, model, SOLVER).force_N,
-        ("ode", "record"): lambda: force_history(heights, BALL, model, SOLVER, contact_time_s=contact, method="ode").force_N,
-        ("sampled", "contact"): lambda: sampled_solve(heights, BALL, model, RATE_Hz, n, substeps).force_N,
-        ("sampled", "record"): lambda: force_history(heights, BALL, model, SOLVER, contact_time_s=contact).force_N,
-        ("sampled, 2 steps per sample", "contact"): lambda: sampled_solve(heights, BALL, model, RATE_Hz, n, 2).force_N,
-    }
+    return (
+        n,
+        substeps,
+        {
+            ("ode", "contact"): lambda: trajectory(heights, times, BALL, model, SOLVER).force_N,
+            ("ode", "record"): lambda: (
+                force_history(
+                    heights, BALL, model, SOLVER, contact_time_s=contact, method="ode"
+                ).force_N
+            ),
+            ("sampled", "contact"): lambda: (
+                sampled_solve(heights, BALL, model, RATE_Hz, n, substeps).force_N
+            ),
+            ("sampled", "record"): lambda: (
+                force_history(heights, BALL, model, SOLVER, contact_time_s=contact).force_N
+            ),
+            ("sampled, 2 steps per sample", "contact"): lambda: (
+                sampled_solve(heights, BALL, model, RATE_Hz, n, 2).force_N
+            ),
+        },
+    )
 
 
 def main() -> None:
@@ -84,12 +110,39 @@ def main() -> None:
             timings = {}
             for (path, part), fn in paths.items():
                 t = time_call(fn, max_repeats=7)
-                timings[f"{path}, {part}"] = {"records_per_s": batch / t["median_s"], "median_s": t["median_s"], "compile_s": t["compile_s"]}
-                rows.append([name, batch, path, part, f"{batch / t['median_s']:,.0f}", f"{t['compile_s']:.1f}", f"{errors[path]:.1e}"])
+                timings[f"{path}, {part}"] = {
+                    "records_per_s": batch / t["median_s"],
+                    "median_s": t["median_s"],
+                    "compile_s": t["compile_s"],
+                }
+                rows.append(
+                    [
+                        name,
+                        batch,
+                        path,
+                        part,
+                        f"{batch / t['median_s']:,.0f}",
+                        f"{t['compile_s']:.1f}",
+                        f"{errors[path]:.1e}",
+                    ]
+                )
                 print(rows[-1], flush=True)
             entry["batches"][str(batch)] = {"samples": n, "substeps": substeps, "timings": timings}
         out["models"][name] = entry
-    print(table(["model", "batch", "path", "output", "records/s", "first call − median (s)", "max rel. error (3 heights)"], rows))
+    print(
+        table(
+            [
+                "model",
+                "batch",
+                "path",
+                "output",
+                "records/s",
+                "first call − median (s)",
+                "max rel. error (3 heights)",
+            ],
+            rows,
+        )
+    )
     out["machine"] = finish_machine_info(info)
     print(f"wrote {write_json('history_speed' + ('_quick' if args.quick else ''), out)}")
 

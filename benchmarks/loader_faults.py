@@ -55,10 +55,45 @@ def main() -> None:
         dc = (c.value - ref[1].value) / ref[1].std
         met = abs(de) <= 1.0 and abs(dc) <= 2.0
         dt = (c.value - FAULT_DAMPING_NS_PER_M) / c.std  # from the truth, in the fit's own σ
-        out[label] = {"youngs_Pa": e.value, "youngs_std_Pa": e.std, "damping_Ns_per_m": c.value, "damping_std": c.std,
-                      "dE_pct": de, "dc_sigma": dc, "dc_truth_sigma": dt, "bars_met": met, "wall_s": wall, "excluded": list(data.excluded)}
-        rows.append([label, f"{e.value:.1f}", f"{de:+.4f}", f"{c.value:.4f}", f"{dc:+.2f}", "yes" if met else "NO", f"{dt:+.2f}", f"{wall:.1f}"])
-    print(table(["set", "E (Pa)", "ΔE (%)", "c (N s/m)", "Δc (σ)", "bars met", "c − truth (own σ)", "fit (s)"], rows))
+        out[label] = {
+            "youngs_Pa": e.value,
+            "youngs_std_Pa": e.std,
+            "damping_Ns_per_m": c.value,
+            "damping_std": c.std,
+            "dE_pct": de,
+            "dc_sigma": dc,
+            "dc_truth_sigma": dt,
+            "bars_met": met,
+            "wall_s": wall,
+            "excluded": list(data.excluded),
+        }
+        rows.append(
+            [
+                label,
+                f"{e.value:.1f}",
+                f"{de:+.4f}",
+                f"{c.value:.4f}",
+                f"{dc:+.2f}",
+                "yes" if met else "NO",
+                f"{dt:+.2f}",
+                f"{wall:.1f}",
+            ]
+        )
+    print(
+        table(
+            [
+                "set",
+                "E (Pa)",
+                "ΔE (%)",
+                "c (N s/m)",
+                "Δc (σ)",
+                "bars met",
+                "c − truth (own σ)",
+                "fit (s)",
+            ],
+            rows,
+        )
+    )
     write_json("loader_faults", {"machine": finish_machine_info(info), "fits": out})
 
 

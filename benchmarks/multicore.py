@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import os
 
-os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2").strip()
+os.environ["XLA_FLAGS"] = (
+    os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2"
+).strip()
 
 import time  # noqa: E402
 
@@ -48,9 +50,20 @@ def main():
     devices = jax.devices()
     mesh = Mesh(np.array(devices[:2]), ("batch",))
     rows = []
-    for name, one in (("ode, recommended tsit5 1e-7/1e-10", lambda hh, bb: impact_ode(hh, bb, model, RECOMMENDED).contact_time_s),
-                      ("quadrature, n_nodes=10", lambda hh, bb: impact_quadrature(hh, bb, model, n_nodes=10).contact_time_s),
-                      ("quadrature, n_nodes=12 (default)", lambda hh, bb: impact_quadrature(hh, bb, model).contact_time_s)):
+    for name, one in (
+        (
+            "ode, recommended tsit5 1e-7/1e-10",
+            lambda hh, bb: impact_ode(hh, bb, model, RECOMMENDED).contact_time_s,
+        ),
+        (
+            "quadrature, n_nodes=10",
+            lambda hh, bb: impact_quadrature(hh, bb, model, n_nodes=10).contact_time_s,
+        ),
+        (
+            "quadrature, n_nodes=12 (default)",
+            lambda hh, bb: impact_quadrature(hh, bb, model).contact_time_s,
+        ),
+    ):
         batched = jax.vmap(one)
         single = jax.jit(batched)
         # as rbjax.studies.sweep shards: jit with the batch axis split over the mesh (GSPMD partitions
@@ -58,14 +71,38 @@ def main():
         spec = NamedSharding(mesh, P("batch"))
         sharded = jax.jit(batched, in_shardings=(spec, spec), out_shardings=spec)
         hs, bs = jax.device_put(h, spec), jax.device_put(b, spec)
-        for label, fn, args_ in (("1 device", single, (h, b)), ("2 devices (jit, NamedSharding)", sharded, (hs, bs))):
+        for label, fn, args_ in (
+            ("1 device", single, (h, b)),
+            ("2 devices (jit, NamedSharding)", sharded, (hs, bs)),
+        ):
             t = time_call(lambda: fn(*args_), min_repeats=5)
             err = float(np.max(np.abs(np.asarray(t["out"]) / ref - 1)))
-            rows.append({"variant": name, "devices": label, "batch": n, "impacts_per_s": n / t["median_s"], "best_impacts_per_s": n / t["min_s"],
-                         "first_s": t["first_s"], "median_s": t["median_s"], "min_s": t["min_s"], "contact_rel_err": err})
-            print(f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best {n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}", flush=True)
-    write_json("multicore" + ("_quick" if args.quick else ""), {"machine": finish_machine_info(info), "devices": [str(d) for d in devices],
-                                                                "rows": rows, "wall_s": time.perf_counter() - t0})
+            rows.append(
+                {
+                    "variant": name,
+                    "devices": label,
+                    "batch": n,
+                    "impacts_per_s": n / t["median_s"],
+                    "best_impacts_per_s": n / t["min_s"],
+                    "first_s": t["first_s"],
+                    "median_s": t["median_s"],
+                    "min_s": t["min_s"],
+                    "contact_rel_err": err,
+                }
+            )
+            print(
+                f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best {n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}",
+                flush=True,
+            )
+    write_json(
+        "multicore" + ("_quick" if args.quick else ""),
+        {
+            "machine": finish_machine_info(info),
+            "devices": [str(d) for d in devices],
+            "rows": rows,
+            "wall_s": time.perf_counter() - t0,
+        },
+    )
 
 
 if __name__ == "__main__":

@@ -30,12 +30,16 @@ def pulses(n: int, t_min_s: float, t_max_s: float, batch: int) -> np.ndarray:
     duration = rng.uniform(t_min_s, t_max_s, (batch, 1))
     amplitude = rng.uniform(200.0, 2000.0, (batch, 1))
     t = np.arange(n) / RATE_HZ
-    return np.where(t <= duration, amplitude * np.sin(np.pi * np.minimum(t, duration) / duration), 0.0)
+    return np.where(
+        t <= duration, amplitude * np.sin(np.pi * np.minimum(t, duration) / duration), 0.0
+    )
 
 
 def main() -> None:
     info = machine_info()
-    padded_fn = jax.jit(lambda x: lfe_octave_dB(jnp.pad(x, ((0, 0), (0, N_RECORD - x.shape[-1]))), RATE_HZ))
+    padded_fn = jax.jit(
+        lambda x: lfe_octave_dB(jnp.pad(x, ((0, 0), (0, N_RECORD - x.shape[-1]))), RATE_HZ)
+    )
     short_fn = jax.jit(lambda x: lfe_octave_dB(x, RATE_HZ, n_record=N_RECORD))
     rows, out = [], {}
     for n, t_min, t_max, batch in CASES:
@@ -47,14 +51,43 @@ def main() -> None:
         out[key] = {"n_contact": n, "batch": batch, "max_abs_diff_dB": diff_dB}
         for path, t in (("padded FFT (44 100)", t_pad), ("short FFT + band kernel", t_short)):
             per_s = batch / t["median_s"]
-            out[key][path] = {"median_s": t["median_s"], "impacts_per_s": per_s, "first_call_s": t["first_s"]}
-            rows.append([path, n, f"{batch:,}", f"{1e3 * t['median_s']:.1f}", f"{per_s:,.0f}", f"{t['first_s']:.2f}", f"{diff_dB:.1e}"])
+            out[key][path] = {
+                "median_s": t["median_s"],
+                "impacts_per_s": per_s,
+                "first_call_s": t["first_s"],
+            }
+            rows.append(
+                [
+                    path,
+                    n,
+                    f"{batch:,}",
+                    f"{1e3 * t['median_s']:.1f}",
+                    f"{per_s:,.0f}",
+                    f"{t['first_s']:.2f}",
+                    f"{diff_dB:.1e}",
+                ]
+            )
             print(rows[-1], flush=True)
         out[key]["speedup"] = t_pad["median_s"] / t_short["median_s"]
-    print(table(["path", "contact samples", "batch", "ms/batch", "impacts/s", "first call (s)", "max |ΔL_FE| (dB)"], rows))
+    print(
+        table(
+            [
+                "path",
+                "contact samples",
+                "batch",
+                "ms/batch",
+                "impacts/s",
+                "first call (s)",
+                "max |ΔL_FE| (dB)",
+            ],
+            rows,
+        )
+    )
     out["machine"] = finish_machine_info(info)
     m = out["machine"]
-    print(f"machine: {m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}, load {m['loadavg_start']} → {m['loadavg_end']}")
+    print(
+        f"machine: {m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}, load {m['loadavg_start']} → {m['loadavg_end']}"
+    )
     print(f"wrote {write_json('pulse_spectrum', out)}")
 
 

@@ -35,7 +35,12 @@ CONFIGS = [
     ("paper", "none", "momentum", None),
     ("kelvin-voigt c=100 N·s/m", "adiabatic", "paper", rbjax.KelvinVoigt(damping_Ns_per_m=100.0)),
     ("hunt-crossley α=0.3 s/m", "adiabatic", "paper", rbjax.HuntCrossley(alpha_s_per_m=0.3)),
-    ("zener r=0.3, τ=2 ms", "adiabatic", "momentum", rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3)),
+    (
+        "zener r=0.3, τ=2 ms",
+        "adiabatic",
+        "momentum",
+        rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3),
+    ),
 ]
 
 
@@ -54,21 +59,31 @@ def measure() -> list[dict]:
             ref = reference_impact(float(h), ball, gas=gas, blocked_force=bf, damping=damping)
             for q in ("contact_time_s", "peak_force_N", "restitution"):
                 err[q].append(abs(float(getattr(res, q)[i]) / getattr(ref, q) - 1.0))
-            err["history"].append(float(np.max(np.abs(hist[i] - ref.force_N(times))) / ref.peak_force_N))
-        rows.append({"model": name, "gas": gas, "blocked_force": bf, **{q: max(v) for q, v in err.items()}})
+            err["history"].append(
+                float(np.max(np.abs(hist[i] - ref.force_N(times))) / ref.peak_force_N)
+            )
+        rows.append(
+            {"model": name, "gas": gas, "blocked_force": bf, **{q: max(v) for q, v in err.items()}}
+        )
     return rows
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--out", default=str(HERE / "results" / "reference_agreement.json"))
     args = ap.parse_args()
     rows = measure()
-    print("| model | gas | blocked force | contact time | peak force | restitution | history (of peak) |")
+    print(
+        "| model | gas | blocked force | contact time | peak force | restitution | history (of peak) |"
+    )
     print("|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['model']} | {r['gas']} | {r['blocked_force']} | {r['contact_time_s']:.1e} | "
-              f"{r['peak_force_N']:.1e} | {r['restitution']:.1e} | {r['history']:.1e} |")
+        print(
+            f"| {r['model']} | {r['gas']} | {r['blocked_force']} | {r['contact_time_s']:.1e} | "
+            f"{r['peak_force_N']:.1e} | {r['restitution']:.1e} | {r['history']:.1e} |"
+        )
     Path(args.out).write_text(json.dumps({"heights_m": HEIGHTS_M.tolist(), "rows": rows}, indent=1))
 
 

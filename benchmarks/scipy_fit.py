@@ -37,13 +37,27 @@ MODELS = {
     "kelvin-voigt": (
         ("youngs_Pa", "damping_Ns_per_m"),
         (1.6e6, 50.0),
-        lambda h, p: reference_impact(h, JIS_RUBBER_BALL.replace(youngs_Pa=p[0]), damping=KelvinVoigt(p[1]), blocked_force="momentum", rtol=RTOL),
+        lambda h, p: reference_impact(
+            h,
+            JIS_RUBBER_BALL.replace(youngs_Pa=p[0]),
+            damping=KelvinVoigt(p[1]),
+            blocked_force="momentum",
+            rtol=RTOL,
+        ),
     ),
     "hunt-crossley+ball-mode": (
         ("youngs_Pa", "alpha_s_per_m", "mode_mass_ratio", "mode_frequency_Hz", "mode_loss_factor"),
         (1.6e6, 0.05, 20.0, 600.0, 0.2),
-        lambda h, p: reference_ball_mode_impact(h, JIS_RUBBER_BALL.replace(youngs_Pa=p[0]), p[2], p[3], p[4], damping=HuntCrossley(p[1]),
-                                                blocked_force="momentum", rtol=RTOL),
+        lambda h, p: reference_ball_mode_impact(
+            h,
+            JIS_RUBBER_BALL.replace(youngs_Pa=p[0]),
+            p[2],
+            p[3],
+            p[4],
+            damping=HuntCrossley(p[1]),
+            blocked_force="momentum",
+            rtol=RTOL,
+        ),
     ),
 }
 
@@ -65,16 +79,24 @@ def fit(model: str, data) -> dict:
     weights = 1.0 / data.noise_rms_N
     k = len(data.height_m)
     # onsets: where the measured force first crosses 5 % of its peak, less the filter's delay
-    onsets = np.array([t[np.argmax(f > 0.05 * f.max())] for f in measured]) - 2.613 / (2 * math.pi * data.lowpass_Hz)
+    onsets = np.array([t[np.argmax(f > 0.05 * f.max())] for f in measured]) - 2.613 / (
+        2 * math.pi * data.lowpass_Hz
+    )
     scale = np.array([*start, *([1e-3] * k)])  # shifts in ms
 
     def residuals(x):
         p = x[: len(names)] * scale[: len(names)]
-        shifts = x[len(names):] * 1e-3
+        shifts = x[len(names) :] * 1e-3
         rows = []
         for i, h in enumerate(data.height_m):
             ref = impact(float(h), p)
-            rows.append(weights[i] * (scipy.signal.sosfilt(sos, sampled(ref, t - shifts[i], data.rate_Hz)) - measured[i]))
+            rows.append(
+                weights[i]
+                * (
+                    scipy.signal.sosfilt(sos, sampled(ref, t - shifts[i], data.rate_Hz))
+                    - measured[i]
+                )
+            )
         return np.concatenate(rows)
 
     x0 = np.concatenate([np.ones(len(names)), onsets / 1e-3])
@@ -85,7 +107,7 @@ def fit(model: str, data) -> dict:
     return {
         "model": model,
         "parameters": dict(zip(names, map(float, p))),
-        "onset_shift_s": (sol.x[len(names):] * 1e-3).tolist(),
+        "onset_shift_s": (sol.x[len(names) :] * 1e-3).tolist(),
         "cost": float(sol.cost),
         "rms_N": float(np.sqrt(np.mean(r**2))),
         "evaluations": int(sol.nfev),
@@ -113,4 +135,6 @@ if __name__ == "__main__":
     data = prepare_data(examples_dir())
     for name in sys.argv[1:] or ["kelvin-voigt"]:
         out = fit(name, data)
-        print(f"{name}: {out['time_s']:.1f} s, {out['evaluations']} evaluations, rms {out['rms_N']:.2f} N, cost {out['cost']:.6g}, {out['parameters']}")
+        print(
+            f"{name}: {out['time_s']:.1f} s, {out['evaluations']} evaluations, rms {out['rms_N']:.2f} N, cost {out['cost']:.6g}, {out['parameters']}"
+        )

@@ -68,15 +68,36 @@ Z95 = 1.959963984540054
 
 def _cli_sweep(config_path, out_path) -> dict:
     """``rbjax sweep`` in a fresh process: wall and CPU seconds."""
-    env = dict(os.environ, PYTHONPATH=str(REPO / "src") + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(
+        os.environ, PYTHONPATH=str(REPO / "src") + os.pathsep + os.environ.get("PYTHONPATH", "")
+    )
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "rbjax.cli", "sweep", str(config_path), "--no-progress", "--out", str(out_path)], env=env, capture_output=True, text=True)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "rbjax.cli",
+            "sweep",
+            str(config_path),
+            "--no-progress",
+            "--out",
+            str(out_path),
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode:
         raise RuntimeError(proc.stderr[-2000:])
-    return {"wall_s": wall, "cpu_user_s": after.ru_utime - before.ru_utime, "cpu_sys_s": after.ru_stime - before.ru_stime, "loadavg_after": list(os.getloadavg())}
+    return {
+        "wall_s": wall,
+        "cpu_user_s": after.ru_utime - before.ru_utime,
+        "cpu_sys_s": after.ru_stime - before.ru_stime,
+        "loadavg_after": list(os.getloadavg()),
+    }
 
 
 def _split_run() -> dict:
@@ -109,13 +130,25 @@ def _agreement(new: dict, old: dict) -> tuple[list, dict]:
     for o, entry in new["outputs"].items():
         for p in new["parameters"]:
             t_new, (lo, hi) = entry["total_order"][p], entry["total_order_ci"][p]
-            t_old, (olo, ohi) = old["outputs"][o]["total_order"][p], old["outputs"][o]["total_order_ci"][p]
+            t_old, (olo, ohi) = (
+                old["outputs"][o]["total_order"][p],
+                old["outputs"][o]["total_order_ci"][p],
+            )
             inside, overlap = lo <= t_old <= hi, lo <= ohi and olo <= hi
             worst["pairs"] += 1
             worst["old_in_new_interval"] += inside
             worst["intervals_overlap"] += overlap
             if p in ("wall_m", "youngs_Pa", "mass_kg"):
-                rows.append([o, p, f"{t_old:.4f} [{olo:.4f}, {ohi:.4f}]", f"{t_new:.4f} [{lo:.4f}, {hi:.4f}]", "yes" if inside else "no", "yes" if overlap else "no"])
+                rows.append(
+                    [
+                        o,
+                        p,
+                        f"{t_old:.4f} [{olo:.4f}, {ohi:.4f}]",
+                        f"{t_new:.4f} [{lo:.4f}, {hi:.4f}]",
+                        "yes" if inside else "no",
+                        "yes" if overlap else "no",
+                    ]
+                )
     return rows, worst
 
 
@@ -126,13 +159,48 @@ def part_timing(out: dict) -> None:
     split = _split_run()
     old = read_json("sobol_study_before")
     rows, counts = _agreement(summary, old)
-    out["timing"] = {"cold_cli": cold, "in_process": split, "n_evaluations": summary["n_evaluations"], "agreement_with_before": counts, "before_note": old.get("note")}
+    out["timing"] = {
+        "cold_cli": cold,
+        "in_process": split,
+        "n_evaluations": summary["n_evaluations"],
+        "agreement_with_before": counts,
+        "before_note": old.get("note"),
+    }
     out["sobol_summary"] = summary
-    print(table(["", "wall (s)", "CPU user + sys (s)", "evaluation (s)", "SALib analysis (s)"], [
-        ["cold `rbjax sweep sobol.toml`", f"{cold['wall_s']:.1f}", f"{cold['cpu_user_s'] + cold['cpu_sys_s']:.1f}", "", ""],
-        ["in process (after imports)", f"{split['study_s']:.1f}", "", f"{split['evaluation_s']:.1f}", f"{split['salib_analysis_s']:.1f}"],
-    ]))
-    print(table(["output", "parameter", "S_T before (pseudo-random, 100 000)", "S_T now (Sobol', 131 072)", "before inside now's interval", "intervals overlap"], rows))
+    print(
+        table(
+            ["", "wall (s)", "CPU user + sys (s)", "evaluation (s)", "SALib analysis (s)"],
+            [
+                [
+                    "cold `rbjax sweep sobol.toml`",
+                    f"{cold['wall_s']:.1f}",
+                    f"{cold['cpu_user_s'] + cold['cpu_sys_s']:.1f}",
+                    "",
+                    "",
+                ],
+                [
+                    "in process (after imports)",
+                    f"{split['study_s']:.1f}",
+                    "",
+                    f"{split['evaluation_s']:.1f}",
+                    f"{split['salib_analysis_s']:.1f}",
+                ],
+            ],
+        )
+    )
+    print(
+        table(
+            [
+                "output",
+                "parameter",
+                "S_T before (pseudo-random, 100 000)",
+                "S_T now (Sobol', 131 072)",
+                "before inside now's interval",
+                "intervals overlap",
+            ],
+            rows,
+        )
+    )
     print(f"all pairs: {counts}")
 
 
@@ -145,25 +213,51 @@ def _fit(ns, widths) -> tuple[float, float]:
 def part_convergence(out: dict, quick: bool) -> None:
     ns = [2**k for k in (range(5, 9) if quick else range(6, 12))]
     replicates = 4 if quick else 8
-    res: dict = {"n_base": ns, "replicates": replicates, "outputs": list(CONVERGENCE_OUTPUTS), "designs": {}}
+    res: dict = {
+        "n_base": ns,
+        "replicates": replicates,
+        "outputs": list(CONVERGENCE_OUTPUTS),
+        "designs": {},
+    }
     for design in ("sobol", "random"):
-        entry: dict = {"n_evaluations": [n * (len(RANGES) + 2) for n in ns], "width": {o: [] for o in CONVERGENCE_OUTPUTS}, "bootstrap_width": {o: [] for o in CONVERGENCE_OUTPUTS}, "mean_total_order": {o: [] for o in CONVERGENCE_OUTPUTS}}
+        entry: dict = {
+            "n_evaluations": [n * (len(RANGES) + 2) for n in ns],
+            "width": {o: [] for o in CONVERGENCE_OUTPUTS},
+            "bootstrap_width": {o: [] for o in CONVERGENCE_OUTPUTS},
+            "mean_total_order": {o: [] for o in CONVERGENCE_OUTPUTS},
+        }
         for n in ns:
             start = time.perf_counter()
             studies = [
-                global_sensitivity(RANGES, n, outputs=CONVERGENCE_OUTPUTS, design=design, second_order=False, seed=rep, n_bootstrap=100, chunk_size=1024)
+                global_sensitivity(
+                    RANGES,
+                    n,
+                    outputs=CONVERGENCE_OUTPUTS,
+                    design=design,
+                    second_order=False,
+                    seed=rep,
+                    n_bootstrap=100,
+                    chunk_size=1024,
+                )
                 for rep in range(replicates)
             ]
             for o in CONVERGENCE_OUTPUTS:
                 totals = np.array([s.total_order[o] for s in studies])  # (R, d)
                 entry["width"][o].append(float(np.mean(2 * Z95 * totals.std(axis=0, ddof=1))))
-                entry["bootstrap_width"][o].append(float(np.mean([np.mean(np.diff(s.total_order_ci[o], axis=1)) for s in studies])))
+                entry["bootstrap_width"][o].append(
+                    float(np.mean([np.mean(np.diff(s.total_order_ci[o], axis=1)) for s in studies]))
+                )
                 entry["mean_total_order"][o].append(totals.mean(axis=0).tolist())
-            print(f"{design} N={n}: {replicates} × {n * (len(RANGES) + 2)} impacts in {time.perf_counter() - start:.1f} s", flush=True)
+            print(
+                f"{design} N={n}: {replicates} × {n * (len(RANGES) + 2)} impacts in {time.perf_counter() - start:.1f} s",
+                flush=True,
+            )
         res["designs"][design] = entry
     out["convergence"] = res
     _summarize_convergence(res)
-    _plot_convergence(res, RESULTS_DIR / ("sensitivity_convergence" + ("_quick" if quick else "") + ".png"))
+    _plot_convergence(
+        res, RESULTS_DIR / ("sensitivity_convergence" + ("_quick" if quick else "") + ".png")
+    )
 
 
 def _summarize_convergence(res: dict) -> None:
@@ -173,26 +267,55 @@ def _summarize_convergence(res: dict) -> None:
     res["factor"] = {}
     evals = np.array(res["designs"]["sobol"]["n_evaluations"], dtype=float)
     for o in res["outputs"]:
-        (_, b_s), (_, b_r) = (_fit(evals, res["designs"][d]["width"][o]) for d in ("sobol", "random"))
-        factors = (np.array(res["designs"]["random"]["width"][o]) / np.array(res["designs"]["sobol"]["width"][o])) ** 2
-        res["factor"][o] = {"slope_sobol": b_s, "slope_random": b_r, "by_size": factors.tolist(), "smallest": float(factors.min()), "factor": float(factors[-1])}
+        (_, b_s), (_, b_r) = (
+            _fit(evals, res["designs"][d]["width"][o]) for d in ("sobol", "random")
+        )
+        factors = (
+            np.array(res["designs"]["random"]["width"][o])
+            / np.array(res["designs"]["sobol"]["width"][o])
+        ) ** 2
+        res["factor"][o] = {
+            "slope_sobol": b_s,
+            "slope_random": b_r,
+            "by_size": factors.tolist(),
+            "smallest": float(factors.min()),
+            "factor": float(factors[-1]),
+        }
         rows.append([o, f"{b_r:.2f}", f"{b_s:.2f}", *(f"{f:,.0f}×" for f in factors)])
     headers = ["output", "slope, pseudo-random", "slope, Sobol'", *(f"{n:,.0f}" for n in evals)]
-    print("pseudo-random evaluations needed per Sobol' evaluation for the same S_T interval width, by evaluations:")
+    print(
+        "pseudo-random evaluations needed per Sobol' evaluation for the same S_T interval width, by evaluations:"
+    )
     print(table(headers, rows))
 
 
 def _plot_convergence(res: dict, path) -> None:
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(res["outputs"]), figsize=(3.3 * len(res["outputs"]) + 0.5, 3.4), layout="constrained", sharey=False)
+    fig, axes = plt.subplots(
+        1,
+        len(res["outputs"]),
+        figsize=(3.3 * len(res["outputs"]) + 0.5, 3.4),
+        layout="constrained",
+        sharey=False,
+    )
     for ax, o in zip(axes, res["outputs"]):
         for design, style in (("random", "o-"), ("sobol", "s-")):
             entry = res["designs"][design]
-            ax.loglog(entry["n_evaluations"], entry["width"][o], style, label=f"{design}: replicates")
-            ax.loglog(entry["n_evaluations"], entry["bootstrap_width"][o], style[0] + ":", alpha=0.5, label=f"{design}: SALib bootstrap")
+            ax.loglog(
+                entry["n_evaluations"], entry["width"][o], style, label=f"{design}: replicates"
+            )
+            ax.loglog(
+                entry["n_evaluations"],
+                entry["bootstrap_width"][o],
+                style[0] + ":",
+                alpha=0.5,
+                label=f"{design}: SALib bootstrap",
+            )
         f = res["factor"][o]
-        ax.set_title(f"{o}: Sobol' needs {f['smallest']:.0f}–{max(f['by_size']):,.0f}× fewer", fontsize=9)
+        ax.set_title(
+            f"{o}: Sobol' needs {f['smallest']:.0f}–{max(f['by_size']):,.0f}× fewer", fontsize=9
+        )
         ax.set_xlabel("evaluations")
         ax.grid(alpha=0.3, which="both")
     axes[0].set_ylabel("S_T 95 % interval width")
@@ -208,15 +331,30 @@ def part_dgsm(out: dict, quick: bool) -> None:
     res = global_sensitivity(RANGES, n, method="dgsm", outputs=outputs)
     d = len(RANGES)
     per_fd, per_exact = res.seconds_fd / n, res.seconds_exact / n
-    entry: dict = {"n_base": n, "delta": res.delta, "seconds_fd": res.seconds_fd, "seconds_exact": res.seconds_exact,
-                   "per_base_point_fd_s": per_fd, "per_base_point_exact_s": per_exact, "cost_ratio_fd_over_exact": per_fd / per_exact, "outputs": {}}
+    entry: dict = {
+        "n_base": n,
+        "delta": res.delta,
+        "seconds_fd": res.seconds_fd,
+        "seconds_exact": res.seconds_exact,
+        "per_base_point_fd_s": per_fd,
+        "per_base_point_exact_s": per_exact,
+        "cost_ratio_fd_over_exact": per_fd / per_exact,
+        "outputs": {},
+    }
     totals = (out.get("sobol_summary") or {}).get("outputs", {})
     rows, bound_rows = [], []
     for o in res.outputs:
         nu, (lo, hi), fd = res.nu[o], res.nu_ci[o].T, res.nu_fd[o]
         within = bool(np.all((lo <= fd) & (fd <= hi)))
         rel = float(np.max(np.abs(fd / nu - 1)))
-        e = {"nu": nu.tolist(), "nu_ci": res.nu_ci[o].tolist(), "nu_fd": fd.tolist(), "total_bound": res.total_bound[o].tolist(), "fd_within_sampling_error": within, "max_rel_difference": rel}
+        e = {
+            "nu": nu.tolist(),
+            "nu_ci": res.nu_ci[o].tolist(),
+            "nu_fd": fd.tolist(),
+            "total_bound": res.total_bound[o].tolist(),
+            "fd_within_sampling_error": within,
+            "max_rel_difference": rel,
+        }
         if o in totals:
             st = np.array([totals[o]["total_order"][p] for p in res.parameters])
             e["total_order_sobol"] = st.tolist()
@@ -225,11 +363,24 @@ def part_dgsm(out: dict, quick: bool) -> None:
         entry["outputs"][o] = e
         rows.append([o, "yes" if within else "no", f"{rel:.1e}"])
     out["dgsm"] = entry
-    print(f"DGSM, N = {n}: exact {res.seconds_exact:.2f} s ({per_exact * 1e3:.2f} ms per base point), SALib finite differences {res.seconds_fd:.2f} s "
-          f"({d + 1} impacts per base point, {per_fd * 1e3:.2f} ms): finite differences cost {per_fd / per_exact:.2f}× the exact gradient")
-    print(table(["output", "finite-difference ν within the exact ν's 95 % sampling interval", "max |ν_fd/ν − 1|"], rows))
+    print(
+        f"DGSM, N = {n}: exact {res.seconds_exact:.2f} s ({per_exact * 1e3:.2f} ms per base point), SALib finite differences {res.seconds_fd:.2f} s "
+        f"({d + 1} impacts per base point, {per_fd * 1e3:.2f} ms): finite differences cost {per_fd / per_exact:.2f}× the exact gradient"
+    )
+    print(
+        table(
+            [
+                "output",
+                "finite-difference ν within the exact ν's 95 % sampling interval",
+                "max |ν_fd/ν − 1|",
+            ],
+            rows,
+        )
+    )
     if bound_rows:
-        print("bound ν_i (b−a)²/(π² V) over the Sobol S_Ti (12/π² = 1.22 for a response linear in x_i):")
+        print(
+            "bound ν_i (b−a)²/(π² V) over the Sobol S_Ti (12/π² = 1.22 for a response linear in x_i):"
+        )
         print(table(["output", *res.parameters], bound_rows))
 
 
@@ -243,7 +394,9 @@ def part_million(out: dict) -> None:
         run = _cli_sweep(path, f"{tmp}/million.json")
         n = json.loads(open(f"{tmp}/million.json").read())["n_evaluations"]
     out["million"] = {"n_evaluations": n, **run}
-    print(f"{n:,} impacts with L_FE in one command: {run['wall_s']:.0f} s wall, {run['cpu_user_s'] + run['cpu_sys_s']:.0f} s CPU")
+    print(
+        f"{n:,} impacts with L_FE in one command: {run['wall_s']:.0f} s wall, {run['cpu_user_s'] + run['cpu_sys_s']:.0f} s CPU"
+    )
 
 
 def _toml(config: dict) -> str:
@@ -262,7 +415,12 @@ def _toml(config: dict) -> str:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="a smoke run: small designs (minutes)")
-    p.add_argument("--part", action="append", choices=("timing", "convergence", "dgsm", "million"), help="run only this part (repeatable)")
+    p.add_argument(
+        "--part",
+        action="append",
+        choices=("timing", "convergence", "dgsm", "million"),
+        help="run only this part (repeatable)",
+    )
     args = p.parse_args()
     parts = args.part or ["timing", "convergence", "dgsm"]
     info = machine_info()

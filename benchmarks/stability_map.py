@@ -49,8 +49,15 @@ TOL = 1e-6
 SCALARS = ("contact_time_s", "peak_force_N", "restitution")
 CLASSES = ("correct", "WRONG", "flagged", "false flag", "step_limit", "solver_failed", "NaN")
 METHODS = (
-    ("euler", {}), ("heun", {}), ("midpoint", {}), ("bosh3", {}), ("tsit5", {}),
-    ("tsit5", {"rtol": 1e-7, "atol": 1e-10}), ("dopri5", {}), ("dopri8", {}), ("kvaerno5", {}),
+    ("euler", {}),
+    ("heun", {}),
+    ("midpoint", {}),
+    ("bosh3", {}),
+    ("tsit5", {}),
+    ("tsit5", {"rtol": 1e-7, "atol": 1e-10}),
+    ("dopri5", {}),
+    ("dopri8", {}),
+    ("kvaerno5", {}),
 )
 FIXED_STEP_S = 1e-5
 MAX_DEFLECTION_RATIO_C = 100.0
@@ -64,9 +71,24 @@ def critical_damping(youngs_Pa):
 def grids(n):
     heights = np.logspace(-3, 1, n)
     slices = {
-        "A": {"title": "A: E × height (elastic, gas)", "x": heights, "y": np.logspace(4, 9, n), "ylabel": "E (Pa)"},
-        "B": {"title": "B: Kelvin–Voigt ζ × height", "x": heights, "y": np.concatenate([[0.0], np.logspace(-2, math.log10(5.0), n - 1)]), "ylabel": "ζ = c / 2√(kM)"},
-        "C": {"title": "C: E × height, gas none (δ → 2R)", "x": heights, "y": np.logspace(4, 7, n), "ylabel": "E (Pa)"},
+        "A": {
+            "title": "A: E × height (elastic, gas)",
+            "x": heights,
+            "y": np.logspace(4, 9, n),
+            "ylabel": "E (Pa)",
+        },
+        "B": {
+            "title": "B: Kelvin–Voigt ζ × height",
+            "x": heights,
+            "y": np.concatenate([[0.0], np.logspace(-2, math.log10(5.0), n - 1)]),
+            "ylabel": "ζ = c / 2√(kM)",
+        },
+        "C": {
+            "title": "C: E × height, gas none (δ → 2R)",
+            "x": heights,
+            "y": np.logspace(4, 7, n),
+            "ylabel": "E (Pa)",
+        },
     }
     return slices
 
@@ -78,7 +100,11 @@ def inputs(key, s):
     if key == "B":
         c = yy * critical_damping(BALL.youngs_Pa)
         return hh, BALL, make_model(damping=rbjax.KelvinVoigt(damping_Ns_per_m=c))
-    return hh, BALL.replace(youngs_Pa=yy), make_model(gas="none", max_deflection_ratio=MAX_DEFLECTION_RATIO_C)
+    return (
+        hh,
+        BALL.replace(youngs_Pa=yy),
+        make_model(gas="none", max_deflection_ratio=MAX_DEFLECTION_RATIO_C),
+    )
 
 
 def reference(key, s):
@@ -108,7 +134,9 @@ def reference(key, s):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
-                r = sr.reference_impact(hh[i, j], BALL.replace(youngs_Pa=float(youngs[i, j])), **options)
+                r = sr.reference_impact(
+                    hh[i, j], BALL.replace(youngs_Pa=float(youngs[i, j])), **options
+                )
             except Exception:  # noqa: BLE001  (a reference that cannot solve the point)
                 ref["status"][i, j] = -1
                 continue
@@ -124,7 +152,9 @@ def reference(key, s):
 
 def classify(out, ref):
     status = np.asarray(out.status)
-    err = np.max(np.stack([np.abs(np.asarray(getattr(out, k)) / ref[k] - 1) for k in SCALARS]), axis=0)
+    err = np.max(
+        np.stack([np.abs(np.asarray(getattr(out, k)) / ref[k] - 1) for k in SCALARS]), axis=0
+    )
     finite = np.all(np.stack([np.isfinite(np.asarray(getattr(out, k))) for k in SCALARS]), axis=0)
     cls = np.full(status.shape, -1)
     ok = status == 0
@@ -154,24 +184,46 @@ def main():
         t = time.perf_counter()
         refs[key] = reference(key, s)
         print(f"reference {key}: {time.perf_counter() - t:.1f} s", flush=True)
-    methods = METHODS if not quick else (("heun", {}), ("tsit5", {}), ("tsit5", {"rtol": 1e-7, "atol": 1e-10}), ("dopri8", {}))
+    methods = (
+        METHODS
+        if not quick
+        else (("heun", {}), ("tsit5", {}), ("tsit5", {"rtol": 1e-7, "atol": 1e-10}), ("dopri8", {}))
+    )
     results = []
     for method, tol in methods:
-        label = method + (f" rtol {tol['rtol']:.0e}" if tol else (" step 10 µs" if method in ("euler", "heun", "midpoint") else " rtol 1e-09"))
-        solver = sweep_solver(method, rtol=tol.get("rtol", 1e-9), atol=tol.get("atol", 1e-12), step_s=FIXED_STEP_S)
+        label = method + (
+            f" rtol {tol['rtol']:.0e}"
+            if tol
+            else (" step 10 µs" if method in ("euler", "heun", "midpoint") else " rtol 1e-09")
+        )
+        solver = sweep_solver(
+            method, rtol=tol.get("rtol", 1e-9), atol=tol.get("atol", 1e-12), step_s=FIXED_STEP_S
+        )
         entry = {"label": label, "method": method, "slices": {}}
         for key, s in slices.items():
             hh, ball, model = inputs(key, s)
             shape, h, b, m = broadcast_inputs(hh, ball, model)
             t = time.perf_counter()
             out = impact_batch(h, b, m, solver)
-            out = type(out)(**{f: np.asarray(getattr(out, f)).reshape(shape) for f in out.__dataclass_fields__})
+            out = type(out)(
+                **{f: np.asarray(getattr(out, f)).reshape(shape) for f in out.__dataclass_fields__}
+            )
             wall = time.perf_counter() - t
             cls, err = classify(out, refs[key])
             counts = {CLASSES[c]: int(np.sum(cls == c)) for c in range(len(CLASSES))}
             counts["no reference"] = int(np.sum(cls == -1))
-            entry["slices"][key] = {"class": cls, "error": err, "status": out.status, "num_steps": out.num_steps, "counts": counts, "wall_s": wall}
-            print(f"{label:22s} {key}  {counts}  max steps {int(np.max(out.num_steps))}  ({wall:.1f} s)", flush=True)
+            entry["slices"][key] = {
+                "class": cls,
+                "error": err,
+                "status": out.status,
+                "num_steps": out.num_steps,
+                "counts": counts,
+                "wall_s": wall,
+            }
+            print(
+                f"{label:22s} {key}  {counts}  max steps {int(np.max(out.num_steps))}  ({wall:.1f} s)",
+                flush=True,
+            )
         results.append(entry)
 
     data = {
@@ -180,15 +232,52 @@ def main():
         "tolerance_rel": TOL,
         "fixed_step_s": FIXED_STEP_S,
         "classes": CLASSES,
-        "slices": {k: {"title": s["title"], "height_m": s["x"], "y": s["y"], "ylabel": s["ylabel"], "reference_status": refs[k]["status"]} for k, s in slices.items()},
+        "slices": {
+            k: {
+                "title": s["title"],
+                "height_m": s["x"],
+                "y": s["y"],
+                "ylabel": s["ylabel"],
+                "reference_status": refs[k]["status"],
+            }
+            for k, s in slices.items()
+        },
         "results": results,
         "wall_s": time.perf_counter() - t0,
     }
     write_json("stability_map" + ("_quick" if quick else ""), data)
     plot(results, slices, quick)
-    rows = [[e["label"]] + [" / ".join(str(e["slices"][k]["counts"][c]) for c in ("correct", "WRONG", "flagged", "step_limit", "solver_failed", "NaN", "false flag")) for k in slices]
-            for e in results]
-    print(table(["method", *(f"{k}: correct / WRONG / flagged / step_limit / failed / NaN / false flag" for k in slices)], rows))
+    rows = [
+        [e["label"]]
+        + [
+            " / ".join(
+                str(e["slices"][k]["counts"][c])
+                for c in (
+                    "correct",
+                    "WRONG",
+                    "flagged",
+                    "step_limit",
+                    "solver_failed",
+                    "NaN",
+                    "false flag",
+                )
+            )
+            for k in slices
+        ]
+        for e in results
+    ]
+    print(
+        table(
+            [
+                "method",
+                *(
+                    f"{k}: correct / WRONG / flagged / step_limit / failed / NaN / false flag"
+                    for k in slices
+                ),
+            ],
+            rows,
+        )
+    )
     print(f"total {data['wall_s']:.0f} s")
 
 
@@ -200,7 +289,16 @@ def plot(results, slices, quick):
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
-    colours = ["white", "#2ca02c", "#d62728", "#1f77b4", "#17becf", "#ff7f0e", "#9467bd", "black"]  # -1 … 6
+    colours = [
+        "white",
+        "#2ca02c",
+        "#d62728",
+        "#1f77b4",
+        "#17becf",
+        "#ff7f0e",
+        "#9467bd",
+        "black",
+    ]  # -1 … 6
     cmap = ListedColormap(colours)
     norm = BoundaryNorm(np.arange(-1.5, 7.5), cmap.N)
     nrows = len(results)
@@ -213,7 +311,11 @@ def plot(results, slices, quick):
             ax.pcolormesh(np.arange(len(x) + 1), np.arange(len(y) + 1), cls, cmap=cmap, norm=norm)
             xt = np.arange(0, len(x), max(1, len(x) // 4))
             ax.set_xticks(xt + 0.5, [f"{x[i]:.0e}" for i in xt], fontsize=7)
-            ax.set_yticks(xt[xt < len(y)] + 0.5, [f"{y[i]:.1e}" if y[i] else "0" for i in xt if i < len(y)], fontsize=7)
+            ax.set_yticks(
+                xt[xt < len(y)] + 0.5,
+                [f"{y[i]:.1e}" if y[i] else "0" for i in xt if i < len(y)],
+                fontsize=7,
+            )
             if r == 0:
                 ax.set_title(s["title"], fontsize=9)
             if r == nrows - 1:
@@ -222,7 +324,9 @@ def plot(results, slices, quick):
                 ax.set_ylabel(f"{entry['label']}\n{s['ylabel']}", fontsize=8)
             else:
                 ax.set_ylabel(s["ylabel"], fontsize=7)
-    handles = [Patch(color=colours[i + 1], label=name) for i, name in enumerate(CLASSES)] + [Patch(facecolor="white", edgecolor="k", label="no reference")]
+    handles = [Patch(color=colours[i + 1], label=name) for i, name in enumerate(CLASSES)] + [
+        Patch(facecolor="white", edgecolor="k", label="no reference")
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=8, fontsize=8)
     fig.tight_layout(rect=(0, 0.03, 1, 1))
     RESULTS_DIR.mkdir(exist_ok=True)

@@ -40,10 +40,19 @@ def truth_rows(name, truth, rng):
     lfe = np.asarray(res.lfe_octave_dB())
     rows = []
     for i, h in enumerate(HEIGHTS):
-        row = {"height_m": h, "contact_time_s": float(res.contact_time_s[i]) + 1e-4 * rng.standard_normal(), "contact_time_s_sd": 1e-4}
+        row = {
+            "height_m": h,
+            "contact_time_s": float(res.contact_time_s[i]) + 1e-4 * rng.standard_normal(),
+            "contact_time_s_sd": 1e-4,
+        }
         peak = float(res.peak_force_N[i])
-        row.update(peak_force_N=peak * (1 + 0.01 * rng.standard_normal()), peak_force_N_sd=0.01 * peak)
-        row.update(restitution=float(res.restitution[i]) + 0.01 * rng.standard_normal(), restitution_sd=0.01)
+        row.update(
+            peak_force_N=peak * (1 + 0.01 * rng.standard_normal()), peak_force_N_sd=0.01 * peak
+        )
+        row.update(
+            restitution=float(res.restitution[i]) + 0.01 * rng.standard_normal(),
+            restitution_sd=0.01,
+        )
         for j, b in enumerate(BANDS):
             row[f"lfe_{b}_dB"] = float(lfe[i, j]) + 0.2 * rng.standard_normal()
             row[f"lfe_{b}_dB_sd"] = 0.2
@@ -57,7 +66,9 @@ def main() -> None:
     args = ap.parse_args()
     info = machine_info()
     out = {}
-    print(f"{'model':<14} {'parameter':<18} {'truth':>10} {'within 2σ':>10} {'median |z|':>10}  first fit   warm fit (median)")
+    print(
+        f"{'model':<14} {'parameter':<18} {'truth':>10} {'within 2σ':>10} {'median |z|':>10}  first fit   warm fit (median)"
+    )
     for name, truth in CASES.items():
         z = {k: [] for k in truth}
         times = []
@@ -71,12 +82,23 @@ def main() -> None:
                 p = fit.parameters[k]
                 z[k].append((p.value - v) / p.std)
         warm = statistics.median(times[1:]) if len(times) > 1 else float("nan")
-        row = {"truth": truth, "heights_m": HEIGHTS, "n_figures": len(HEIGHTS) * (3 + len(BANDS)), "first_s": times[0], "warm_median_s": warm,
-               "within_2sigma": {k: float(np.mean(np.abs(v) <= 2)) for k, v in z.items()}, "z": z}
+        row = {
+            "truth": truth,
+            "heights_m": HEIGHTS,
+            "n_figures": len(HEIGHTS) * (3 + len(BANDS)),
+            "first_s": times[0],
+            "warm_median_s": warm,
+            "within_2sigma": {k: float(np.mean(np.abs(v) <= 2)) for k, v in z.items()},
+            "z": z,
+        }
         out[name] = row
         for k, v in truth.items():
-            print(f"{name:<14} {k:<18} {v:>10.4g} {row['within_2sigma'][k]:>10.0%} {np.median(np.abs(z[k])):>10.2f}  {times[0]:8.1f} s  {warm:8.2f} s")
-    path = write_json("summary_fit", {"machine": finish_machine_info(info), "draws": args.draws, "cases": out})
+            print(
+                f"{name:<14} {k:<18} {v:>10.4g} {row['within_2sigma'][k]:>10.0%} {np.median(np.abs(z[k])):>10.2f}  {times[0]:8.1f} s  {warm:8.2f} s"
+            )
+    path = write_json(
+        "summary_fit", {"machine": finish_machine_info(info), "draws": args.draws, "cases": out}
+    )
     print(f"wrote {path}")
 
 

@@ -26,7 +26,9 @@ CASES = {
     "hunt-crossley + ball mode": {"damping": HC, "ball_mode": MODE},
     "zener": {"damping": rbjax.Zener(0.3, 2e-3)},
     "elastic on osb-15mm (infinite plate)": {"floor": floor_preset("osb-15mm")},
-    "elastic on a 2-mode floating floor": {"floor": rbjax.ModalFloor([12.0, 4000.0], [50.0, 60.0], [0.1, 0.02])},
+    "elastic on a 2-mode floating floor": {
+        "floor": rbjax.ModalFloor([12.0, 4000.0], [50.0, 60.0], [0.1, 0.02])
+    },
 }
 
 
@@ -36,16 +38,44 @@ def main() -> None:
     for name, options in CASES.items():
 
         def run(options=options):
-            return rbjax.simulate(HEIGHTS, blocked_force="momentum", method="ode", **options).contact_time_s
+            return rbjax.simulate(
+                HEIGHTS, blocked_force="momentum", method="ode", **options
+            ).contact_time_s
 
         t = time_call(run)
         res = rbjax.simulate(HEIGHTS, blocked_force="momentum", method="ode", **options)
         steps = float(np.mean(np.asarray(res.num_steps)))
         us = 1e6 * t["median_s"] / HEIGHTS.size
-        out[name] = {"per_impact_us": us, "compile_s": t["compile_s"], "mean_steps": steps, "ok": int(np.sum(np.asarray(res.status) == 0))}
-        rows.append([name, f"{us:.1f}", f"{1e6 / us:,.0f}", f"{steps:.0f}", f"{t['compile_s']:.1f}", out[name]["ok"]])
+        out[name] = {
+            "per_impact_us": us,
+            "compile_s": t["compile_s"],
+            "mean_steps": steps,
+            "ok": int(np.sum(np.asarray(res.status) == 0)),
+        }
+        rows.append(
+            [
+                name,
+                f"{us:.1f}",
+                f"{1e6 / us:,.0f}",
+                f"{steps:.0f}",
+                f"{t['compile_s']:.1f}",
+                out[name]["ok"],
+            ]
+        )
         print(rows[-1], flush=True)
-    print(table(["model (momentum, ODE path, batch 1000)", "µs/impact", "impacts/s", "steps", "first call (s)", "ok"], rows))
+    print(
+        table(
+            [
+                "model (momentum, ODE path, batch 1000)",
+                "µs/impact",
+                "impacts/s",
+                "steps",
+                "first call (s)",
+                "ok",
+            ],
+            rows,
+        )
+    )
     out["machine"] = finish_machine_info(info)
     print(f"wrote {write_json('term_cost', out)}")
 

@@ -81,19 +81,36 @@ def flat(n, model=None, **ball_changes):
 
 
 def record(rows, workload, variant, n, timing, **extra):
-    row = {"workload": workload, "variant": variant, "batch": n, "first_s": timing["first_s"], "median_s": timing["median_s"],
-           "min_s": timing["min_s"], "compile_s": timing["compile_s"], "repeats": timing["repeats"],
-           "impacts_per_s": n / timing["median_s"], "per_impact_s": timing["median_s"] / n, **extra}
+    row = {
+        "workload": workload,
+        "variant": variant,
+        "batch": n,
+        "first_s": timing["first_s"],
+        "median_s": timing["median_s"],
+        "min_s": timing["min_s"],
+        "compile_s": timing["compile_s"],
+        "repeats": timing["repeats"],
+        "impacts_per_s": n / timing["median_s"],
+        "per_impact_s": timing["median_s"] / n,
+        **extra,
+    }
     rows.append(row)
-    print(f"{workload:10s} {variant:44s} B={n:<7d} {row['impacts_per_s']:12.0f} /s   first {timing['first_s']:6.2f} s  "
-          f"compile {timing['compile_s']:6.2f} s  median {timing['median_s'] * 1e3:9.2f} ms  "
-          + " ".join(f"{k}={fmt(v, '.3g')}" for k, v in extra.items() if not isinstance(v, (dict, list))), flush=True)
+    print(
+        f"{workload:10s} {variant:44s} B={n:<7d} {row['impacts_per_s']:12.0f} /s   first {timing['first_s']:6.2f} s  "
+        f"compile {timing['compile_s']:6.2f} s  median {timing['median_s'] * 1e3:9.2f} ms  "
+        + " ".join(
+            f"{k}={fmt(v, '.3g')}" for k, v in extra.items() if not isinstance(v, (dict, list))
+        ),
+        flush=True,
+    )
     return row
 
 
 def timed(fn, n):
     big = n >= 10_000
-    return time_call(fn, min_repeats=1 if n >= 100_000 else 2 if big else 3, min_time_s=0.3, max_repeats=10)
+    return time_call(
+        fn, min_repeats=1 if n >= 100_000 else 2 if big else 3, min_time_s=0.3, max_repeats=10
+    )
 
 
 def contact_error(out, n):
@@ -117,17 +134,43 @@ def scalar_workload(rows, sizes, quick):
         for name, solver in variants:
             t = timed(lambda: impact_batch(h, b, m, solver), n)
             out = t["out"]
-            record(rows, "scalar", name, n, t, mean_steps=float(np.mean(np.asarray(out.num_steps))),
-                   max_steps=int(np.max(np.asarray(out.num_steps))), contact_rel_err=contact_error(out, n) if check else None)
+            record(
+                rows,
+                "scalar",
+                name,
+                n,
+                t,
+                mean_steps=float(np.mean(np.asarray(out.num_steps))),
+                max_steps=int(np.max(np.asarray(out.num_steps))),
+                contact_rel_err=contact_error(out, n) if check else None,
+            )
         for nodes in (12, *QUAD_FAST_NODES):
             t = timed(lambda: impact_quadrature_batch(h, b, m, nodes), n)
-            record(rows, "scalar", f"quadrature, n_nodes={nodes}", n, t, contact_rel_err=contact_error(t["out"], n) if check else None)
+            record(
+                rows,
+                "scalar",
+                f"quadrature, n_nodes={nodes}",
+                n,
+                t,
+                contact_rel_err=contact_error(t["out"], n) if check else None,
+            )
     # adjoint lever at one size: the same tolerance, forward-mode adjoint
     n = sizes[-2] if len(sizes) > 1 else sizes[-1]
     h, b, m = flat(n)
-    for name, solver in (("ode, default tol, adjoint=forward", rbjax.Solver(adjoint="forward")), ("ode, recommended tol, adjoint=forward", RECOMMENDED_FWD)):
+    for name, solver in (
+        ("ode, default tol, adjoint=forward", rbjax.Solver(adjoint="forward")),
+        ("ode, recommended tol, adjoint=forward", RECOMMENDED_FWD),
+    ):
         t = timed(lambda: impact_batch(h, b, m, solver), n)
-        record(rows, "scalar", name, n, t, mean_steps=float(np.mean(np.asarray(t["out"].num_steps))), contact_rel_err=contact_error(t["out"], n))
+        record(
+            rows,
+            "scalar",
+            name,
+            n,
+            t,
+            mean_steps=float(np.mean(np.asarray(t["out"].num_steps))),
+            contact_rel_err=contact_error(t["out"], n),
+        )
 
 
 def bucketing_workload(rows, quick):
@@ -137,14 +180,20 @@ def bucketing_workload(rows, quick):
     n, chunk = (1000, 500) if quick else (20_000, 1000)
     height = 10.0 ** rng.uniform(-3, 1, n)
     youngs = 10.0 ** rng.uniform(5, 8, n)
-    c = 10.0 ** rng.uniform(0, 3.5, n)  # Kelvin–Voigt c up to ~3× critical (~700 N s/m for the JIS ball)
+    c = 10.0 ** rng.uniform(
+        0, 3.5, n
+    )  # Kelvin–Voigt c up to ~3× critical (~700 N s/m for the JIS ball)
     solver = RECOMMENDED
 
     def run(order):
         outs = []
         for i in range(0, n, chunk):
-            idx = order[i:i + chunk]
-            _, hh, bb, mm = broadcast_inputs(height[idx], BALL.replace(youngs_Pa=youngs[idx]), make_model(damping=rbjax.KelvinVoigt(c[idx])))
+            idx = order[i : i + chunk]
+            _, hh, bb, mm = broadcast_inputs(
+                height[idx],
+                BALL.replace(youngs_Pa=youngs[idx]),
+                make_model(damping=rbjax.KelvinVoigt(c[idx])),
+            )
             outs.append(impact_batch(hh, bb, mm, solver))
         return outs
 
@@ -159,10 +208,25 @@ def bucketing_workload(rows, quick):
     oracle = np.argsort(steps)
     t_pred = time_call(lambda: run(predictor), min_repeats=2, min_time_s=0.0)
     t_orc = time_call(lambda: run(oracle), min_repeats=2, min_time_s=0.0)
-    chunk_max = lambda order: float(np.mean([steps[order[i:i + chunk]].max() for i in range(0, n, chunk)]))  # noqa: E731
-    for name, t, order in (("mixed batch, chunks unsorted", t_un, unsorted), ("mixed batch, chunks sorted by predictor", t_pred, predictor),
-                           ("mixed batch, chunks sorted by step count (oracle)", t_orc, oracle)):
-        record(rows, "bucketing", name, n, t, chunk=chunk, mean_steps=float(steps.mean()), mean_chunk_max_steps=chunk_max(order))
+
+    def chunk_max(order):
+        return float(np.mean([steps[order[i : i + chunk]].max() for i in range(0, n, chunk)]))
+
+    for name, t, order in (
+        ("mixed batch, chunks unsorted", t_un, unsorted),
+        ("mixed batch, chunks sorted by predictor", t_pred, predictor),
+        ("mixed batch, chunks sorted by step count (oracle)", t_orc, oracle),
+    ):
+        record(
+            rows,
+            "bucketing",
+            name,
+            n,
+            t,
+            chunk=chunk,
+            mean_steps=float(steps.mean()),
+            mean_chunk_max_steps=chunk_max(order),
+        )
 
 
 def scipy_workload(rows, quick):
@@ -174,8 +238,14 @@ def scipy_workload(rows, quick):
     wall = time.perf_counter() - t0
     ref = quadrature_reference(hs, n_nodes=64)["contact_time_s"]
     timing = {"first_s": wall, "median_s": wall, "min_s": wall, "compile_s": 0.0, "repeats": 1}
-    return record(rows, "scalar", "scipy solve_ivp DOP853 rtol 1e-10 (Python loop)", n, timing,
-                  contact_rel_err=float(np.max(np.abs(np.asarray(tc) / ref - 1))))
+    return record(
+        rows,
+        "scalar",
+        "scipy solve_ivp DOP853 rtol 1e-10 (Python loop)",
+        n,
+        timing,
+        contact_rel_err=float(np.max(np.abs(np.asarray(tc) / ref - 1))),
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -188,7 +258,10 @@ def _bin_matrix():
     k = np.arange(N_RECORD // 2 + 1)
     f = k * RATE_HZ / N_RECORD
     used = (f >= lower[0]) & (f < upper[-1])
-    band = np.array([np.flatnonzero((f[used] >= lo) & (f[used] < hi)) for lo, hi in zip(lower, upper)], dtype=object)
+    band = np.array(
+        [np.flatnonzero((f[used] >= lo) & (f[used] < hi)) for lo, hi in zip(lower, upper)],
+        dtype=object,
+    )
     mask = np.zeros((len(lower), used.sum()))
     for i, idx in enumerate(band):
         mask[i, idx] = 1.0
@@ -210,7 +283,9 @@ def lfe_octave_from_window(force_window):
 
 def history_workload(rows, sizes):
     model = make_model()
-    t_c = float(quadrature_reference([0.1])["contact_time_s"][0])  # the longest contact of 0.1–1.6 m
+    t_c = float(
+        quadrature_reference([0.1])["contact_time_s"][0]
+    )  # the longest contact of 0.1–1.6 m
     n_w = int(math.ceil(t_c * RATE_HZ)) + 2
     times = jnp.arange(n_w) / RATE_HZ
 
@@ -218,7 +293,9 @@ def history_workload(rows, sizes):
         @jax.jit
         def f(h):
             force = rbjax.trajectory(h, times, BALL, model, solver).force_N
-            chunks = force.reshape((-1, min(force.shape[0], 250), n_w))  # rfft of 1 s records, 250 at a time
+            chunks = force.reshape(
+                (-1, min(force.shape[0], 250), n_w)
+            )  # rfft of 1 s records, 250 at a time
 
             def lfe(x):
                 return lfe_octave_dB(jnp.pad(x, ((0, 0), (0, N_RECORD - n_w))), RATE_HZ)
@@ -228,7 +305,11 @@ def history_workload(rows, sizes):
         return f
 
     def windowed(solver):
-        return jax.jit(lambda h: lfe_octave_from_window(rbjax.trajectory(h, times, BALL, model, solver).force_N))
+        return jax.jit(
+            lambda h: lfe_octave_from_window(
+                rbjax.trajectory(h, times, BALL, model, solver).force_N
+            )
+        )
 
     # rbjax.trajectory keeps each phase's dense interpolant for max_steps steps: ~16 floats per step
     # and phase (tsit5), 1 MB per impact at max_steps = 4096; a batch of 10 000 needs ~10 GB (the
@@ -236,11 +317,19 @@ def history_workload(rows, sizes):
     small = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10, max_steps=256)
     upto_1000 = [n for n in sizes if n <= 1000]
     variants = [
-        ("trajectory + octave bins only (DFT matmul), recommended", windowed(RECOMMENDED), upto_1000),
+        (
+            "trajectory + octave bins only (DFT matmul), recommended",
+            windowed(RECOMMENDED),
+            upto_1000,
+        ),
         ("trajectory + lfe_octave_dB (1 s rfft), recommended", padded(RECOMMENDED), upto_1000[-1:]),
         ("trajectory + octave bins only, default Solver()", windowed(DEFAULT), upto_1000[-1:]),
         ("trajectory + octave bins only, recommended, max_steps=256", windowed(small), sizes),
-        ("trajectory + lfe_octave_dB (1 s rfft), recommended, max_steps=256", padded(small), sizes[-1:]),
+        (
+            "trajectory + lfe_octave_dB (1 s rfft), recommended, max_steps=256",
+            padded(small),
+            sizes[-1:],
+        ),
     ]
     ref_fn = windowed(rbjax.Solver(method="dopri8", rtol=1e-12, atol=1e-15, max_steps=256))
     refs = {}
@@ -250,7 +339,15 @@ def history_workload(rows, sizes):
             if n not in refs:
                 refs[n] = np.asarray(ref_fn(h))
             t = timed(lambda: fn(h), n)
-            record(rows, "history", name, n, t, samples=n_w, lfe_max_abs_err_dB=float(np.max(np.abs(np.asarray(t["out"]) - refs[n]))))
+            record(
+                rows,
+                "history",
+                name,
+                n,
+                t,
+                samples=n_w,
+                lfe_max_abs_err_dB=float(np.max(np.abs(np.asarray(t["out"]) - refs[n]))),
+            )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -281,13 +378,19 @@ def jacobian_workload(rows, sizes):
     quad_jac = jax.jit(jax.vmap(value_and_jac(one_quad)))
     for n in sizes:
         h = jnp.asarray(heights(n))
-        ode = n == sizes[-2] if len(sizes) > 1 else True  # the ODE Jacobian compiles for minutes: one size
+        ode = (
+            n == sizes[-2] if len(sizes) > 1 else True
+        )  # the ODE Jacobian compiles for minutes: one size
         theta3 = jnp.tile(jnp.array([1.6e6, 0.45, 100.0]), (n, 1))
         theta2 = jnp.tile(jnp.array([1.6e6, 0.45]), (n, 1))
         base = {}
-        for name, fn, th in (("KV: value only (adjoint=forward)", ode_value, theta3), ("KV: value only (adjoint=reverse)", ode_value_rev, theta3),
-                             ("KV: value + jacfwd (E, nu, c)", ode_jac, theta3),
-                             ("quadrature: value only", quad_value, theta2), ("quadrature: value + jacfwd (E, nu)", quad_jac, theta2)):
+        for name, fn, th in (
+            ("KV: value only (adjoint=forward)", ode_value, theta3),
+            ("KV: value only (adjoint=reverse)", ode_value_rev, theta3),
+            ("KV: value + jacfwd (E, nu, c)", ode_jac, theta3),
+            ("quadrature: value only", quad_value, theta2),
+            ("quadrature: value + jacfwd (E, nu)", quad_jac, theta2),
+        ):
             kind = name.split(":")[0]
             if kind == "KV" and not ode:
                 continue
@@ -319,18 +422,29 @@ def compile_breakdown(n=1000, quick=False):
         compiled = lowered.compile()
         t2 = time.perf_counter()
         hlo = compiled.as_text() or ""
-        out[name] = {"trace_lower_s": t1 - t0, "xla_compile_s": t2 - t1, "hlo_lines_optimized": hlo.count("\n"),
-                     "stablehlo_lines": lowered.as_text().count("\n"), "while_loops": hlo.count(" while(")}
+        out[name] = {
+            "trace_lower_s": t1 - t0,
+            "xla_compile_s": t2 - t1,
+            "hlo_lines_optimized": hlo.count("\n"),
+            "stablehlo_lines": lowered.as_text().count("\n"),
+            "while_loops": hlo.count(" while("),
+        }
     fn = jax.jit(jax.vmap(lambda hh, bb: impact_quadrature(hh, bb, make_model())))
     t0 = time.perf_counter()
     lowered = fn.lower(h, b)
     t1 = time.perf_counter()
     compiled = lowered.compile()
     t2 = time.perf_counter()
-    out["quadrature n_nodes=12"] = {"trace_lower_s": t1 - t0, "xla_compile_s": t2 - t1, "hlo_lines_optimized": (compiled.as_text() or "").count("\n"),
-                                    "stablehlo_lines": lowered.as_text().count("\n")}
+    out["quadrature n_nodes=12"] = {
+        "trace_lower_s": t1 - t0,
+        "xla_compile_s": t2 - t1,
+        "hlo_lines_optimized": (compiled.as_text() or "").count("\n"),
+        "stablehlo_lines": lowered.as_text().count("\n"),
+    }
     for k, v in out.items():
-        print(f"compile  {k:32s} trace+lower {v['trace_lower_s']:6.2f} s  XLA {v['xla_compile_s']:6.2f} s  HLO lines {v['hlo_lines_optimized']}")
+        print(
+            f"compile  {k:32s} trace+lower {v['trace_lower_s']:6.2f} s  XLA {v['xla_compile_s']:6.2f} s  HLO lines {v['hlo_lines_optimized']}"
+        )
     return out
 
 
@@ -339,14 +453,21 @@ def persistent_cache_probe(quick):
     persistent compilation cache (the warm run still traces; it skips XLA)."""
     import tempfile
 
-    code = ("import time,sys; t=time.perf_counter(); import jax; jax.config.update('jax_compilation_cache_dir', sys.argv[1]);"
-            "jax.config.update('jax_persistent_cache_min_compile_time_secs', 0.0); import rbjax, numpy as np;"
-            "t1=time.perf_counter(); r=rbjax.simulate(np.linspace(0.1,1.6,1000)); jax.block_until_ready(r.contact_time_s);"
-            "print(time.perf_counter()-t1)")
+    code = (
+        "import time,sys; t=time.perf_counter(); import jax; jax.config.update('jax_compilation_cache_dir', sys.argv[1]);"
+        "jax.config.update('jax_persistent_cache_min_compile_time_secs', 0.0); import rbjax, numpy as np;"
+        "t1=time.perf_counter(); r=rbjax.simulate(np.linspace(0.1,1.6,1000)); jax.block_until_ready(r.contact_time_s);"
+        "print(time.perf_counter()-t1)"
+    )
     out = {}
     with tempfile.TemporaryDirectory() as d:
         for label in ("cold cache", "warm cache"):
-            res = subprocess.run([sys.executable, "-c", code, d], capture_output=True, text=True, cwd=os.path.dirname(__file__))
+            res = subprocess.run(
+                [sys.executable, "-c", code, d],
+                capture_output=True,
+                text=True,
+                cwd=os.path.dirname(__file__),
+            )
             try:
                 out[label] = float(res.stdout.strip().splitlines()[-1])
             except (ValueError, IndexError):
@@ -368,7 +489,9 @@ def vector_field_floor(n=10_000):
         @jax.jit
         def f(y, b, m):
             def body(_, yy):
-                return yy + 1e-9 * jax.vmap(lambda yi, bi, mi: COMPRESSION_FIELD(0.0, yi, (bi, mi)))(yy, b, m)
+                return yy + 1e-9 * jax.vmap(
+                    lambda yi, bi, mi: COMPRESSION_FIELD(0.0, yi, (bi, mi))
+                )(yy, b, m)
 
             return jax.lax.fori_loop(0, 200, body, y)
 
@@ -397,16 +520,26 @@ def main():
     history_workload(rows, sizes_b)
     jacobian_workload(rows, sizes_c)
     floor_s = vector_field_floor(1000 if quick else 10_000)
-    print("one vector-field evaluation (ns per impact, min of repeats):", {k: round(v * 1e9, 1) for k, v in floor_s.items()})
+    print(
+        "one vector-field evaluation (ns per impact, min of repeats):",
+        {k: round(v * 1e9, 1) for k, v in floor_s.items()},
+    )
     cache = {} if quick else persistent_cache_probe(quick)
 
     for r in rows:
         if r["workload"] == "scalar" and r is not scipy_row:
             r["speedup_vs_scipy"] = scipy_row["per_impact_s"] / r["per_impact_s"]
-    data = {"machine": finish_machine_info(info), "quick": quick, "rows": rows, "compile_breakdown": breakdown,
-            "vector_field_eval_s_per_impact": floor_s, "persistent_cache_first_call_s": cache,
-            "scipy_per_impact_s": scipy_row["per_impact_s"], "recommended_solver": repr(RECOMMENDED),
-            "wall_s": time.perf_counter() - t_start}
+    data = {
+        "machine": finish_machine_info(info),
+        "quick": quick,
+        "rows": rows,
+        "compile_breakdown": breakdown,
+        "vector_field_eval_s_per_impact": floor_s,
+        "persistent_cache_first_call_s": cache,
+        "scipy_per_impact_s": scipy_row["per_impact_s"],
+        "recommended_solver": repr(RECOMMENDED),
+        "wall_s": time.perf_counter() - t_start,
+    }
     write_json("throughput" + ("_quick" if quick else ""), data)
     plot(rows, scipy_row, quick)
     print(f"total {data['wall_s']:.0f} s")
@@ -419,14 +552,21 @@ def plot(rows, scipy_row, quick):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(17, 5.2))
-    for ax, workload, title in zip(axes, ("scalar", "history", "jacobian"),
-                                   ("(a) scalar outputs", "(b) 44.1 kHz history + octave L_FE", "(c) value + Jacobian")):
+    for ax, workload, title in zip(
+        axes,
+        ("scalar", "history", "jacobian"),
+        ("(a) scalar outputs", "(b) 44.1 kHz history + octave L_FE", "(c) value + Jacobian"),
+    ):
         variants = []
         for r in rows:
             if r["workload"] == workload and r["variant"] not in variants and r is not scipy_row:
                 variants.append(r["variant"])
         for v in variants:
-            pts = sorted((r["batch"], r["impacts_per_s"]) for r in rows if r["workload"] == workload and r["variant"] == v)
+            pts = sorted(
+                (r["batch"], r["impacts_per_s"])
+                for r in rows
+                if r["workload"] == workload and r["variant"] == v
+            )
             if len(pts) == 1:
                 ax.loglog(*zip(*pts), "*", ms=10, label=v)
             else:

@@ -111,7 +111,12 @@ def main():
     ref = quadrature_reference(HEIGHTS_M, n_nodes=64)
     n_t = int(math.ceil(ref["contact_time_s"].max() * RATE_HZ)) + 2
     times = jnp.arange(n_t) / RATE_HZ
-    ref_force = np.stack([np.asarray(force_history_quadrature(h, ball, model, times, n_nodes=48).force_N) for h in HEIGHTS_M])
+    ref_force = np.stack(
+        [
+            np.asarray(force_history_quadrature(h, ball, model, times, n_nodes=48).force_N)
+            for h in HEIGHTS_M
+        ]
+    )
     ref_lfe = lfe_of(ref_force)
 
     import scipy_reference as sr
@@ -119,17 +124,29 @@ def main():
     floor = {}
     sp = [sr.reference_impact(h, ball, rtol=1e-13) for h in HEIGHTS_M]
     floor["scipy DOP853 rtol 1e-13"] = {
-        "contact_time_s": max(abs(s.contact_time_s / ref["contact_time_s"][i] - 1) for i, s in enumerate(sp)),
-        "peak_force_N": max(abs(s.peak_force_N / ref["peak_force_N"][i] - 1) for i, s in enumerate(sp)),
-        "restitution": max(abs(s.restitution / ref["restitution"][i] - 1) for i, s in enumerate(sp)),
-        "force_L2": max(np.linalg.norm(s.force_N(np.asarray(times)) - ref_force[i]) / np.linalg.norm(ref_force[i]) for i, s in enumerate(sp)),
+        "contact_time_s": max(
+            abs(s.contact_time_s / ref["contact_time_s"][i] - 1) for i, s in enumerate(sp)
+        ),
+        "peak_force_N": max(
+            abs(s.peak_force_N / ref["peak_force_N"][i] - 1) for i, s in enumerate(sp)
+        ),
+        "restitution": max(
+            abs(s.restitution / ref["restitution"][i] - 1) for i, s in enumerate(sp)
+        ),
+        "force_L2": max(
+            np.linalg.norm(s.force_N(np.asarray(times)) - ref_force[i])
+            / np.linalg.norm(ref_force[i])
+            for i, s in enumerate(sp)
+        ),
     }
     d8 = sweep_solver("dopri8", rtol=1e-13, atol=1e-16)
     o = impact_batch(h3, b3, m3, d8)
     f8 = np.asarray(trajectory_batch(h3, b3, m3, d8, times).force_N)
     floor["diffrax dopri8 rtol 1e-13"] = {
         **{k: float(np.max(np.abs(np.asarray(getattr(o, k)) / ref[k] - 1))) for k in SCALARS},
-        "force_L2": float(np.max(np.linalg.norm(f8 - ref_force, axis=-1) / np.linalg.norm(ref_force, axis=-1))),
+        "force_L2": float(
+            np.max(np.linalg.norm(f8 - ref_force, axis=-1) / np.linalg.norm(ref_force, axis=-1))
+        ),
         "lfe_dB": float(np.max(np.abs(lfe_of(f8) - ref_lfe))),
     }
 
@@ -145,13 +162,19 @@ def main():
             max_steps=16384 if fixed else 4096,
             adjoint=c["adjoint"],
         )
-        timing = time_call(lambda: impact_batch(h_all, b_all, m_all, solver), min_repeats=2 if quick else 3)
+        timing = time_call(
+            lambda: impact_batch(h_all, b_all, m_all, solver), min_repeats=2 if quick else 3
+        )
         out = timing["out"]
         status = np.asarray(out.status)
-        err = {k: float(np.max(np.abs(np.asarray(getattr(out, k))[:3] / ref[k] - 1))) for k in SCALARS}
+        err = {
+            k: float(np.max(np.abs(np.asarray(getattr(out, k))[:3] / ref[k] - 1))) for k in SCALARS
+        }
         traj = block(trajectory_batch(h3, b3, m3, solver, times))
         force = np.asarray(traj.force_N)
-        err["force_L2"] = float(np.max(np.linalg.norm(force - ref_force, axis=-1) / np.linalg.norm(ref_force, axis=-1)))
+        err["force_L2"] = float(
+            np.max(np.linalg.norm(force - ref_force, axis=-1) / np.linalg.norm(ref_force, axis=-1))
+        )
         err["lfe_dB"] = float(np.max(np.abs(lfe_of(force) - ref_lfe)))
         row = {
             **c,
@@ -165,21 +188,38 @@ def main():
             "errors": err,
         }
         rows.append(row)
-        print(f"{row['series']:26s} {c.get('rtol', c.get('step_s')):8.0e}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  "
-              f"steps {row['mean_steps']:7.1f}  ok {row['ok_fraction']:.2f}  tc {err['contact_time_s']:.1e}  "
-              f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}  L2 {err['force_L2']:.1e}  "
-              f"LFE {err['lfe_dB']:.1e} dB  (first call {timing['first_s']:.1f} s) {row['status_counts']}", flush=True)
+        print(
+            f"{row['series']:26s} {c.get('rtol', c.get('step_s')):8.0e}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  "
+            f"steps {row['mean_steps']:7.1f}  ok {row['ok_fraction']:.2f}  tc {err['contact_time_s']:.1e}  "
+            f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}  L2 {err['force_L2']:.1e}  "
+            f"LFE {err['lfe_dB']:.1e} dB  (first call {timing['first_s']:.1f} s) {row['status_counts']}",
+            flush=True,
+        )
 
     # quadrature path, over its node count (static: one compile each)
-    for n in ([8, 16] if quick else [4, 6, 8, 10, 12, 16, 24, 32]):
-        timing = time_call(lambda: impact_quadrature_batch(h_all, b_all, m_all, n), min_repeats=2 if quick else 3)
+    for n in [8, 16] if quick else [4, 6, 8, 10, 12, 16, 24, 32]:
+        timing = time_call(
+            lambda: impact_quadrature_batch(h_all, b_all, m_all, n), min_repeats=2 if quick else 3
+        )
         out = timing["out"]
-        err = {k: float(np.max(np.abs(np.asarray(getattr(out, k))[:3] / ref[k] - 1))) for k in SCALARS}
-        row = {"quadrature": True, "n_nodes": n, "series": "quadrature", "per_solve_s": timing["median_s"] / batch,
-               "first_call_s": timing["first_s"], "ok_fraction": float(np.mean(np.asarray(out.status) == 0)), "errors": err}
+        err = {
+            k: float(np.max(np.abs(np.asarray(getattr(out, k))[:3] / ref[k] - 1))) for k in SCALARS
+        }
+        row = {
+            "quadrature": True,
+            "n_nodes": n,
+            "series": "quadrature",
+            "per_solve_s": timing["median_s"] / batch,
+            "first_call_s": timing["first_s"],
+            "ok_fraction": float(np.mean(np.asarray(out.status) == 0)),
+            "errors": err,
+        }
         rows.append(row)
-        print(f"{'quadrature':26s} n={n:<6d}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  tc {err['contact_time_s']:.1e}  "
-              f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}", flush=True)
+        print(
+            f"{'quadrature':26s} n={n:<6d}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  tc {err['contact_time_s']:.1e}  "
+            f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}",
+            flush=True,
+        )
 
     damped = damped_models(quick)
     knees = pick_knees(rows)
@@ -210,7 +250,11 @@ DAMPED = {
     "kelvin-voigt c=100": dict(damping=rbjax.KelvinVoigt(100.0)),
     "hunt-crossley a=0.5": dict(damping=rbjax.HuntCrossley(0.5)),
     "zener r=0.3 tau=1ms, momentum": dict(damping=rbjax.Zener(0.3, 1e-3), blocked_force="momentum"),
-    "kelvin-voigt 3x critical": dict(damping=rbjax.KelvinVoigt(3.0 * 2.0 * math.sqrt(float(rbjax.JIS_RUBBER_BALL.stiffness_N_per_m) * 2.5))),
+    "kelvin-voigt 3x critical": dict(
+        damping=rbjax.KelvinVoigt(
+            3.0 * 2.0 * math.sqrt(float(rbjax.JIS_RUBBER_BALL.stiffness_N_per_m) * 2.5)
+        )
+    ),
 }
 
 
@@ -222,16 +266,33 @@ def damped_models(quick):
     ball = rbjax.JIS_RUBBER_BALL
     rtols = [1e-6, 1e-7, 1e-9] if quick else [1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
     out = {}
-    for name, options in (list(DAMPED.items())[:1] if quick else DAMPED.items()):
+    for name, options in list(DAMPED.items())[:1] if quick else DAMPED.items():
         refs = [sr.reference_impact(h, ball, **options) for h in HEIGHTS_M]
         _, h, b, m = broadcast_inputs(np.asarray(HEIGHTS_M), ball, make_model(**options))
         out[name] = {}
         for rtol in rtols:
             res = impact_batch(h, b, m, sweep_solver("tsit5", rtol=rtol, atol=1e-3 * rtol))
-            err = {k: float(np.max(np.abs(np.asarray(getattr(res, k)) / np.array([getattr(r, k) for r in refs]) - 1))) for k in SCALARS}
-            out[name][f"{rtol:.0e}"] = {"errors": err, "mean_steps": float(np.mean(np.asarray(res.num_steps)))}
-            print(f"damped  {name:32s} tsit5 rtol {rtol:.0e}: " + "  ".join(f"{k} {v:.1e}" for k, v in err.items())
-                  + f"  steps {out[name][f'{rtol:.0e}']['mean_steps']:.0f}", flush=True)
+            err = {
+                k: float(
+                    np.max(
+                        np.abs(
+                            np.asarray(getattr(res, k)) / np.array([getattr(r, k) for r in refs])
+                            - 1
+                        )
+                    )
+                )
+                for k in SCALARS
+            }
+            out[name][f"{rtol:.0e}"] = {
+                "errors": err,
+                "mean_steps": float(np.mean(np.asarray(res.num_steps))),
+            }
+            print(
+                f"damped  {name:32s} tsit5 rtol {rtol:.0e}: "
+                + "  ".join(f"{k} {v:.1e}" for k, v in err.items())
+                + f"  steps {out[name][f'{rtol:.0e}']['mean_steps']:.0f}",
+                flush=True,
+            )
     return out
 
 
@@ -242,10 +303,17 @@ def pick_knees(rows):
     for name in sorted({r["series"] for r in rows}):
         mine = sorted((r for r in rows if r["series"] == name), key=lambda r: r["per_solve_s"])
         for label, tol in (("target", TARGET_REL), ("margin_100x", TARGET_REL / 100)):
-            ok = [r for r in mine if r["ok_fraction"] == 1.0 and all(r["errors"][k] <= tol for k in SCALARS)]
+            ok = [
+                r
+                for r in mine
+                if r["ok_fraction"] == 1.0 and all(r["errors"][k] <= tol for k in SCALARS)
+            ]
             if ok:
                 r = ok[0]
-                knees.setdefault(name, {})[label] = {k: r.get(k) for k in ("rtol", "atol", "step_s", "n_nodes", "per_solve_s", "mean_steps")} | {"errors": r["errors"]}
+                knees.setdefault(name, {})[label] = {
+                    k: r.get(k)
+                    for k in ("rtol", "atol", "step_s", "n_nodes", "per_solve_s", "mean_steps")
+                } | {"errors": r["errors"]}
     return knees
 
 
@@ -253,11 +321,43 @@ def knee_table(knees):
     rows = []
     for name, k in knees.items():
         for label, r in k.items():
-            setting = (f"rtol {r['rtol']:.0e}" if r.get("rtol") else f"step {r['step_s']:.0e} s" if r.get("step_s") else f"n={r['n_nodes']}")
+            setting = (
+                f"rtol {r['rtol']:.0e}"
+                if r.get("rtol")
+                else f"step {r['step_s']:.0e} s"
+                if r.get("step_s")
+                else f"n={r['n_nodes']}"
+            )
             e = r["errors"]
-            rows.append([name, label, setting, fmt(r["per_solve_s"] * 1e6), fmt(r.get("mean_steps")), fmt(e["contact_time_s"], ".1e"),
-                         fmt(e["peak_force_N"], ".1e"), fmt(e["restitution"], ".1e"), fmt(e.get("force_L2"), ".1e"), fmt(e.get("lfe_dB"), ".1e")])
-    return table(["series", "criterion", "setting", "µs/solve", "steps", "tc err", "F err", "e err", "history L2", "L_FE dB"], rows)
+            rows.append(
+                [
+                    name,
+                    label,
+                    setting,
+                    fmt(r["per_solve_s"] * 1e6),
+                    fmt(r.get("mean_steps")),
+                    fmt(e["contact_time_s"], ".1e"),
+                    fmt(e["peak_force_N"], ".1e"),
+                    fmt(e["restitution"], ".1e"),
+                    fmt(e.get("force_L2"), ".1e"),
+                    fmt(e.get("lfe_dB"), ".1e"),
+                ]
+            )
+    return table(
+        [
+            "series",
+            "criterion",
+            "setting",
+            "µs/solve",
+            "steps",
+            "tc err",
+            "F err",
+            "e err",
+            "history L2",
+            "L_FE dB",
+        ],
+        rows,
+    )
 
 
 def plot(rows, floor, quick):
@@ -266,28 +366,48 @@ def plot(rows, floor, quick):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    panels = [("contact_time_s", "contact time, relative error"), ("peak_force_N", "peak force, relative error"),
-              ("restitution", "restitution, relative error"), ("force_L2", "force history (44.1 kHz), relative L2"),
-              ("lfe_dB", "octave L_FE, max |ΔL| (dB)")]
+    panels = [
+        ("contact_time_s", "contact time, relative error"),
+        ("peak_force_N", "peak force, relative error"),
+        ("restitution", "restitution, relative error"),
+        ("force_L2", "force history (44.1 kHz), relative L2"),
+        ("lfe_dB", "octave L_FE, max |ΔL| (dB)"),
+    ]
     fig, axes = plt.subplots(2, 3, figsize=(16, 9.5))
     names = sorted({r["series"] for r in rows}, key=lambda s: (s == "quadrature", s))
     cmap = plt.get_cmap("tab10")
     for ax, (key, title) in zip(axes.flat, panels):
         for i, name in enumerate(names):
-            pts = [(r["per_solve_s"], r["errors"].get(key)) for r in rows if r["series"] == name and r["errors"].get(key) is not None]
+            pts = [
+                (r["per_solve_s"], r["errors"].get(key))
+                for r in rows
+                if r["series"] == name and r["errors"].get(key) is not None
+            ]
             pts = [(t, max(e, 1e-17)) for t, e in pts if math.isfinite(e)]
             if not pts:
                 continue
             t, e = zip(*pts)
             style = "--" if "forward" in name else ":" if name == "quadrature" else "-"
-            ax.loglog(np.asarray(t) * 1e6, e, style, marker="o", ms=3, color=cmap(i % 10), label=name)
-            bad = [(r["per_solve_s"] * 1e6, r["errors"][key]) for r in rows if r["series"] == name and r["ok_fraction"] < 1.0
-                   and r["errors"].get(key) is not None and math.isfinite(r["errors"][key])]
+            ax.loglog(
+                np.asarray(t) * 1e6, e, style, marker="o", ms=3, color=cmap(i % 10), label=name
+            )
+            bad = [
+                (r["per_solve_s"] * 1e6, r["errors"][key])
+                for r in rows
+                if r["series"] == name
+                and r["ok_fraction"] < 1.0
+                and r["errors"].get(key) is not None
+                and math.isfinite(r["errors"][key])
+            ]
             if bad:  # a status other than ok in the batch (the history itself carries no status)
                 ax.loglog(*zip(*bad), "x", ms=9, mew=2, color="red")
         if key != "lfe_dB":
             ax.axhline(TARGET_REL, color="k", lw=0.8, ls="--")
-        floor_val = floor["scipy DOP853 rtol 1e-13"].get(key) if key in floor["scipy DOP853 rtol 1e-13"] else None
+        floor_val = (
+            floor["scipy DOP853 rtol 1e-13"].get(key)
+            if key in floor["scipy DOP853 rtol 1e-13"]
+            else None
+        )
         if floor_val:
             ax.axhline(floor_val, color="grey", lw=0.8, ls=":")
         ax.set_title(title, fontsize=10)
@@ -296,7 +416,11 @@ def plot(rows, floor, quick):
     axes.flat[0].legend(fontsize=7)
     ax = axes.flat[5]
     for i, name in enumerate(names):
-        pts = [(r["per_solve_s"], r["mean_steps"]) for r in rows if r["series"] == name and r.get("mean_steps")]
+        pts = [
+            (r["per_solve_s"], r["mean_steps"])
+            for r in rows
+            if r["series"] == name and r.get("mean_steps")
+        ]
         if pts:
             t, s = zip(*pts)
             ax.loglog(s, np.asarray(t) * 1e6, marker="o", ms=3, color=cmap(i % 10), label=name)
@@ -304,8 +428,10 @@ def plot(rows, floor, quick):
     ax.set_ylabel("µs per solve")
     ax.set_title("cost per step", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle("Work–precision, JIS ball at 0.1, 1.0, 1.6 m (max error over heights); dashed: 1e-6 target; dotted grey: scipy 1e-13 vs "
-                 "reference; red x: step_limit / solver_failed in the batch")
+    fig.suptitle(
+        "Work–precision, JIS ball at 0.1, 1.0, 1.6 m (max error over heights); dashed: 1e-6 target; dotted grey: scipy 1e-13 vs "
+        "reference; red x: step_limit / solver_failed in the batch"
+    )
     fig.tight_layout()
     RESULTS_DIR.mkdir(exist_ok=True)
     fig.savefig(RESULTS_DIR / ("work_precision" + ("_quick" if quick else "") + ".png"), dpi=110)

@@ -79,15 +79,32 @@ class BallModeReference:
         return np.where(inside, self.floor_force(self.state(t)), 0.0)
 
 
-def reference_ball_mode_impact(height_m, ball, mode_mass_ratio, mode_frequency_Hz, mode_loss_factor, *, gas="adiabatic",
-                               blocked_force="paper", damping=None, rtol=RTOL, method="DOP853"):
+def reference_ball_mode_impact(
+    height_m,
+    ball,
+    mode_mass_ratio,
+    mode_frequency_Hz,
+    mode_loss_factor,
+    *,
+    gas="adiabatic",
+    blocked_force="paper",
+    damping=None,
+    rtol=RTOL,
+    method="DOP853",
+):
     """Solve the two-degree-of-freedom impact (module docstring) with scipy."""
     radius, wall, mass, youngs, poisson = ball_parameters(ball)
     k = shell_stiffness(radius, wall, youngs, poisson)
     spec = damping_spec(damping)
     if spec is not None and spec[0] == "zener":
-        raise NotImplementedError("the ball-mode reference has Kelvin–Voigt and Hunt–Crossley damping only")
-    mu, omega, eta = float(mode_mass_ratio), 2.0 * math.pi * float(mode_frequency_Hz), float(mode_loss_factor)
+        raise NotImplementedError(
+            "the ball-mode reference has Kelvin–Voigt and Hunt–Crossley damping only"
+        )
+    mu, omega, eta = (
+        float(mode_mass_ratio),
+        2.0 * math.pi * float(mode_frequency_Hz),
+        float(mode_loss_factor),
+    )
     flux = mass / (2.0 * radius)
     v0 = math.sqrt(2.0 * STANDARD_GRAVITY * float(height_m))
 
@@ -129,7 +146,17 @@ def reference_ball_mode_impact(height_m, ball, mode_mass_ratio, mode_frequency_H
 
     first_max.terminal, first_max.direction = True, -1.0
     y0 = np.array([0.0, v0, 0.0, 0.0])
-    s1 = solve_ivp(rhs, (0.0, span), y0, method=method, rtol=rtol, atol=atol, events=[first_max], dense_output=True, max_step=max_step)
+    s1 = solve_ivp(
+        rhs,
+        (0.0, span),
+        y0,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        events=[first_max],
+        dense_output=True,
+        max_step=max_step,
+    )
     if s1.status != 1:
         raise RuntimeError(f"reference compression did not reach δ̇ = 0: {s1.message}")
     t1, y1 = s1.t[-1], s1.y[:, -1]
@@ -146,12 +173,33 @@ def reference_ball_mode_impact(height_m, ball, mode_mass_ratio, mode_frequency_H
 
         force_zero.terminal, force_zero.direction = True, -1.0
         ends.append(force_zero)
-    s2 = solve_ivp(rhs, (t1, t1 + span), y1, method=method, rtol=rtol, atol=atol, events=ends, dense_output=True, max_step=max_step)
+    s2 = solve_ivp(
+        rhs,
+        (t1, t1 + span),
+        y1,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        events=ends,
+        dense_output=True,
+        max_step=max_step,
+    )
     if s2.status != 1:
         raise RuntimeError(f"reference restitution did not reach the end of contact: {s2.message}")
     t2, y2 = s2.t[-1], s2.y[:, -1]
-    ref = BallModeReference(float(height_m), float(t2), 0.0, 0.0, 0.0, 0.0, 0.0, float(floor_force(y2)), 0,
-                            [(t1, s1.sol), (t2, s2.sol)], floor_force)
+    ref = BallModeReference(
+        float(height_m),
+        float(t2),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        float(floor_force(y2)),
+        0,
+        [(t1, s1.sol), (t2, s2.sol)],
+        floor_force,
+    )
 
     # Force maxima: a fine grid, refined by a bounded scalar search around each grid maximum.
     grid = np.linspace(0.0, t2, 40001)
@@ -163,12 +211,21 @@ def reference_ball_mode_impact(height_m, ball, mode_mass_ratio, mode_frequency_H
 
     def refine(i):
         lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-        r = minimize_scalar(lambda t: -float(ref.force_N(t)[0]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
-        return (float(r.x), -float(r.fun)) if -float(r.fun) >= f[i] else (float(grid[i]), float(f[i]))
+        r = minimize_scalar(
+            lambda t: -float(ref.force_N(t)[0]),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-13},
+        )
+        return (
+            (float(r.x), -float(r.fun)) if -float(r.fun) >= f[i] else (float(grid[i]), float(f[i]))
+        )
 
     maxima = [refine(i) for i in local]
     ref.first_peak_time_s, ref.first_peak_force_N = maxima[0]
     ref.max_force_time_s, ref.max_force_N = max(maxima, key=lambda m: m[1])
     ref.n_force_maxima = len(maxima)
-    ref.restitution = float(mass * (1.0 - (y2[0] + y2[2]) / (2.0 * radius)) * (-y2[1]) / (mass * v0))
+    ref.restitution = float(
+        mass * (1.0 - (y2[0] + y2[2]) / (2.0 * radius)) * (-y2[1]) / (mass * v0)
+    )
     return ref

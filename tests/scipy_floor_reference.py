@@ -51,10 +51,18 @@ def floor_spec(floor):
     if hasattr(floor, "floor_impedance_Ns_per_m"):
         return ("dashpot", float(floor.floor_impedance_Ns_per_m))
     if hasattr(floor, "plate_thickness_m"):
-        t, e, rho, nu = (float(getattr(floor, f"plate_{n}")) for n in ("thickness_m", "youngs_Pa", "density_kg_per_m3", "poisson"))
+        t, e, rho, nu = (
+            float(getattr(floor, f"plate_{n}"))
+            for n in ("thickness_m", "youngs_Pa", "density_kg_per_m3", "poisson")
+        )
         return ("dashpot", 8.0 * math.sqrt(e * t**3 / (12.0 * (1.0 - nu**2)) * rho * t))
     if hasattr(floor, "frequency_Hz"):
-        return ("modal", np.asarray(floor.mass_kg, float), np.asarray(floor.frequency_Hz, float), np.asarray(floor.loss_factor, float))
+        return (
+            "modal",
+            np.asarray(floor.mass_kg, float),
+            np.asarray(floor.frequency_Hz, float),
+            np.asarray(floor.loss_factor, float),
+        )
     raise TypeError(f"unknown floor {floor!r}")
 
 
@@ -92,7 +100,17 @@ class FloorReference:
         return out
 
 
-def reference_floor_impact(height_m, ball, floor, *, gas="adiabatic", blocked_force="paper", rtol=RTOL, method="DOP853", grid=4000):
+def reference_floor_impact(
+    height_m,
+    ball,
+    floor,
+    *,
+    gas="adiabatic",
+    blocked_force="paper",
+    rtol=RTOL,
+    method="DOP853",
+    grid=4000,
+):
     """Solve one drop of ``ball`` from ``height_m`` on ``floor`` (see the module docstring)."""
     if gas not in ("adiabatic", "none"):
         raise ValueError(gas)
@@ -141,7 +159,14 @@ def reference_floor_impact(height_m, ball, floor, *, gas="adiabatic", blocked_fo
             else:
                 # widened by 1e-12 so that round-off cannot put the root on the bracket's end
                 lo, hi = sorted((0.0, f0 / z * (1.0 + 1e-12)))
-                s = brentq(lambda s: z * s - floor_force(d, xd - s), lo, hi, xtol=1e-300, rtol=8.9e-16, maxiter=200)
+                s = brentq(
+                    lambda s: z * s - floor_force(d, xd - s),
+                    lo,
+                    hi,
+                    xtol=1e-300,
+                    rtol=8.9e-16,
+                    maxiter=200,
+                )
             return d, xd - s, z * s, s
         q, qd = y[2 : 2 + n_modes], y[2 + n_modes : 2 + 2 * n_modes]
         ud = float(np.sum(qd))
@@ -164,7 +189,12 @@ def reference_floor_impact(height_m, ball, floor, *, gas="adiabatic", blocked_fo
 
     omega = math.sqrt(k / mass)
     x_scale = v0 / omega
-    scales = [x_scale, v0] + ([x_scale] * (n_floor // 2 or n_floor)) + ([v0] * (n_floor // 2 if kind == "modal" else 0)) + [0.5 * mass * v0**2]
+    scales = (
+        [x_scale, v0]
+        + ([x_scale] * (n_floor // 2 or n_floor))
+        + ([v0] * (n_floor // 2 if kind == "modal" else 0))
+        + [0.5 * mass * v0**2]
+    )
     atol = np.asarray(scales) * rtol * 1e-3
     t_span = 1e3 / omega
 
@@ -178,7 +208,16 @@ def reference_floor_impact(height_m, ball, floor, *, gas="adiabatic", blocked_fo
     separation.terminal, separation.direction = True, -1.0
 
     def solve(t0, y0, event):
-        sol = solve_ivp(rhs, (t0, t0 + t_span), y0, method=method, rtol=rtol, atol=atol, events=[event], dense_output=True)
+        sol = solve_ivp(
+            rhs,
+            (t0, t0 + t_span),
+            y0,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            events=[event],
+            dense_output=True,
+        )
         if sol.status != 1:
             raise RuntimeError(f"reference solve did not reach its terminal event: {sol.message}")
         return sol
@@ -205,7 +244,12 @@ def reference_floor_impact(height_m, ball, floor, *, gas="adiabatic", blocked_fo
     maxima = []
     for i in range(1, grid):
         if fs[i] >= fs[i - 1] and fs[i] > fs[i + 1]:
-            opt = minimize_scalar(lambda t: -force_at(t), bounds=(ts[i - 1], ts[i + 1]), method="bounded", options={"xatol": 1e-14 * t_end})
+            opt = minimize_scalar(
+                lambda t: -force_at(t),
+                bounds=(ts[i - 1], ts[i + 1]),
+                method="bounded",
+                options={"xatol": 1e-14 * t_end},
+            )
             tm, fm = float(opt.x), -float(opt.fun)
             if fm < fs[i]:
                 tm, fm = float(ts[i]), float(fs[i])

@@ -36,7 +36,10 @@ _COMPLEX_STEP_S = 1e-30
 
 def ball_parameters(ball):
     """(R, h, M, E, ν) as floats from any object with the rbjax Ball field names."""
-    return tuple(float(getattr(ball, name)) for name in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson"))
+    return tuple(
+        float(getattr(ball, name))
+        for name in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+    )
 
 
 def shell_stiffness(radius_m, wall_m, youngs_Pa, poisson):
@@ -49,7 +52,9 @@ def gas_force(deflection_m, radius_m):
     d, r = deflection_m, radius_m
     v0 = 4.0 * math.pi * r**3 / 3.0
     cap = math.pi * d**2 * (3.0 * r - d) / 3.0
-    return AMBIENT_PRESSURE_Pa * ((v0 / (v0 - cap)) ** GAMMA_AIR - 1.0) * math.pi * d * (2.0 * r - d)
+    return (
+        AMBIENT_PRESSURE_Pa * ((v0 / (v0 - cap)) ** GAMMA_AIR - 1.0) * math.pi * d * (2.0 * r - d)
+    )
 
 
 def damping_spec(damping):
@@ -200,7 +205,16 @@ def reference_impact(
 
     def solve(f, t0, y0, terminal_events):
         events = list(terminal_events) + [force_rate(f)]
-        sol = solve_ivp(f, (t0, t0 + t_span), y0, method=method, rtol=rtol, atol=atol, events=events, dense_output=True)
+        sol = solve_ivp(
+            f,
+            (t0, t0 + t_span),
+            y0,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            events=events,
+            dense_output=True,
+        )
         if sol.status != 1:
             raise RuntimeError(f"reference solve did not reach its terminal event: {sol.message}")
         t_end = sol.t[-1]
@@ -261,7 +275,13 @@ def reference_scalars(heights_m, ball, **options):
     results = [reference_impact(h, ball, **options) for h in np.atleast_1d(heights_m)]
     return {
         name: np.array([getattr(r, name) for r in results])
-        for name in ("contact_time_s", "peak_force_N", "peak_time_s", "restitution", "max_deflection_m")
+        for name in (
+            "contact_time_s",
+            "peak_force_N",
+            "peak_time_s",
+            "restitution",
+            "max_deflection_m",
+        )
     }
 
 

@@ -54,14 +54,25 @@ class SeriesReference:
         return out
 
 
-def reference_series_impact(height_m, ball, compliance_m_per_N, time_constant_s, *, gas="adiabatic", blocked_force="paper",
-                            damping=None, rtol=RTOL):
+def reference_series_impact(
+    height_m,
+    ball,
+    compliance_m_per_N,
+    time_constant_s,
+    *,
+    gas="adiabatic",
+    blocked_force="paper",
+    damping=None,
+    rtol=RTOL,
+):
     """Solve the impact with the series element (module docstring) with scipy."""
     radius, wall, mass, youngs, poisson = ball_parameters(ball)
     k = shell_stiffness(radius, wall, youngs, poisson)
     spec = damping_spec(damping)
     if spec is not None and spec[0] == "zener":
-        raise NotImplementedError("the series reference has Kelvin–Voigt and Hunt–Crossley damping only")
+        raise NotImplementedError(
+            "the series reference has Kelvin–Voigt and Hunt–Crossley damping only"
+        )
     k_b = 1.0 / float(compliance_m_per_N)
     c_b = float(time_constant_s) * k_b
     flux = mass / (2.0 * radius)
@@ -116,8 +127,17 @@ def reference_series_impact(height_m, ball, compliance_m_per_N, time_constant_s,
         return shell(y)[1]
 
     first_max.terminal, first_max.direction = True, -1.0
-    s1 = solve_ivp(rhs, (0.0, span), np.array([0.0, v0, 0.0]), method="DOP853", rtol=rtol, atol=atol, events=[first_max],
-                   dense_output=True, max_step=max_step)
+    s1 = solve_ivp(
+        rhs,
+        (0.0, span),
+        np.array([0.0, v0, 0.0]),
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        events=[first_max],
+        dense_output=True,
+        max_step=max_step,
+    )
     if s1.status != 1:
         raise RuntimeError(f"reference compression did not reach δ̇ = 0: {s1.message}")
     t1, y1 = s1.t[-1], s1.y[:, -1]
@@ -135,11 +155,23 @@ def reference_series_impact(height_m, ball, compliance_m_per_N, time_constant_s,
 
         force_zero.terminal, force_zero.direction = True, -1.0
         ends.append(force_zero)
-    s2 = solve_ivp(rhs, (t1, t1 + span), y1, method="DOP853", rtol=rtol, atol=atol, events=ends, dense_output=True, max_step=max_step)
+    s2 = solve_ivp(
+        rhs,
+        (t1, t1 + span),
+        y1,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        events=ends,
+        dense_output=True,
+        max_step=max_step,
+    )
     if s2.status != 1:
         raise RuntimeError(f"reference restitution did not reach the end of contact: {s2.message}")
     t2, y2 = s2.t[-1], s2.y[:, -1]
-    ref = SeriesReference(float(height_m), float(t2), 0.0, 0.0, [(t1, s1.sol), (t2, s2.sol)], floor_force)
+    ref = SeriesReference(
+        float(height_m), float(t2), 0.0, 0.0, [(t1, s1.sol), (t2, s2.sol)], floor_force
+    )
     grid = np.linspace(0.0, t2, 4001)[:-1]
     ref.max_force_N = float(np.max(ref.force_N(grid)))
     ref.restitution = float((1.0 - (y2[0] + y2[2]) / (2.0 * radius)) * (-y2[1]) / v0)

@@ -34,7 +34,17 @@ def sampled_force(ref, tau_s, rate_Hz=RATE_HZ):
     return inside * ref.force_N(np.maximum(mid, 0.0))
 
 
-def reference_records(ball, damping, blocked_force, starts_s, noise_N=0.0, seed=0, *, rate_Hz=RATE_HZ, record_s=RECORD_S):
+def reference_records(
+    ball,
+    damping,
+    blocked_force,
+    starts_s,
+    noise_N=0.0,
+    seed=0,
+    *,
+    rate_Hz=RATE_HZ,
+    record_s=RECORD_S,
+):
     """Measured-like records (no chain applied yet is not an option: always filtered), sampled
     at ``rate_Hz`` (the chain's Butterworth designed at that rate), ``record_s`` long."""
     rng = np.random.default_rng(seed)
@@ -53,7 +63,13 @@ def synthetic_data(ball, damping, blocked_force, seed):
     starts = CONTACT_START_S + rng.uniform(0, 1 / RATE_HZ, len(HEIGHTS_M))
     _, forces = reference_records(ball, damping, blocked_force, starts, NOISE_N, seed)
     recs = [
-        Recording(source=f"synthetic_h{int(round(h * 100)):03d}.csv", height_m=h, rate_Hz=RATE_HZ, force_N=f, lowpass_Hz=CUTOFF_HZ)
+        Recording(
+            source=f"synthetic_h{int(round(h * 100)):03d}.csv",
+            height_m=h,
+            rate_Hz=RATE_HZ,
+            force_N=f,
+            lowpass_Hz=CUTOFF_HZ,
+        )
         for h, f in zip(HEIGHTS_M, forces)
     ]
     return prepare_data(recs)
@@ -69,7 +85,10 @@ def central_difference(reference, params: dict, shifts, name: str):
         down[k] -= step
         return (reference(params, up) - reference(params, down)) / (2 * step)
     step = 1e-4 * params[name]
-    return (reference({**params, name: params[name] + step}, shifts) - reference({**params, name: params[name] - step}, shifts)) / (2 * step)
+    return (
+        reference({**params, name: params[name] + step}, shifts)
+        - reference({**params, name: params[name] - step}, shifts)
+    ) / (2 * step)
 
 
 #: The drops behind the fault tests (tests/data/test_faults.py, tests/fit/test_fit_faults.py):
@@ -86,13 +105,25 @@ def long_records(rate_Hz=RATE_HZ, seed=3):
     from rbjax import JIS_RUBBER_BALL, KelvinVoigt
 
     ball = JIS_RUBBER_BALL.replace(youngs_Pa=FAULT_BALL_E_PA)
-    starts = FAULT_START_S + np.random.default_rng(seed + 100).uniform(0, 1 / rate_Hz, len(HEIGHTS_M))
+    starts = FAULT_START_S + np.random.default_rng(seed + 100).uniform(
+        0, 1 / rate_Hz, len(HEIGHTS_M)
+    )
     noise = NOISE_N * np.sqrt(rate_Hz / RATE_HZ)
-    return reference_records(ball, KelvinVoigt(FAULT_DAMPING_NS_PER_M), "momentum", starts, noise, seed,
-                             rate_Hz=rate_Hz, record_s=FAULT_RECORD_S)
+    return reference_records(
+        ball,
+        KelvinVoigt(FAULT_DAMPING_NS_PER_M),
+        "momentum",
+        starts,
+        noise,
+        seed,
+        rate_Hz=rate_Hz,
+        record_s=FAULT_RECORD_S,
+    )
 
 
-def with_faults(t, force, *, offset_N=0.0, drift_N_per_s=0.0, hum=None, inverted=False, rebound_after_s=None):
+def with_faults(
+    t, force, *, offset_N=0.0, drift_N_per_s=0.0, hum=None, inverted=False, rebound_after_s=None
+):
     """A clean record with the faults of a real one added after the measuring chain.
 
     hum: (frequency_Hz, amplitude_N): the fundamental, plus a third harmonic of a quarter of
@@ -143,8 +174,21 @@ def write_uff(path, channels):
 
     t = np.arange(len(channels[0][1])) / RATE_HZ
     sets = [
-        dict(type=58, binary=0, func_type=1, id1=name, rsp_node=1, rsp_dir=3, ref_node=1, ref_dir=3,
-             orddenom_spec_data_type=0, abscissa_spacing=1, ordinate_axis_units_lab=unit, data=x, x=t)
+        dict(
+            type=58,
+            binary=0,
+            func_type=1,
+            id1=name,
+            rsp_node=1,
+            rsp_dir=3,
+            ref_node=1,
+            ref_dir=3,
+            orddenom_spec_data_type=0,
+            abscissa_spacing=1,
+            ordinate_axis_units_lab=unit,
+            data=x,
+            x=t,
+        )
         for name, x, unit in channels
     ]
     pyuff.UFF(str(path)).write_sets(sets, mode="overwrite")

@@ -76,14 +76,23 @@ SCRIPT = textwrap.dedent(
     """
 )
 
-ENTRY_POINTS = [line.split('"')[1] for line in SCRIPT.splitlines() if line.startswith('    "') and "lambda" in line]
+ENTRY_POINTS = [
+    line.split('"')[1]
+    for line in SCRIPT.splitlines()
+    if line.startswith('    "') and "lambda" in line
+]
 
 
 @pytest.fixture(scope="module")
 def outcomes() -> dict[str, str]:
     src = str(Path(__file__).resolve().parents[1] / "src")
-    env = os.environ | {"PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]), "RBJAX_CACHE_DIR": ""}
-    done = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env, timeout=300)
+    env = os.environ | {
+        "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]),
+        "RBJAX_CACHE_DIR": "",
+    }
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env, timeout=300
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 

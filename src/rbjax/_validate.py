@@ -54,4 +54,6 @@ def check_range(
     if np.any(bad):
         first = arr.reshape(-1)[np.argmax(bad.reshape(-1))]
         where = "" if arr.ndim == 0 else f" (element {int(np.argmax(bad.reshape(-1)))})"
-        raise ValueError(f"{name}={float(first)!r}{where} is outside the valid range {valid} and finite")
+        raise ValueError(
+            f"{name}={float(first)!r}{where} is outside the valid range {valid} and finite"
+        )

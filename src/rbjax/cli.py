@@ -35,7 +35,9 @@ def build_parser() -> argparse.ArgumentParser:
         "(Schoenwald, Zeitler & Nightingale 2011).",
     )
     parser.add_argument("--version", action="version", version=f"rbjax {__version__}")
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
+    subparsers = parser.add_subparsers(
+        dest="command", metavar="COMMAND", parser_class=ArgumentParser
+    )
     for name in command_modules():
         module = importlib.import_module(f"{commands.__name__}.{name}")
         register = getattr(module, "register", None)

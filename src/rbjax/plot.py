@@ -15,7 +15,11 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 
-if "matplotlib.pyplot" not in sys.modules and not os.environ.get("DISPLAY") and not os.environ.get("MPLBACKEND"):
+if (
+    "matplotlib.pyplot" not in sys.modules
+    and not os.environ.get("DISPLAY")
+    and not os.environ.get("MPLBACKEND")
+):
     matplotlib.use("Agg")
 
 __all__ = [
@@ -83,8 +87,14 @@ def plot_force_histories(time_s, force_N, heights_m, ax=None, *, contact_time_s=
     if contact_time_s is not None and np.any(np.isfinite(contact_time_s)):
         ax.set_xlim(0.0, 1.05e3 * float(np.nanmax(contact_time_s)))
     ax.set_ylim(bottom=0.0)
-    where = {"loc": "center left", "bbox_to_anchor": (1.01, 0.5)} if len(heights) > 6 else {"loc": "upper right"}
-    return _finish(fig, ax, "time (ms)", "blocked force (N)", title, legend={"title": "drop height", **where})
+    where = (
+        {"loc": "center left", "bbox_to_anchor": (1.01, 0.5)}
+        if len(heights) > 6
+        else {"loc": "upper right"}
+    )
+    return _finish(
+        fig, ax, "time (ms)", "blocked force (N)", title, legend={"title": "drop height", **where}
+    )
 
 
 def plot_histories(result, ax=None, rate_Hz=None):
@@ -97,10 +107,25 @@ def plot_histories(result, ax=None, rate_Hz=None):
     heights = np.asarray(result.height_m, dtype=float).reshape(-1)
     force = np.asarray(traj.force_N, dtype=float).reshape(heights.size, -1)
     tc = np.asarray(result.contact_time_s, dtype=float)
-    return plot_force_histories(np.asarray(traj.time_s), force, heights, ax, contact_time_s=tc, title=f"rbjax: model {result.model.name}, gas {result.model.gas}")
+    return plot_force_histories(
+        np.asarray(traj.time_s),
+        force,
+        heights,
+        ax,
+        contact_time_s=tc,
+        title=f"rbjax: model {result.model.name}, gas {result.model.gas}",
+    )
 
 
-def plot_force_components(time_s, forces: Mapping[str, np.ndarray], ax=None, *, contact_time_s=None, title=None, styles=None):
+def plot_force_components(
+    time_s,
+    forces: Mapping[str, np.ndarray],
+    ax=None,
+    *,
+    contact_time_s=None,
+    title=None,
+    styles=None,
+):
     """Named force histories (e.g. F_T, F_B, F_G; paper Fig. 3) in N against time in ms."""
     fig, ax = _axes(ax)
     t_ms = np.asarray(time_s, dtype=float) * 1e3
@@ -146,7 +171,15 @@ def plot_lfe_bands(lfe_octave_dB, ax=None, tolerances=True, label=None, **line_k
         lower, upper = tolerance_limits(bands)
         has = np.isfinite(lower) & np.isfinite(upper)
         if np.any(has):
-            ax.fill_between(x[has], lower[has], upper[has], color="0.85", step=None, label="tolerance (1 m)", zorder=0)
+            ax.fill_between(
+                x[has],
+                lower[has],
+                upper[has],
+                color="0.85",
+                step=None,
+                label="tolerance (1 m)",
+                zorder=0,
+            )
             ax.plot(x[has], lower[has], color="0.5", ls="--", lw=0.8, zorder=0)
             ax.plot(x[has], upper[has], color="0.5", ls="--", lw=0.8, zorder=0)
         ax._rbjax_tolerances = True
@@ -161,7 +194,17 @@ def plot_lfe_bands(lfe_octave_dB, ax=None, tolerances=True, label=None, **line_k
     return fig
 
 
-def plot_vs_height(heights_m, series: Mapping[str, np.ndarray], ax=None, *, ylabel, scale=1.0, references=None, band=None, title=None):
+def plot_vs_height(
+    heights_m,
+    series: Mapping[str, np.ndarray],
+    ax=None,
+    *,
+    ylabel,
+    scale=1.0,
+    references=None,
+    band=None,
+    title=None,
+):
     """Quantities against drop height in cm (paper Figs. 5, 6).
 
     ``series``: label → values per height (multiplied by ``scale``); ``references``: label →
@@ -176,7 +219,16 @@ def plot_vs_height(heights_m, series: Mapping[str, np.ndarray], ax=None, *, ylab
         ax.plot(h_cm, np.asarray(values, dtype=float) * scale, marker=".", label=name)
     markers = iter("sD^v<>")
     for name, (hs, vs) in (references or {}).items():
-        ax.plot(np.asarray(hs, dtype=float) * 100, np.asarray(vs, dtype=float) * scale, ls="none", marker=next(markers), ms=7, mfc="none", mew=1.5, label=name)
+        ax.plot(
+            np.asarray(hs, dtype=float) * 100,
+            np.asarray(vs, dtype=float) * scale,
+            ls="none",
+            marker=next(markers),
+            ms=7,
+            mfc="none",
+            mew=1.5,
+            label=name,
+        )
     return _finish(fig, ax, "drop height (cm)", ylabel, title)
 
 
@@ -195,18 +247,48 @@ def plot_relative_difference(entries: Sequence[Mapping], ax=None, *, title=None)
         for v, rel in e["relative_difference"].items():
             if rel is None or not np.isfinite(rel):
                 continue
-            ax.plot(e["height_m"] * 100, rel * 100, ls="none", marker=markers[v], color=colours[e["label"]], ms=7, mfc="none" if v != variants[0] else colours[e["label"]])
+            ax.plot(
+                e["height_m"] * 100,
+                rel * 100,
+                ls="none",
+                marker=markers[v],
+                color=colours[e["label"]],
+                ms=7,
+                mfc="none" if v != variants[0] else colours[e["label"]],
+            )
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=colours[lab], marker="o", ls="none", label=lab) for lab in labels]
-    handles += [Line2D([], [], color="k", marker=markers[v], ls="none", mfc="k" if v == variants[0] else "none", label=v) for v in variants]
+    handles = [
+        Line2D([], [], color=colours[lab], marker="o", ls="none", label=lab) for lab in labels
+    ]
+    handles += [
+        Line2D(
+            [],
+            [],
+            color="k",
+            marker=markers[v],
+            ls="none",
+            mfc="k" if v == variants[0] else "none",
+            label=v,
+        )
+        for v in variants
+    ]
     ax.axhline(0.0, color="k", lw=0.8)
     ax.axhspan(-10, 10, color="0.93", zorder=0)
     ax.set_xlim(0, 170)
-    return _finish(fig, ax, "drop height (cm)", "rbjax − paper (% of paper value)", title, legend={"handles": handles, "loc": "best"})
+    return _finish(
+        fig,
+        ax,
+        "drop height (cm)",
+        "rbjax − paper (% of paper value)",
+        title,
+        legend={"handles": handles, "loc": "best"},
+    )
 
 
-def plot_band_differences(bands, differences: Mapping[str, np.ndarray], ax=None, *, ylabel, title=None):
+def plot_band_differences(
+    bands, differences: Mapping[str, np.ndarray], ax=None, *, ylabel, title=None
+):
     """One line per labelled row of per-band values against the octave bands (paper Fig. 9)."""
     fig, ax = _axes(ax)
     x = np.arange(len(bands))
@@ -232,10 +314,20 @@ def plot_lfe_increase(height_ratio, increase_dB, bands, ax=None, *, slopes_dB=No
             ax.plot(ratio, slopes_dB[j] * np.log2(ratio), ls="--", lw=0.8, color=line.get_color())
     ax.set_xscale("log", base=2)
     legend = {"ncol": 2, "title": "octave band (dashed: linear fit)"}
-    return _finish(fig, ax, "drop height / 1 m", "L_FE increase re 1 m (dB)", title, legend=legend, grid={"which": "both"})
+    return _finish(
+        fig,
+        ax,
+        "drop height / 1 m",
+        "L_FE increase re 1 m (dB)",
+        title,
+        legend=legend,
+        grid={"which": "both"},
+    )
 
 
-def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None, *, paper=None, title=None):
+def plot_increase_per_doubling(
+    bands, slopes: Mapping[str, np.ndarray], ax=None, *, paper=None, title=None
+):
     """L_FE increase per doubling of drop height (dB) per octave band (paper Fig. 11).
 
     ``slopes``: label → dB per band; ``paper``: dB per band as reported (NaN where none).
@@ -245,9 +337,24 @@ def plot_increase_per_doubling(bands, slopes: Mapping[str, np.ndarray], ax=None,
     for name, values in slopes.items():
         ax.plot(x, np.asarray(values, dtype=float), marker="o", label=name)
     if paper is not None:
-        ax.plot(x, np.asarray(paper, dtype=float), ls="none", marker="s", ms=9, mfc="none", color="k", label="paper (≈, §4.2)")
+        ax.plot(
+            x,
+            np.asarray(paper, dtype=float),
+            ls="none",
+            marker="s",
+            ms=9,
+            mfc="none",
+            color="k",
+            label="paper (≈, §4.2)",
+        )
     ax.set_xticks(x, list(bands))
-    return _finish(fig, ax, "octave band centre frequency (Hz)", "L_FE increase per doubling of height (dB)", title)
+    return _finish(
+        fig,
+        ax,
+        "octave band centre frequency (Hz)",
+        "L_FE increase per doubling of height (dB)",
+        title,
+    )
 
 
 def plot_growth(growths, ax=None, *, paper=None, title=None):
@@ -261,7 +368,9 @@ def plot_growth(growths, ax=None, *, paper=None, title=None):
     fig, ax = _axes(ax)
     growths = list(growths)
     if not growths:
-        raise ValueError("plot_growth: growths is empty (give at least one rbjax.studies.growth.Growth)")
+        raise ValueError(
+            "plot_growth: growths is empty (give at least one rbjax.studies.growth.Growth)"
+        )
     bands = growths[0].bands_Hz
     x = np.arange(len(bands))
     n = len(growths)
@@ -270,16 +379,46 @@ def plot_growth(growths, ax=None, *, paper=None, title=None):
             raise ValueError(f"plot_growth: {g.label!r} has bands {g.bands_Hz}, expected {bands}")
         dx = (k - (n - 1) / 2) * 0.06
         err = np.where(np.isfinite(g.stderr_dB), g.stderr_dB, 0.0)
-        style = {"ls": "none", "marker": "o", "ms": 6, "color": "k"} if k == 0 else {"marker": ".", "lw": 1.2}
-        ax.errorbar(x + dx, g.slope_dB, yerr=err, capsize=3, label=g.label or f"series {k + 1}", **style)
+        style = (
+            {"ls": "none", "marker": "o", "ms": 6, "color": "k"}
+            if k == 0
+            else {"marker": ".", "lw": 1.2}
+        )
+        ax.errorbar(
+            x + dx, g.slope_dB, yerr=err, capsize=3, label=g.label or f"series {k + 1}", **style
+        )
     if paper is not None:
-        ax.plot(x, np.asarray(paper, dtype=float), ls="none", marker="s", ms=9, mfc="none", color="0.4", label="paper (≈, §4.2)")
+        ax.plot(
+            x,
+            np.asarray(paper, dtype=float),
+            ls="none",
+            marker="s",
+            ms=9,
+            mfc="none",
+            color="0.4",
+            label="paper (≈, §4.2)",
+        )
     ax.axhline(10.0 * np.log10(2.0), color="0.6", lw=0.8, ls=":")
     ax.set_xticks(x, list(bands))
-    return _finish(fig, ax, "octave band centre frequency (Hz)", "L_FE growth per doubling of height (dB)", title)
+    return _finish(
+        fig,
+        ax,
+        "octave band centre frequency (Hz)",
+        "L_FE growth per doubling of height (dB)",
+        title,
+    )
 
 
-def plot_narrowband(freq_Hz, spectra_dB: Mapping[str, np.ndarray], ax=None, *, resonances_Hz=None, references_Hz=None, fmax_Hz=500.0, title=None):
+def plot_narrowband(
+    freq_Hz,
+    spectra_dB: Mapping[str, np.ndarray],
+    ax=None,
+    *,
+    resonances_Hz=None,
+    references_Hz=None,
+    fmax_Hz=500.0,
+    title=None,
+):
     """Narrow-band force spectra (dB) with the contact resonance marked (paper Fig. 12).
 
     ``spectra_dB``: label → level per frequency; ``resonances_Hz``: label → frequency of the
@@ -296,9 +435,18 @@ def plot_narrowband(freq_Hz, spectra_dB: Mapping[str, np.ndarray], ax=None, *, r
             ax.axvline(fr, color=line.get_color(), ls=":", lw=1.0)
             y = np.interp(fr, f[keep], np.asarray(level, dtype=float)[keep])
             ax.plot([fr], [y], marker="v", color=line.get_color(), ms=8)
-            ax.annotate(f"{fr:.0f} Hz", (fr, y), textcoords="offset points", xytext=(6, -14), color=line.get_color(), fontsize="small")
+            ax.annotate(
+                f"{fr:.0f} Hz",
+                (fr, y),
+                textcoords="offset points",
+                xytext=(6, -14),
+                color=line.get_color(),
+                fontsize="small",
+            )
     for i, fr in enumerate((references_Hz or {}).values()):  # one legend entry for all of them
-        ax.axvline(fr, color="0.4", ls="--", lw=0.9, label="; ".join(references_Hz) if i == 0 else None)
+        ax.axvline(
+            fr, color="0.4", ls="--", lw=0.9, label="; ".join(references_Hz) if i == 0 else None
+        )
     ax.set_xlim(0, fmax_Hz)
     return _finish(fig, ax, "frequency (Hz)", "|F(f)| (dB re 1 N·s)", title)
 
@@ -318,7 +466,9 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
     if blocked is None:
         rigid = [r for r in results.values() if r.model.floor.rigid]  # type: ignore[attr-defined]
         if not rigid:
-            raise ValueError("plot_floors: no result on the rigid floor; pass blocked=rbjax.simulate(h) (the blocked force)")
+            raise ValueError(
+                "plot_floors: no result on the rigid floor; pass blocked=rbjax.simulate(h) (the blocked force)"
+            )
         blocked = rigid[0]
     if axes is None:
         import matplotlib.pyplot as plt
@@ -331,7 +481,12 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
         n = traj.force_N.shape[-1]
         force = np.asarray(traj.force_N, dtype=float).reshape(-1, n)[0]
         tc = float(np.asarray(result.contact_time_s, dtype=float).reshape(-1)[0])
-        return np.asarray(traj.time_s, dtype=float), force, tc, np.asarray(lfe_octave_dB(force, result.rate_Hz), dtype=float)
+        return (
+            np.asarray(traj.time_s, dtype=float),
+            force,
+            tc,
+            np.asarray(lfe_octave_dB(force, result.rate_Hz), dtype=float),
+        )
 
     t, f0, tc0, lfe0 = first(blocked)
     curves = [(label, first(r)) for label, r in results.items() if r is not blocked]
@@ -372,7 +527,9 @@ def plot_fit(result, out_dir) -> list[Path]:
     paths = []
     t_ms = result.time_s * 1e3
     n = len(result.heights_m)
-    fig, axes = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, height_ratios=(3, 1), layout="constrained")
+    fig, axes = plt.subplots(
+        2, 1, figsize=(7.5, 6.5), sharex=True, height_ratios=(3, 1), layout="constrained"
+    )
     colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, max(n, 1)))
     for k in range(n):
         label = f"{result.heights_m[k] * 100:.0f} cm" + ("" if result.in_fit[k] else " (held out)")
@@ -392,7 +549,14 @@ def plot_fit(result, out_dir) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7.0, 4.5), layout="constrained")
     x = np.arange(len(bands))
     for k, row in enumerate(result.per_height):
-        ax.plot(x, row["measured"]["lfe_octave_dB"], "o-", color=colours[k], lw=0.8, label=f"{row['height_m'] * 100:.0f} cm")
+        ax.plot(
+            x,
+            row["measured"]["lfe_octave_dB"],
+            "o-",
+            color=colours[k],
+            lw=0.8,
+            label=f"{row['height_m'] * 100:.0f} cm",
+        )
         ax.plot(x, row["fitted"]["lfe_octave_dB"], "x--", color=colours[k], lw=1.2)
     ax.set_xticks(x, bands)
     ax.set_xlabel("octave band (Hz)")

@@ -30,7 +30,26 @@ from scipy_reference import reference_impact
 HEIGHTS_M = [0.1, 1.0, 1.6]
 ARGS = ["simulate", "--height-m", *map(str, HEIGHTS_M)]
 OCTAVES = ("31.5", "63", "125", "250", "500", "1000")
-THIRDS = ("25", "31.5", "40", "50", "63", "80", "100", "125", "160", "200", "250", "315", "400", "500", "630", "800", "1000", "1250")
+THIRDS = (
+    "25",
+    "31.5",
+    "40",
+    "50",
+    "63",
+    "80",
+    "100",
+    "125",
+    "160",
+    "200",
+    "250",
+    "315",
+    "400",
+    "500",
+    "630",
+    "800",
+    "1000",
+    "1250",
+)
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +86,9 @@ def test_a_new_command_module_is_picked_up(tmp_path, monkeypatch):
         "    p.set_defaults(func=lambda a: emit_json({'x': a.x}) or 0)\n"
     )
     (tmp_path / "zz_helpers.py").write_text("VALUE = 1  # no register(): not a command\n")
-    (tmp_path / "_zz_private.py").write_text("raise RuntimeError('private modules must not be imported')\n")
+    (tmp_path / "_zz_private.py").write_text(
+        "raise RuntimeError('private modules must not be imported')\n"
+    )
     monkeypatch.setattr(commands, "__path__", [*commands.__path__, str(tmp_path)])
     for name in ("zz_probe", "zz_helpers"):
         monkeypatch.delitem(sys.modules, f"rbjax.commands.{name}", raising=False)
@@ -104,7 +125,9 @@ def test_installed_entry_point_help():
     assert exe.exists(), f"the console script is not installed next to {sys.executable}"
     proc = subprocess.run([str(exe), "--help"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
-    assert "usage: rbjax" in proc.stdout and "simulate" in proc.stdout and "reproduce" in proc.stdout
+    assert (
+        "usage: rbjax" in proc.stdout and "simulate" in proc.stdout and "reproduce" in proc.stdout
+    )
 
 
 # ------------------------------------------------------------------------------ simulate --json
@@ -112,7 +135,18 @@ def test_installed_entry_point_help():
 
 def test_json_has_the_documented_keys(json_rows):
     assert len(json_rows) == len(HEIGHTS_M)
-    keys = {"height_m", "contact_time_s", "peak_force_N", "restitution", "lfe_total_dB", "lfe_octave_dB", "lfe_third_octave_dB", "conformance", "status", "method"}
+    keys = {
+        "height_m",
+        "contact_time_s",
+        "peak_force_N",
+        "restitution",
+        "lfe_total_dB",
+        "lfe_octave_dB",
+        "lfe_third_octave_dB",
+        "conformance",
+        "status",
+        "method",
+    }
     for row, h in zip(json_rows, HEIGHTS_M):
         assert set(row) == keys
         assert row["height_m"] == h and row["status"] == "ok"
@@ -124,11 +158,21 @@ def test_json_has_the_documented_keys(json_rows):
 
 def test_json_agrees_with_simulate(json_rows, direct):
     for name in ("contact_time_s", "peak_force_N", "restitution"):
-        np.testing.assert_allclose([r[name] for r in json_rows], np.asarray(getattr(direct, name)), rtol=1e-12)
+        np.testing.assert_allclose(
+            [r[name] for r in json_rows], np.asarray(getattr(direct, name)), rtol=1e-12
+        )
     octave = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(direct.force_N, 44_100.0))
-    np.testing.assert_allclose([[r["lfe_octave_dB"][b] for b in OCTAVES] for r in json_rows], octave, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        [[r["lfe_octave_dB"][b] for b in OCTAVES] for r in json_rows], octave, rtol=0, atol=1e-9
+    )
     i = HEIGHTS_M.index(1.0)
-    expected = check_conformance(octave[i], contact_time_s=json_rows[i]["contact_time_s"], restitution=json_rows[i]["restitution"], mass_kg=2.5, height_m=1.0)
+    expected = check_conformance(
+        octave[i],
+        contact_time_s=json_rows[i]["contact_time_s"],
+        restitution=json_rows[i]["restitution"],
+        mass_kg=2.5,
+        height_m=1.0,
+    )
     assert json_rows[i]["conformance"] == json.loads(json.dumps(expected.to_dict()))
 
 
@@ -160,7 +204,7 @@ def _band_lfe(force, rate, centres_exponents, fraction):
     esd[0] /= 2.0
     esd[-1] /= 2.0  # even n: Nyquist
     f = np.arange(esd.size) * rate / n
-    g = 10 ** 0.3
+    g = 10**0.3
     out = []
     for x in centres_exponents:
         fm = 1000.0 * g ** (x / fraction)
@@ -184,7 +228,9 @@ def test_lfe_against_an_independent_spectrum(json_rows):
 def test_octave_energy_is_the_sum_of_its_thirds(json_rows):
     """Base-ten octave edges are third-octave edges: E_octave = sum of its three thirds."""
     for row in json_rows:
-        thirds = np.array([10 ** (row["lfe_third_octave_dB"][b] / 10) for b in THIRDS]).reshape(6, 3)
+        thirds = np.array([10 ** (row["lfe_third_octave_dB"][b] / 10) for b in THIRDS]).reshape(
+            6, 3
+        )
         octave = np.array([10 ** (row["lfe_octave_dB"][b] / 10) for b in OCTAVES])
         np.testing.assert_allclose(thirds.sum(axis=1), octave, rtol=1e-9)
         assert 10 * math.log10(octave.sum()) < row["lfe_total_dB"]
@@ -200,10 +246,14 @@ def test_failed_solves_are_null_with_the_status_name(json_rows):
     assert "NaN" not in out
     rows = json.loads(out)
     direct = rbjax.simulate(np.array(heights))
-    assert [r["status"] for r in rows] == list(direct.status_name) == ["ok", "ok", "deflection_limit"]
+    assert (
+        [r["status"] for r in rows] == list(direct.status_name) == ["ok", "ok", "deflection_limit"]
+    )
     bad = rows[-1]
     assert bad["height_m"] == 10.0
-    assert bad["contact_time_s"] is None and bad["peak_force_N"] is None and bad["restitution"] is None
+    assert (
+        bad["contact_time_s"] is None and bad["peak_force_N"] is None and bad["restitution"] is None
+    )
     assert bad["lfe_total_dB"] is None and set(bad["lfe_octave_dB"].values()) == {None}
     assert set(bad["lfe_third_octave_dB"].values()) == {None} and bad["conformance"] is None
     assert rows[:2] == json_rows[:2]
@@ -215,7 +265,9 @@ def test_table_shows_failed_status():
     lines = out.splitlines()
     cells, solved = lines[4].split(), lines[2].split()  # the 10 m row and the 0.1 m row
     assert cells[0] == "10.00" and cells[-1] == "deflection_limit"
-    assert len(cells) == len(solved) == 13  # height, t_c, F_peak, e, L_FE, 6 bands, conformance, status
+    assert (
+        len(cells) == len(solved) == 13
+    )  # height, t_c, F_peak, e, L_FE, 6 bands, conformance, status
     assert cells[1:-1] == ["—"] * 11
 
 
@@ -230,11 +282,15 @@ def test_table_renders(direct):
     for band in OCTAVES:
         assert f"{band} Hz" in lines[0]
     data = lines[2 : 2 + len(HEIGHTS_M)]
-    for line, h, tc, fp in zip(data, HEIGHTS_M, np.asarray(direct.contact_time_s), np.asarray(direct.peak_force_N)):
+    for line, h, tc, fp in zip(
+        data, HEIGHTS_M, np.asarray(direct.contact_time_s), np.asarray(direct.peak_force_N)
+    ):
         cells = line.split()
         assert cells[0] == f"{h:.2f}" and cells[1] == f"{tc * 1e3:.2f}" and cells[2] == f"{fp:.0f}"
         assert cells[-1] == "ok"
-        assert cells[-2] == ("n/a" if h != 1.0 else "FAIL")  # the elastic model misses 125-500 Hz (paper Fig. 8)
+        assert cells[-2] == (
+            "n/a" if h != 1.0 else "FAIL"
+        )  # the elastic model misses 125-500 Hz (paper Fig. 8)
     assert "outside the tolerances" in out and "L_FE 125 Hz" in out
     assert "simulating 3 drop height(s)" in err
 
@@ -248,7 +304,19 @@ def test_params_file_then_overrides(tmp_path):
     save_params(path, ball, rbjax.Model(gas="none", blocked_force="momentum"))
     from rbjax.commands.simulate import load_ball_and_model
 
-    args = build_parser().parse_args(["simulate", "--height-m", "1", "--params", str(path), "--youngs-pa", "1.7e6", "--gas", "adiabatic"])
+    args = build_parser().parse_args(
+        [
+            "simulate",
+            "--height-m",
+            "1",
+            "--params",
+            str(path),
+            "--youngs-pa",
+            "1.7e6",
+            "--gas",
+            "adiabatic",
+        ]
+    )
     loaded, model = load_ball_and_model(args)
     assert (loaded.youngs_Pa, loaded.poisson, loaded.mass_kg) == (1.7e6, 0.45, 2.4)
     assert (model.gas, model.blocked_force) == ("adiabatic", "momentum")
@@ -260,7 +328,9 @@ def test_params_end_to_end(tmp_path, json_rows):
     save_params(path, rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=2.2e6), rbjax.Model())
     code, out, err = run_cli([*ARGS, "--params", str(path), "--youngs-pa", "1.6e6", "--json"])
     assert code == 0, err
-    assert [r["contact_time_s"] for r in json.loads(out)] == [r["contact_time_s"] for r in json_rows]
+    assert [r["contact_time_s"] for r in json.loads(out)] == [
+        r["contact_time_s"] for r in json_rows
+    ]
 
 
 # ------------------------------------------------------------------------------ bad input
@@ -275,7 +345,10 @@ def test_params_end_to_end(tmp_path, json_rows):
         (["simulate", "--height-m", "1", "--youngs-pa", "-5"], ["youngs_Pa", "-5", "(0, inf)"]),
         (["simulate", "--height-m", "1", "--gas", "foo"], ["--gas", "foo", "adiabatic", "none"]),
         (["simulate", "--height-m", "abc"], ["--height-m", "abc"]),
-        (["simulate", "--height-m", "1", "--params", "/nonexistent/fit.json"], ["params", "/nonexistent/fit.json"]),
+        (
+            ["simulate", "--height-m", "1", "--params", "/nonexistent/fit.json"],
+            ["params", "/nonexistent/fit.json"],
+        ),
         (["nosuchcommand"], ["nosuchcommand", "simulate"]),
     ],
 )
@@ -296,8 +369,14 @@ def test_bad_input_exits_2_with_one_line(argv, words):
     [
         ("{not json", ["cannot read JSON"]),
         ('{"ball": {"radius_m": 0.089}, "model": {}}', ["missing", "wall_m"]),
-        ('{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.9}, "model": {}}', ["poisson", "0.9"]),
-        ('{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.5}, "model": {"damping": {"name": "zener", "tau": 1}}}', ["params", "tau"]),
+        (
+            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.9}, "model": {}}',
+            ["poisson", "0.9"],
+        ),
+        (
+            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.5}, "model": {"damping": {"name": "zener", "tau": 1}}}',
+            ["params", "tau"],
+        ),
     ],
 )
 def test_bad_params_file_exits_2_with_one_line(tmp_path, content, words):

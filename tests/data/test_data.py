@@ -30,7 +30,9 @@ NOISE_N = 0.8
 def pulse_N(t_s, t0_s=0.0, peak_N=500.0, T_s=0.02):
     """Half-sine contact pulse of duration T_s starting at t0_s."""
     tau = np.asarray(t_s) - t0_s
-    return np.where((tau > 0) & (tau < T_s), peak_N * np.sin(np.pi * np.clip(tau, 0, T_s) / T_s), 0.0)
+    return np.where(
+        (tau > 0) & (tau < T_s), peak_N * np.sin(np.pi * np.clip(tau, 0, T_s) / T_s), 0.0
+    )
 
 
 def smooth_pulse_N(t_s, t0_s, peak_N=500.0, T_s=0.002):
@@ -146,7 +148,9 @@ def test_condition_examples_line_up_and_are_physical():
         assert c.onset_s == 0.002 and c.n_samples == round(0.05 * RATE)
         assert c.lowpass_Hz == 1250.0
         start, end = c.contact_window()
-        assert start == pytest.approx(0.002, abs=0.3 / RATE)  # re-located after the shift, with noise
+        assert start == pytest.approx(
+            0.002, abs=0.3 / RATE
+        )  # re-located after the shift, with noise
         assert 0.0185 < end - start < 0.0215
         assert abs(np.mean(c.force_N[:60])) < 0.5  # baseline removed
         peaks.setdefault(r.height_m, []).append(c.peak_N)
@@ -180,12 +184,16 @@ def test_wav_two_impacts_first_kept_with_warning():
 def test_csv_header_variants_units_and_single_column(tmp_path):
     x = raw_force()
     a = D.read_csv(write_csv(tmp_path / "a.csv", x, header="Time,F"), height_m=0.5)
-    (tmp_path / "b.csv").write_text("t;Force\n" + "".join(f"{i / RATE:.7f};{f:.3f}\n" for i, f in enumerate(x)))
+    (tmp_path / "b.csv").write_text(
+        "t;Force\n" + "".join(f"{i / RATE:.7f};{f:.3f}\n" for i, f in enumerate(x))
+    )
     b = D.read_csv(tmp_path / "b.csv")
     assert a.rate_Hz == b.rate_Hz == 44100.0 and a.height_m == 0.5 and b.height_m is None
     np.testing.assert_allclose(a.force_N, np.round(x, 3))
     # units in the header are applied
-    lines = ["time [ms],force_kN"] + [f"{1e3 * i / RATE:.5f},{f / 1e3:.6f}" for i, f in enumerate(x)]
+    lines = ["time [ms],force_kN"] + [
+        f"{1e3 * i / RATE:.5f},{f / 1e3:.6f}" for i, f in enumerate(x)
+    ]
     (tmp_path / "c.csv").write_text("\n".join(lines))
     c = D.read_csv(tmp_path / "c.csv")
     assert c.rate_Hz == 44100.0
@@ -223,7 +231,9 @@ def test_int_wav_with_calibration(tmp_path):
         assert r.rate_Hz == RATE and r.height_m == 1.0 and r.calibration_N_per_FS == cal
         np.testing.assert_allclose(r.force_N, codes / fs * cal, rtol=0, atol=1e-12)
         np.testing.assert_allclose(r.force_N, x, atol=cal / fs)
-        with pytest.raises(DataError, match=rf"h100_int{width}\.wav: integer PCM.*calibration_N_per_FS"):
+        with pytest.raises(
+            DataError, match=rf"h100_int{width}\.wav: integer PCM.*calibration_N_per_FS"
+        ):
             D.read_wav(p)
     # WAVE_FORMAT_EXTENSIBLE integer PCM (the stdlib wave of Python 3.11 refuses it)
     codes = np.round(x / cal * 32768).astype("<i2")
@@ -245,7 +255,9 @@ def test_float_wav_round_trip(tmp_path):
     i = blob.index(b"data")
     extra = b"bext" + struct.pack("<I", 4) + b"abcd"
     p = tmp_path / "bext.wav"
-    p.write_bytes(b"RIFF" + struct.pack("<I", len(blob) - 8 + len(extra)) + blob[8:i] + extra + blob[i:])
+    p.write_bytes(
+        b"RIFF" + struct.pack("<I", len(blob) - 8 + len(extra)) + blob[8:i] + extra + blob[i:]
+    )
     r = D.read_wav(p)
     np.testing.assert_array_equal(r.force_N, x.astype(np.float64))
     assert any("not understood" in n for n in r.notes)
@@ -291,10 +303,14 @@ def test_height_sources_and_unknown_height(tmp_path):
     x = raw_force()
     write_csv(tmp_path / "h080_d1.csv", x)
     write_csv(tmp_path / "drop7.csv", x)
-    with pytest.raises(DataError, match=r"cannot know the drop height of drop7\.csv: pass height_m="):
+    with pytest.raises(
+        DataError, match=r"cannot know the drop height of drop7\.csv: pass height_m="
+    ):
         D.load(tmp_path)
     (tmp_path / "heights.csv").write_text("file,height_m\ndrop7.csv,0.55\n")
-    recs = D.load([tmp_path / "h080_d1.csv", tmp_path / "drop7.csv"], manifest=tmp_path / "heights.csv")
+    recs = D.load(
+        [tmp_path / "h080_d1.csv", tmp_path / "drop7.csv"], manifest=tmp_path / "heights.csv"
+    )
     assert [r.height_m for r in recs] == [0.8, 0.55]
     assert [r.height_m for r in D.load([tmp_path / "drop7.csv"], height_m=1.2)] == [1.2]
     (tmp_path / "heights.csv").unlink()
@@ -329,7 +345,10 @@ def test_different_rates_rejected(tmp_path):
         ("# only a comment\n\n", "empty file"),
         ("a,b\n1,2\n", "no force column"),
         ("time_s,force_lbf\n0,1\n", "unknown unit 'lbf'"),
-        ("time_s,force_N\n" + "".join(f"{i / RATE:.7f},1.0\n" for i in range(50)), "only 50 samples"),
+        (
+            "time_s,force_N\n" + "".join(f"{i / RATE:.7f},1.0\n" for i in range(50)),
+            "only 50 samples",
+        ),
     ],
 )
 def test_bad_csv_structure(tmp_path, content, match):
@@ -385,7 +404,9 @@ def test_clipping_flat_top(tmp_path):
         with pytest.raises(DataError, match=rf"{name}: clipped: 4 consecutive samples"):
             D.load(p, height_m=1.0, rate_Hz=RATE if name.endswith("npy") else None)
     # integer WAV: any sample at full scale
-    codes = np.clip(np.round(raw_force(peak_N=1500.0) / 1000.0 * 32768), -32768, 32767).astype("<i2")
+    codes = np.clip(np.round(raw_force(peak_N=1500.0) / 1000.0 * 32768), -32768, 32767).astype(
+        "<i2"
+    )
     p = tmp_path / "clip_int.wav"
     p.write_bytes(wav_bytes(codes.tobytes(), tag=1, bits=16))
     with pytest.raises(DataError, match=r"clip_int\.wav: clipped: \d+ sample\(s\) at full scale"):
@@ -403,10 +424,15 @@ def test_clipping_flat_top(tmp_path):
             w.setframerate(RATE)
             w.writeframes(b"".join(b[i : i + 3] for i in range(0, len(b), 4)))
         if clipped:
-            with pytest.raises(DataError, match=r"clip24\.wav: clipped: 1 sample\(s\) at full scale \(first at sample 1000\)"):
+            with pytest.raises(
+                DataError,
+                match=r"clip24\.wav: clipped: 1 sample\(s\) at full scale \(first at sample 1000\)",
+            ):
                 D.read_wav(p, calibration_N_per_FS=2000.0)
         else:
-            assert D.read_wav(p, calibration_N_per_FS=2000.0).force_N[1000] == pytest.approx(2000.0 * code / 2**23)
+            assert D.read_wav(p, calibration_N_per_FS=2000.0).force_N[1000] == pytest.approx(
+                2000.0 * code / 2**23
+            )
 
 
 def test_bad_wav_files(tmp_path):
@@ -437,7 +463,9 @@ def test_bad_wav_files(tmp_path):
 
 
 def test_no_impact_and_impact_off_the_end(tmp_path):
-    noise = D.read_npy(NOISE_N * np.random.default_rng(3).standard_normal(4410), rate_Hz=RATE, source="quiet.npy")
+    noise = D.read_npy(
+        NOISE_N * np.random.default_rng(3).standard_normal(4410), rate_Hz=RATE, source="quiet.npy"
+    )
     with pytest.raises(DataError, match=r"quiet\.npy: no impact found.*below the threshold 10 N"):
         D.condition(noise)
     late = D.read_npy(raw_force(onset=4100), rate_Hz=RATE, source="late.npy")
@@ -501,7 +529,10 @@ def test_onset_precision_with_noise_bound():
     predicted = NOISE_N / slope_per_sample  # samples
     rng = np.random.default_rng(4)
     err = np.array(
-        [(D.locate_onset(clean + NOISE_N * rng.standard_normal(t.size), RATE) - ref) * RATE for _ in range(200)]
+        [
+            (D.locate_onset(clean + NOISE_N * rng.standard_normal(t.size), RATE) - ref) * RATE
+            for _ in range(200)
+        ]
     )
     rms = np.sqrt(np.mean(err**2))
     assert rms < 1.5 * predicted
@@ -538,7 +569,15 @@ def _shifted_copies(n=2205, onset0=88.2, shifts=(0.0, 0.3, -2.7, 5.5, 11.125)):
     for k, d in enumerate(shifts):
         onset = (onset0 + d) / RATE
         x = smooth_pulse_N(t, onset, 800.0, 0.003) * np.exp(-np.clip(t - onset, 0, None) / 0.004)
-        recs.append(D.Recording(source=f"h100_s{k}", height_m=1.0 + 0.001 * k, rate_Hz=RATE, force_N=x, onset_s=onset))
+        recs.append(
+            D.Recording(
+                source=f"h100_s{k}",
+                height_m=1.0 + 0.001 * k,
+                rate_Hz=RATE,
+                force_N=x,
+                onset_s=onset,
+            )
+        )
     return recs
 
 

@@ -28,7 +28,13 @@ WINDOW = {"window_s": 0.03, "pre_onset_s": 0.003}
 @pytest.fixture(scope="module")
 def drop():
     t, forces = long_records()
-    rec = D.Recording(source="h100.csv", height_m=HEIGHTS_M[H], rate_Hz=RATE_HZ, force_N=forces[H], lowpass_Hz=CUTOFF_HZ)
+    rec = D.Recording(
+        source="h100.csv",
+        height_m=HEIGHTS_M[H],
+        rate_Hz=RATE_HZ,
+        force_N=forces[H],
+        lowpass_Hz=CUTOFF_HZ,
+    )
     return t, rec, D.condition(D.clean(rec), **WINDOW)
 
 
@@ -54,7 +60,9 @@ def test_offset_and_drift_are_removed_and_logged(drop):
     log = out.conditioning
     assert log["drift_N_per_s"] == pytest.approx(12.0, rel=0.01)
     # the drift is removed as a line through zero at the impact: the offset there remains
-    assert log["offset_N"] == pytest.approx(25.0 + 12.0 * FAULT_START_S + clean.conditioning["offset_N"], abs=0.05)
+    assert log["offset_N"] == pytest.approx(
+        25.0 + 12.0 * FAULT_START_S + clean.conditioning["offset_N"], abs=0.05
+    )
     assert np.abs(out.force_N - clean.force_N).max() < 0.01  # noise rms ~0.19 N
 
 
@@ -88,12 +96,22 @@ def test_the_rebound_is_cut_and_reported(drop):
     assert rebound["time_s"] == pytest.approx(first + 0.7, abs=2e-3)
     assert rebound["peak_N"] == pytest.approx(0.5 * rec.force_N.max(), rel=0.02)
     np.testing.assert_allclose(out.force_N, clean.force_N, atol=1e-9)
-    assert "0.8" in D.describe_conditioning(out.conditioning) and "cut" in D.describe_conditioning(out.conditioning)
+    assert "0.8" in D.describe_conditioning(out.conditioning) and "cut" in D.describe_conditioning(
+        out.conditioning
+    )
 
 
 def test_every_fault_at_once(drop):
     t, rec, clean = drop
-    faulty = with_faults(t, rec.force_N, offset_N=-40.0, drift_N_per_s=-8.0, hum=(50.0, 2.5), inverted=True, rebound_after_s=0.7)
+    faulty = with_faults(
+        t,
+        rec.force_N,
+        offset_N=-40.0,
+        drift_N_per_s=-8.0,
+        hum=(50.0, 2.5),
+        inverted=True,
+        rebound_after_s=0.7,
+    )
     with pytest.warns(D.DataWarning):
         out = conditioned(rec, faulty)
     log = out.conditioning
@@ -105,9 +123,13 @@ def test_every_fault_at_once(drop):
 def test_cut_off_and_no_impact_records_are_named_errors(drop):
     t, rec, _ = drop
     cut = rec.replace(force_N=rec.force_N[: int((FAULT_START_S + 0.008) * RATE_HZ)])  # mid-contact
-    with pytest.raises(D.RecordCutOffError, match=r"h100\.csv: the impact at 0\.1\d+ s runs off the end"):
+    with pytest.raises(
+        D.RecordCutOffError, match=r"h100\.csv: the impact at 0\.1\d+ s runs off the end"
+    ):
         D.condition(D.clean(cut), **WINDOW)
-    late = rec.replace(force_N=rec.force_N[: int((FAULT_START_S + 0.025) * RATE_HZ)])  # contact over, window not
+    late = rec.replace(
+        force_N=rec.force_N[: int((FAULT_START_S + 0.025) * RATE_HZ)]
+    )  # contact over, window not
     with pytest.raises(D.RecordCutOffError, match="would run past the end of the record"):
         D.condition(D.clean(late), **WINDOW)
     quiet = rec.replace(force_N=rec.force_N[: int(0.09 * RATE_HZ)])  # the pre-trigger only
@@ -132,10 +154,20 @@ def test_integer_wav_with_a_calibration(tmp_path, drop, bits):
 def test_a_clipped_record_among_good_ones(tmp_path, drop):
     _, rec, _ = drop
     write_int_wav(tmp_path / "h100_a.wav", rec.force_N, 16, 5000.0)
-    write_int_wav(tmp_path / "h100_b.wav", rec.force_N, 16, 1000.0)  # the peak (1.6 kN) is off the scale
-    (tmp_path / "manifest.csv").write_text("file,height_m,calibration_N_per_FS\nh100_a.wav,1.0,5000\nh100_b.wav,1.0,1000\n")
-    with pytest.raises(D.ClippedRecordError, match=r"h100_b\.wav: clipped: \d+ sample\(s\) at full scale"):
+    write_int_wav(
+        tmp_path / "h100_b.wav", rec.force_N, 16, 1000.0
+    )  # the peak (1.6 kN) is off the scale
+    (tmp_path / "manifest.csv").write_text(
+        "file,height_m,calibration_N_per_FS\nh100_a.wav,1.0,5000\nh100_b.wav,1.0,1000\n"
+    )
+    with pytest.raises(
+        D.ClippedRecordError, match=r"h100_b\.wav: clipped: \d+ sample\(s\) at full scale"
+    ):
         D.load(tmp_path)
     good, left_out = D.load(tmp_path, strict=False)
     assert isinstance(good, D.Recording) and good.source == "h100_a.wav"
-    assert isinstance(left_out, D.Excluded) and left_out.source == "h100_b.wav" and "clipped" in left_out.reason
+    assert (
+        isinstance(left_out, D.Excluded)
+        and left_out.source == "h100_b.wav"
+        and "clipped" in left_out.reason
+    )

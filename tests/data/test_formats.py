@@ -26,14 +26,20 @@ def forces():
 
 def write_csv(path, x):
     t = np.arange(x.size) / RATE_HZ
-    path.write_text("time_s,force_N\n" + "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), x.tolist())) + "\n")
+    path.write_text(
+        "time_s,force_N\n"
+        + "\n".join(f"{a!r},{b!r}" for a, b in zip(t.tolist(), x.tolist()))
+        + "\n"
+    )
 
 
 WRITERS = {
     ".mat": lambda p, x: scipy.io.savemat(p, {"fs": RATE_HZ, "force_N": x}),
     ".h5.mat": lambda p, x: write_mat_v73(p, {"fs": RATE_HZ, "force_N": x}),
     ".uff": lambda p, x: write_uff(p, [("force", x, "N")]),
-    ".tdms": lambda p, x: write_tdms(p, [("force", x, {"wf_increment": 1 / RATE_HZ, "unit_string": "N"})]),
+    ".tdms": lambda p, x: write_tdms(
+        p, [("force", x, {"wf_increment": 1 / RATE_HZ, "unit_string": "N"})]
+    ),
 }
 
 
@@ -62,21 +68,37 @@ def test_each_format_gives_the_samples_and_the_fit_input_of_the_csv(tmp_path, fo
 def test_channels_by_name_or_number_units_and_calibration(tmp_path, forces):
     x = forces[4]
     p = tmp_path / "h100.tdms"
-    write_tdms(p, [
-        ("force", x / 1e3, {"wf_increment": 1 / RATE_HZ, "unit_string": "kN"}),
-        ("amplifier", x / 500.0, {"wf_increment": 1 / RATE_HZ, "unit_string": "V"}),
-        ("raw", np.round(x / 5000.0 * 32768).astype(np.int16), {"wf_increment": 1 / RATE_HZ}),
-    ])
-    with pytest.raises(D.DataError, match=r"3 channels \(0: 'plate/force', 1: 'plate/amplifier', 2: 'plate/raw'\): pass channel="):
+    write_tdms(
+        p,
+        [
+            ("force", x / 1e3, {"wf_increment": 1 / RATE_HZ, "unit_string": "kN"}),
+            ("amplifier", x / 500.0, {"wf_increment": 1 / RATE_HZ, "unit_string": "V"}),
+            ("raw", np.round(x / 5000.0 * 32768).astype(np.int16), {"wf_increment": 1 / RATE_HZ}),
+        ],
+    )
+    with pytest.raises(
+        D.DataError,
+        match=r"3 channels \(0: 'plate/force', 1: 'plate/amplifier', 2: 'plate/raw'\): pass channel=",
+    ):
         D.read_tdms(p)
-    with pytest.raises(D.DataError, match=r"channel='accel' is not among the channels \(0: 'plate/force'"):
+    with pytest.raises(
+        D.DataError, match=r"channel='accel' is not among the channels \(0: 'plate/force'"
+    ):
         D.read_tdms(p, channel="accel")
     np.testing.assert_allclose(D.read_tdms(p, channel="force").force_N, x, rtol=1e-15)  # kN -> N
-    np.testing.assert_array_equal(D.read_tdms(p, channel=0).force_N, D.read_tdms(p, channel="plate/force").force_N)
-    with pytest.raises(D.DataError, match=r"is in 'V': pass calibration_N_per_FS= \(newtons per V\)"):
+    np.testing.assert_array_equal(
+        D.read_tdms(p, channel=0).force_N, D.read_tdms(p, channel="plate/force").force_N
+    )
+    with pytest.raises(
+        D.DataError, match=r"is in 'V': pass calibration_N_per_FS= \(newtons per V\)"
+    ):
         D.read_tdms(p, channel="amplifier")
-    np.testing.assert_allclose(D.read_tdms(p, channel="amplifier", calibration_N_per_FS=500.0).force_N, x, rtol=1e-15)
-    with pytest.raises(D.DataError, match="integer samples in channel 'plate/raw': pass calibration_N_per_FS="):
+    np.testing.assert_allclose(
+        D.read_tdms(p, channel="amplifier", calibration_N_per_FS=500.0).force_N, x, rtol=1e-15
+    )
+    with pytest.raises(
+        D.DataError, match="integer samples in channel 'plate/raw': pass calibration_N_per_FS="
+    ):
         D.read_tdms(p, channel="raw")
     raw = D.read_tdms(p, channel="raw", calibration_N_per_FS=5000.0)
     np.testing.assert_allclose(raw.force_N, x, atol=0.5 * 5000.0 / 32768 * (1 + 1e-9))
@@ -98,7 +120,9 @@ def test_mat_files_name_their_channels_and_time_base(tmp_path, forces):
     assert rec.rate_Hz == RATE_HZ  # from the time vector
     np.testing.assert_array_equal(rec.force_N, 2 * x)
     scipy.io.savemat(p, {"s": {"F_kN": x / 1e3}})  # a struct, a unit in the name, no time base
-    with pytest.raises(D.DataError, match="gives no sampling rate for channel 's.F_kN': pass rate_Hz="):
+    with pytest.raises(
+        D.DataError, match="gives no sampling rate for channel 's.F_kN': pass rate_Hz="
+    ):
         D.read_mat(p)
     np.testing.assert_allclose(D.read_mat(p, rate_Hz=RATE_HZ).force_N, x, rtol=1e-15)
     write_mat_v73(p, {"dt": 1 / RATE_HZ, "force_N": x})
@@ -111,7 +135,9 @@ def test_uff_channels_and_units(tmp_path, forces):
     write_uff(p, [("plate force", x, "N"), ("plate voltage", x / 400.0, "V")])
     with pytest.raises(D.DataError, match=r"0: 'plate force', 1: 'plate voltage'"):
         D.read_uff(p)
-    np.testing.assert_allclose(D.read_uff(p, channel="plate voltage", calibration_N_per_FS=400.0).force_N, x, rtol=1e-10)
+    np.testing.assert_allclose(
+        D.read_uff(p, channel="plate voltage", calibration_N_per_FS=400.0).force_N, x, rtol=1e-10
+    )
     rec = D.read_uff(p, channel=0)
     assert rec.rate_Hz == RATE_HZ and any("read as 44100 Hz" in n for n in rec.notes)
 
@@ -120,9 +146,16 @@ def test_bad_files_and_missing_extras_are_named(tmp_path, forces, monkeypatch):
     x = forces[4]
     bad = tmp_path / "h100.xyz"
     bad.write_text("1,2\n")
-    with pytest.raises(D.DataError, match=r"unknown file type '\.xyz': none of the known formats \(\*\.csv, .*\*\.tdms\)"):
+    with pytest.raises(
+        D.DataError,
+        match=r"unknown file type '\.xyz': none of the known formats \(\*\.csv, .*\*\.tdms\)",
+    ):
         D.load(bad)
-    for suffix, what in ((".mat", "MATLAB .mat"), (".uff", "Universal File Format"), (".tdms", "TDMS")):
+    for suffix, what in (
+        (".mat", "MATLAB .mat"),
+        (".uff", "Universal File Format"),
+        (".tdms", "TDMS"),
+    ):
         p = tmp_path / f"h100{suffix}"
         p.write_bytes(b"this is not what the name says\n" * 10)
         with pytest.raises(D.DataError, match=f"h100{suffix}: .*{what}"):
@@ -137,5 +170,8 @@ def test_bad_files_and_missing_extras_are_named(tmp_path, forces, monkeypatch):
 
     monkeypatch.setattr(importlib, "import_module", without)
     write_tdms(tmp_path / "h100.tdms", [("force", x, {"wf_increment": 1 / RATE_HZ})])
-    with pytest.raises(D.MissingFormatError, match=r"reading TDMS \(\.tdms\) files needs the package 'nptdms'.*pip install 'rbjax\[formats\]'"):
+    with pytest.raises(
+        D.MissingFormatError,
+        match=r"reading TDMS \(\.tdms\) files needs the package 'nptdms'.*pip install 'rbjax\[formats\]'",
+    ):
         D.read_tdms(tmp_path / "h100.tdms")

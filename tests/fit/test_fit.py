@@ -56,7 +56,11 @@ CASES = {
     "paper": ("paper", "paper", {"youngs_Pa": 1.75e6}),
     "kelvin-voigt": ("kelvin-voigt", "momentum", {"youngs_Pa": 1.9e6, "damping_Ns_per_m": 40.0}),
     "hunt-crossley": ("hunt-crossley", "momentum", {"youngs_Pa": 1.63e6, "alpha_s_per_m": 0.05}),
-    "zener": ("zener", "momentum", {"youngs_Pa": 1.5e6, "stiffness_ratio": 0.7, "relaxation_time_s": 1.7e-3}),
+    "zener": (
+        "zener",
+        "momentum",
+        {"youngs_Pa": 1.5e6, "stiffness_ratio": 0.7, "relaxation_time_s": 1.7e-3},
+    ),
 }
 
 
@@ -77,7 +81,13 @@ def recovered():
     for seed, (key, (model, bf, true)) in enumerate(CASES.items()):
         ball = JIS_RUBBER_BALL.replace(youngs_Pa=true["youngs_Pa"])
         data = synthetic_data(ball, damping_of(model, true), bf, seed)
-        res = fit(data, model, blocked_force=bf, start={"youngs_Pa": 2.0 * true["youngs_Pa"]}, progress=False)
+        res = fit(
+            data,
+            model,
+            blocked_force=bf,
+            start={"youngs_Pa": 2.0 * true["youngs_Pa"]},
+            progress=False,
+        )
         out[key] = (data, res)
     return out
 
@@ -121,7 +131,10 @@ def test_fitted_ball_and_model_reproduce_the_truth(recovered):
     loaded_ball = rbjax.terms.serialize.ball_from_dict(d["ball"])
     loaded_model = rbjax.terms.serialize.model_from_dict(d["model"])
     assert float(loaded_ball.youngs_Pa) == pytest.approx(true["youngs_Pa"], rel=0.03)
-    assert float(loaded_model.damping[0].relaxation_time_s) == res.parameters["relaxation_time_s"].value
+    assert (
+        float(loaded_model.damping[0].relaxation_time_s)
+        == res.parameters["relaxation_time_s"].value
+    )
     json.dumps(d, allow_nan=False)  # strict JSON
 
 
@@ -140,7 +153,9 @@ def test_jacobian_matches_finite_differences_of_the_scipy_reference():
         ball = JIS_RUBBER_BALL.replace(youngs_Pa=params["youngs_Pa"], poisson=params["poisson"])
         rows = []
         for k, h in enumerate(HEIGHTS_M):
-            ref = reference_impact(h, ball, damping=HuntCrossley(params["alpha_s_per_m"]), blocked_force=bf, rtol=1e-12)
+            ref = reference_impact(
+                h, ball, damping=HuntCrossley(params["alpha_s_per_m"]), blocked_force=bf, rtol=1e-12
+            )
             rows.append(scipy.signal.sosfilt(SOS, sampled_force(ref, t - shift[k])))
         return np.array(rows)
 
@@ -156,14 +171,18 @@ def test_jacobian_matches_finite_differences_of_the_scipy_reference():
 def test_e_and_nu_are_flagged_as_not_separately_identifiable(recovered):
     data, res = recovered["paper"]
     # the Jacobian columns of E and ν are parallel: both act through E/√(1−ν²) only
-    _, jac, names = model_histories(data, "paper", {"youngs_Pa": 1.7e6, "poisson": 0.3}, data.onset_s - 4e-4)
+    _, jac, names = model_histories(
+        data, "paper", {"youngs_Pa": 1.7e6, "poisson": 0.3}, data.onset_s - 4e-4
+    )
     a, b = jac[..., names.index("youngs_Pa")].ravel(), jac[..., names.index("poisson")].ravel()
     assert abs(a @ b) / (np.linalg.norm(a) * np.linalg.norm(b)) > 1 - 1e-9
     assert "not separately identifiable" in res.identifiability
     assert "E/√(1−ν²)" in res.identifiability
     # what is fitted is the effective modulus; with ν = 0.5 held it is E/√0.75
     eff = res.parameters["effective_modulus_Pa"]
-    assert eff.value == pytest.approx(res.parameters["youngs_Pa"].value / math.sqrt(0.75), rel=1e-12)
+    assert eff.value == pytest.approx(
+        res.parameters["youngs_Pa"].value / math.sqrt(0.75), rel=1e-12
+    )
 
 
 def test_a_prior_on_nu_makes_it_determined_by_the_prior(recovered):
@@ -183,7 +202,9 @@ def test_a_prior_on_nu_makes_it_determined_by_the_prior(recovered):
 @pytest.mark.parametrize("optimizer", ["gauss-newton"])
 def test_other_optimizers_reach_the_same_minimum(optimizer, recovered):
     data, lm = recovered["paper"]
-    res = fit(data, "paper", optimizer=optimizer, start={"youngs_Pa": 2.5e6}, progress=False, max_steps=60)
+    res = fit(
+        data, "paper", optimizer=optimizer, start={"youngs_Pa": 2.5e6}, progress=False, max_steps=60
+    )
     assert res.converged, res.message
     e = lm.parameters["youngs_Pa"]
     assert abs(res.parameters["youngs_Pa"].value - e.value) <= 0.1 * e.std
@@ -204,7 +225,9 @@ def test_the_histories_reported_are_those_of_the_parameters_reported(recovered):
     res = fit(data, "hunt-crossley", blocked_force="momentum", max_steps=0, progress=False)
     assert res.parameters["poisson"].value == 0.5
     values = {n: p.value for n, p in res.parameters.items()}
-    force, _, _ = model_histories(data, "hunt-crossley", values, res.onset_shift_s, blocked_force="momentum")
+    force, _, _ = model_histories(
+        data, "hunt-crossley", values, res.onset_shift_s, blocked_force="momentum"
+    )
     np.testing.assert_allclose(res.predicted_N, force, rtol=0, atol=1e-9 * np.max(force))
 
 
@@ -224,7 +247,14 @@ def test_e_held_and_nu_fitted_recovers_the_effective_modulus(recovered):
 
 def test_held_out_heights_are_predicted_not_fitted(recovered):
     data, full = recovered["hunt-crossley"]
-    res = fit(data, "hunt-crossley", blocked_force="momentum", fit_heights=[0.1, 0.4, 1.0, 1.6], start=full, progress=False)
+    res = fit(
+        data,
+        "hunt-crossley",
+        blocked_force="momentum",
+        fit_heights=[0.1, 0.4, 1.0, 1.6],
+        start=full,
+        progress=False,
+    )
     held = [r for r in res.per_height if not r["in_fit"]]
     assert sorted(r["height_m"] for r in held) == [0.2, 0.8]
     # the model is right, so the held-out records are predicted to the noise
@@ -232,7 +262,9 @@ def test_held_out_heights_are_predicted_not_fitted(recovered):
         assert abs(r["error"]["contact_time_pct"]) < 0.3
         assert abs(r["error"]["peak_force_pct"]) < 0.3
         assert r["residual_rms_N"] < 0.5
-    assert abs(res.parameters["alpha_s_per_m"].value - 0.05) <= 3 * res.parameters["alpha_s_per_m"].std
+    assert (
+        abs(res.parameters["alpha_s_per_m"].value - 0.05) <= 3 * res.parameters["alpha_s_per_m"].std
+    )
 
 
 def test_bad_input_names_the_parameter():
@@ -245,7 +277,13 @@ def test_bad_input_names_the_parameter():
         fit(data, "paper", fix={"poisson": 0.7})
     with pytest.raises(ValueError, match="optimizer='newton'"):
         fit(data, "paper", optimizer="newton")
-    assert parameter_names("zener+stiffening") == ("youngs_Pa", "poisson", "stiffness_ratio", "relaxation_time_s", "beta")
+    assert parameter_names("zener+stiffening") == (
+        "youngs_Pa",
+        "poisson",
+        "stiffness_ratio",
+        "relaxation_time_s",
+        "beta",
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -267,7 +305,9 @@ def program_cache(tmp_path, monkeypatch):
     from rbjax.fit import program_store
 
     before = jax.config.jax_compilation_cache_dir
-    jax.config.update("jax_compilation_cache_dir", None)  # the test session's cache (conftest.py): the CLI keeps a chosen one
+    jax.config.update(
+        "jax_compilation_cache_dir", None
+    )  # the test session's cache (conftest.py): the CLI keeps a chosen one
     monkeypatch.setenv("RBJAX_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(program_store, "_LOADED", {})
     yield tmp_path / "cache"
@@ -275,7 +315,9 @@ def program_cache(tmp_path, monkeypatch):
 
 
 def test_cli_fit_json_and_outputs(tmp_path, program_cache, monkeypatch):
-    code, out, err = run_cli(["fit", str(examples_dir()), "--model", "paper", "--json", "--out", str(tmp_path)])
+    code, out, err = run_cli(
+        ["fit", str(examples_dir()), "--model", "paper", "--json", "--out", str(tmp_path)]
+    )
     assert code == 0, err
     # the fit's program was exported beside the compilation cache; a new process reads it back
     # instead of tracing the model again, and gets the same fit
@@ -283,7 +325,9 @@ def test_cli_fit_json_and_outputs(tmp_path, program_cache, monkeypatch):
     from rbjax.fit import program, program_store
 
     monkeypatch.setattr(program_store, "_LOADED", {})
-    monkeypatch.setattr(program, "compiled", lambda *a: pytest.fail("traced again despite the stored program"))
+    monkeypatch.setattr(
+        program, "compiled", lambda *a: pytest.fail("traced again despite the stored program")
+    )
     code2, out2, err2 = run_cli(["fit", str(examples_dir()), "--model", "paper", "--json"])
     assert code2 == 0, err2
     assert json.loads(out2)["parameters"] == json.loads(out)["parameters"]

@@ -31,7 +31,13 @@ TOLERANCE_BANDS = slice(0, 5)
 @pytest.fixture(scope="module")
 def comparison():
     data = load_data(examples_dir())
-    return held_out_comparison(data, FIT_HEIGHTS_M, candidates=["hunt-crossley", "zener"], blocked_forces=["momentum"], progress=False)
+    return held_out_comparison(
+        data,
+        FIT_HEIGHTS_M,
+        candidates=["hunt-crossley", "zener"],
+        blocked_forces=["momentum"],
+        progress=False,
+    )
 
 
 def test_only_the_held_out_heights_are_compared(comparison):
@@ -49,7 +55,9 @@ def test_fitted_models_predict_history_peak_and_bands_better_than_the_paper(comp
     for f, p in _rows(comparison, label):
         assert f.height_m == p.height_m
         assert f.history_error_pct < 0.6 * p.history_error_pct, (f, p)
-        assert np.mean(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS])) < np.mean(np.abs(p.lfe_octave_dB[TOLERANCE_BANDS])), (f, p)
+        assert np.mean(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS])) < np.mean(
+            np.abs(p.lfe_octave_dB[TOLERANCE_BANDS])
+        ), (f, p)
         assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.5), f  # measured ≤ 2.3 dB
         # README "Where they fall short": neither model reproduces the 1 kHz band (measured 4.8–11 dB off)
         assert abs(f.lfe_octave_dB[5]) > 3.0, f
@@ -66,7 +74,9 @@ def test_hunt_crossley_claims(comparison):
         assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.2), f
         assert 5.5 <= abs(p.lfe_octave_dB[4]) < 9.5, p
         assert 2.5 < f.contact_time_pct < 3.5, f
-        assert 0.5 <= abs(p.contact_time_pct) < 2.5 and abs(f.contact_time_pct) > abs(p.contact_time_pct), p
+        assert 0.5 <= abs(p.contact_time_pct) < 2.5 and abs(f.contact_time_pct) > abs(
+            p.contact_time_pct
+        ), p
         assert abs(f.peak_force_pct) < abs(p.peak_force_pct), (f, p)
 
 

@@ -41,7 +41,13 @@ MODEL = {"model": "kelvin-voigt", "blocked_force": "momentum", "progress": False
 
 def recordings(forces, rate_Hz):
     return [
-        D.Recording(source=f"h{int(round(h * 100)):03d}.csv", height_m=h, rate_Hz=rate_Hz, force_N=f, lowpass_Hz=CUTOFF_HZ)
+        D.Recording(
+            source=f"h{int(round(h * 100)):03d}.csv",
+            height_m=h,
+            rate_Hz=rate_Hz,
+            force_N=f,
+            lowpass_Hz=CUTOFF_HZ,
+        )
         for h, f in zip(HEIGHTS_M, forces)
     ]
 
@@ -49,18 +55,40 @@ def recordings(forces, rate_Hz):
 def write_faulty_set(folder, t, forces):
     """Each drop in another format with other faults; a clipped copy of the 1.6 m drop."""
     x = dict(zip(HEIGHTS_M, forces))
-    write_int_wav(folder / "h010.wav", with_faults(t, x[0.1], offset_N=25.0, drift_N_per_s=12.0), 16, 5000.0)
+    write_int_wav(
+        folder / "h010.wav", with_faults(t, x[0.1], offset_N=25.0, drift_N_per_s=12.0), 16, 5000.0
+    )
     write_int_wav(folder / "h020.wav", with_faults(t, x[0.2], hum=(50.02, 3.0)), 24, 5000.0)
     write_int_wav(folder / "h040.wav", with_faults(t, x[0.4], inverted=True), 32, 5000.0)
-    scipy.io.savemat(folder / "h080.mat", {"fs": RATE_HZ, "force_N": with_faults(t, x[0.8], offset_N=-10.0, hum=(59.97, 4.0))})
-    write_uff(folder / "h100.uff", [("force", with_faults(t, x[1.0], hum=(49.98, 2.0), rebound_after_s=0.7), "N")])
-    everything = with_faults(t, x[1.6], offset_N=-40.0, drift_N_per_s=-8.0, hum=(60.0, 2.5), inverted=True)
-    write_tdms(folder / "h160.tdms", [("force", everything, {"wf_increment": 1 / RATE_HZ, "unit_string": "N"})])
-    write_int_wav(folder / "h160_clipped.wav", x[1.6], 16, 1000.0)  # the 2 kN peak is off the 1 kN scale
+    scipy.io.savemat(
+        folder / "h080.mat",
+        {"fs": RATE_HZ, "force_N": with_faults(t, x[0.8], offset_N=-10.0, hum=(59.97, 4.0))},
+    )
+    write_uff(
+        folder / "h100.uff",
+        [("force", with_faults(t, x[1.0], hum=(49.98, 2.0), rebound_after_s=0.7), "N")],
+    )
+    everything = with_faults(
+        t, x[1.6], offset_N=-40.0, drift_N_per_s=-8.0, hum=(60.0, 2.5), inverted=True
+    )
+    write_tdms(
+        folder / "h160.tdms",
+        [("force", everything, {"wf_increment": 1 / RATE_HZ, "unit_string": "N"})],
+    )
+    write_int_wav(
+        folder / "h160_clipped.wav", x[1.6], 16, 1000.0
+    )  # the 2 kN peak is off the 1 kN scale
     (folder / "manifest.csv").write_text(
         "file,height_m,calibration_N_per_FS\n"
-        + "".join(f"{n},{h},{c}\n" for n, h, c in [("h010.wav", 0.1, 5000), ("h020.wav", 0.2, 5000), ("h040.wav", 0.4, 5000),
-                                                  ("h160_clipped.wav", 1.6, 1000)])
+        + "".join(
+            f"{n},{h},{c}\n"
+            for n, h, c in [
+                ("h010.wav", 0.1, 5000),
+                ("h020.wav", 0.2, 5000),
+                ("h040.wav", 0.4, 5000),
+                ("h160_clipped.wav", 1.6, 1000),
+            ]
+        )
     )
 
 
@@ -79,7 +107,9 @@ def faulty(drops, tmp_path_factory):
     folder = tmp_path_factory.mktemp("faulty")
     write_faulty_set(folder, *drops)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", D.DataWarning)  # the flips and the rebound (checked in tests/data)
+        warnings.simplefilter(
+            "ignore", D.DataWarning
+        )  # the flips and the rebound (checked in tests/data)
         data = prepare_data(load_data(folder, lowpass_Hz=CUTOFF_HZ))
     return folder, data, fit(data, **MODEL)
 
@@ -95,7 +125,9 @@ def assert_same_fit(result, reference):
 def test_the_clean_fit_recovers_the_simulated_drops(clean_fit):
     # the reference the faulty fits are held to is itself right
     assert clean_fit.parameters["youngs_Pa"].value == pytest.approx(FAULT_BALL_E_PA, rel=1e-3)
-    assert clean_fit.parameters["damping_Ns_per_m"].value == pytest.approx(FAULT_DAMPING_NS_PER_M, rel=1e-3)
+    assert clean_fit.parameters["damping_Ns_per_m"].value == pytest.approx(
+        FAULT_DAMPING_NS_PER_M, rel=1e-3
+    )
 
 
 def test_every_fault_class_at_once_gives_the_clean_fit(faulty, clean_fit):
@@ -116,7 +148,11 @@ def test_the_report_says_what_conditioning_did(faulty):
     assert [round(r["time_s"], 2) for r in log["h100.uff"]["further_impacts"]] == [0.8]
     tdms = log["h160.tdms"]
     # flipped first, so the drift and offset are those injected before the sign was inverted
-    assert tdms["polarity"] != "as recorded" and tdms["hum"] and tdms["drift_N_per_s"] == pytest.approx(-8.0, rel=0.02)
+    assert (
+        tdms["polarity"] != "as recorded"
+        and tdms["hum"]
+        and tdms["drift_N_per_s"] == pytest.approx(-8.0, rel=0.02)
+    )
     assert all(c["rate_Hz"] == RATE_HZ for c in data.conditioning)
     (excluded,) = data.excluded
     assert excluded["source"] == "h160_clipped.wav" and "clipped" in excluded["reason"]
@@ -127,14 +163,26 @@ def test_the_report_says_what_conditioning_did(faulty):
 
 def test_fit_json_and_text_report_hold_the_conditioning(faulty, tmp_path):
     folder, data, result = faulty
-    argv = ["fit", str(folder), "--model", "kelvin-voigt", "--blocked-force", "momentum", "--lowpass-hz", "1250", "--quiet"]
+    argv = [
+        "fit",
+        str(folder),
+        "--model",
+        "kelvin-voigt",
+        "--blocked-force",
+        "momentum",
+        "--lowpass-hz",
+        "1250",
+        "--quiet",
+    ]
     code, out, err = run_cli(argv + ["--out", str(tmp_path)])
     assert code == 0, err
     assert out.rstrip().endswith(data.conditioning_report())
     d = json.loads((tmp_path / "fit.json").read_text())
     assert d["conditioning"] == json.loads(json.dumps(list(data.conditioning)))
     assert [e["source"] for e in d["excluded"]] == ["h160_clipped.wav"]
-    assert d["parameters"]["youngs_Pa"]["value"] == pytest.approx(result.parameters["youngs_Pa"].value, rel=1e-9)
+    assert d["parameters"]["youngs_Pa"]["value"] == pytest.approx(
+        result.parameters["youngs_Pa"].value, rel=1e-9
+    )
     # asked for strict loading, the clipped file is refused by name
     code, out, err = run_cli(argv + ["--strict"])
     assert code == 2 and "h160_clipped.wav: clipped" in err and out == ""

@@ -21,14 +21,18 @@ def test_the_mode_is_a_mass_a_spring_and_a_damper():
     assert "500 g mass" in text
     assert f"{omega**2 * mass:.3g} N/m" in text and f"{3.0 * omega * mass:.3g} N s/m" in text
     assert "overdamped" in text
-    assert "ringing mode" in ball_mode_structure(ball, rbjax.Model(ball_mode=rbjax.BallMode(20.0, 600.0, 0.2)))
+    assert "ringing mode" in ball_mode_structure(
+        ball, rbjax.Model(ball_mode=rbjax.BallMode(20.0, 600.0, 0.2))
+    )
     assert ball_mode_structure(ball, rbjax.Model()) == ""
     assert ball_mode_structure(ball, rbjax.Model(ball_mode=rbjax.BallMode.off())) == ""
 
 
 def test_a_parameter_on_a_bound_is_named():
     lo, hi = FIT_RANGES["mode_loss_factor"]
-    assert "mode_loss_factor" in at_bounds({"mode_loss_factor": hi - 1e-4 * (hi - lo), "youngs_Pa": 1e6})
+    assert "mode_loss_factor" in at_bounds(
+        {"mode_loss_factor": hi - 1e-4 * (hi - lo), "youngs_Pa": 1e6}
+    )
     assert "upper bound" in at_bounds({"mode_loss_factor": hi})
     assert at_bounds({"mode_loss_factor": 0.5 * (lo + hi)}) == ""
 
@@ -38,7 +42,9 @@ def test_the_fit_keeps_the_mode_in_its_range_and_the_term_does_not():
     spec = fit_declaration("mode_frequency_Hz", rbjax.JIS_RUBBER_BALL, model)
     lo, hi = FIT_RANGES["mode_frequency_Hz"]
     assert spec.transform == "interval" and (spec.lower, spec.upper) == (lo, hi)
-    assert float(spec.from_unconstrained(-50.0)) == pytest.approx(lo) and float(spec.from_unconstrained(50.0)) == pytest.approx(hi)
+    assert float(spec.from_unconstrained(-50.0)) == pytest.approx(lo) and float(
+        spec.from_unconstrained(50.0)
+    ) == pytest.approx(hi)
     # simulate still takes any positive frequency (the term's own declaration)
     assert rbjax.BallMode(20.0, 1e5, 0.1).mode_frequency_Hz == 1e5
     assert fit_declaration("youngs_Pa", rbjax.JIS_RUBBER_BALL, model).transform == "log"

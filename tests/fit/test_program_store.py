@@ -116,5 +116,11 @@ def test_the_key_covers_the_source_of_every_layer():
 
     root = Path(rbjax.__file__).parent
     files = {p.relative_to(root).as_posix() for p in program_store.source_files()}
-    assert {"terms/forces.py", "solve/ode.py", "solve/record_samples.py", "fit/program.py", "__init__.py"} <= files
+    assert {
+        "terms/forces.py",
+        "solve/ode.py",
+        "solve/record_samples.py",
+        "fit/program.py",
+        "__init__.py",
+    } <= files
     assert files == {p.relative_to(root).as_posix() for p in root.rglob("*.py")}

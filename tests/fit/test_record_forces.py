@@ -40,19 +40,35 @@ CASES = {
     "paper": (rbjax.Model(), lambda h, b: reference_impact(h, b, rtol=1e-12)),
     "kelvin-voigt/momentum": (
         rbjax.Model(blocked_force="momentum", damping=KelvinVoigt(40.0)),
-        lambda h, b: reference_impact(h, b, damping=KelvinVoigt(40.0), blocked_force="momentum", rtol=1e-12),
+        lambda h, b: reference_impact(
+            h, b, damping=KelvinVoigt(40.0), blocked_force="momentum", rtol=1e-12
+        ),
     ),
     "zener/momentum": (
-        rbjax.Model(blocked_force="momentum", damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3)),
-        lambda h, b: reference_impact(h, b, damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3), blocked_force="momentum", rtol=1e-12),
+        rbjax.Model(
+            blocked_force="momentum", damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3)
+        ),
+        lambda h, b: reference_impact(
+            h,
+            b,
+            damping=Zener(stiffness_ratio=0.7, relaxation_time_s=1.7e-3),
+            blocked_force="momentum",
+            rtol=1e-12,
+        ),
     ),
     "hunt-crossley+ball-mode/momentum": (
         rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), ball_mode=MODE),
-        lambda h, b: reference_ball_mode_impact(h, b, 20.0, 800.0, 0.3, damping=HuntCrossley(0.05), blocked_force="momentum", rtol=1e-12),
+        lambda h, b: reference_ball_mode_impact(
+            h, b, 20.0, 800.0, 0.3, damping=HuntCrossley(0.05), blocked_force="momentum", rtol=1e-12
+        ),
     ),
     "hunt-crossley+series-kelvin-voigt/momentum": (
-        rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), series=SeriesKelvinVoigt(*SERIES)),
-        lambda h, b: reference_series_impact(h, b, *SERIES, damping=HuntCrossley(0.05), blocked_force="momentum"),
+        rbjax.Model(
+            blocked_force="momentum", damping=HuntCrossley(0.05), series=SeriesKelvinVoigt(*SERIES)
+        ),
+        lambda h, b: reference_series_impact(
+            h, b, *SERIES, damping=HuntCrossley(0.05), blocked_force="momentum"
+        ),
     ),
 }
 
@@ -80,7 +96,14 @@ def test_samples_match_the_scipy_reference_at_every_sample(case, shift_s):
         assert np.max(np.abs(np.asarray(force) - expected)) <= 1e-6 * np.max(expected), (case, h)
 
 
-@pytest.mark.parametrize("case", ["kelvin-voigt/momentum", "hunt-crossley+ball-mode/momentum", "hunt-crossley+series-kelvin-voigt/momentum"])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "kelvin-voigt/momentum",
+        "hunt-crossley+ball-mode/momentum",
+        "hunt-crossley+series-kelvin-voigt/momentum",
+    ],
+)
 def test_shift_derivative_is_the_negative_force_rate(case):
     """dF(t − s)/ds from −Ḟ (no tangent through the solve) against central differences in s."""
     model, _ = CASES[case]
@@ -96,7 +119,14 @@ def ball_mode_data():
     return synthetic_data(JIS_RUBBER_BALL, HuntCrossley(0.05), "momentum", seed=11)
 
 
-TRUE = {"youngs_Pa": 1.7e6, "poisson": 0.5, "alpha_s_per_m": 0.05, "mode_mass_ratio": 20.0, "mode_frequency_Hz": 800.0, "mode_loss_factor": 0.3}
+TRUE = {
+    "youngs_Pa": 1.7e6,
+    "poisson": 0.5,
+    "alpha_s_per_m": 0.05,
+    "mode_mass_ratio": 20.0,
+    "mode_frequency_Hz": 800.0,
+    "mode_loss_factor": 0.3,
+}
 
 
 def test_sampled_and_ode_paths_of_the_fit_agree():
@@ -107,8 +137,12 @@ def test_sampled_and_ode_paths_of_the_fit_agree():
     t = np.arange(N) / RATE_HZ
     shifts = 0.0100 + np.linspace(0.0, 1.0, len(HEIGHTS_M)) / RATE_HZ
     solver = rbjax.Solver(adjoint="forward", rtol=1e-11, atol=1e-13)
-    ode = jax.jit(jax.vmap(lambda h, s: sample_force(h, t - s, RATE_HZ, JIS_RUBBER_BALL, model, solver)))
-    sampled = jax.jit(jax.vmap(lambda h, s: record_samples(h, s, JIS_RUBBER_BALL, model, RATE_HZ, N, 2)[0]))
+    ode = jax.jit(
+        jax.vmap(lambda h, s: sample_force(h, t - s, RATE_HZ, JIS_RUBBER_BALL, model, solver))
+    )
+    sampled = jax.jit(
+        jax.vmap(lambda h, s: record_samples(h, s, JIS_RUBBER_BALL, model, RATE_HZ, N, 2)[0])
+    )
     f_ode = np.asarray(ode(np.array(HEIGHTS_M), shifts))
     f_sampled = np.asarray(sampled(np.array(HEIGHTS_M), shifts))
     assert np.max(np.abs(f_sampled - f_ode)) <= 1e-6 * np.max(np.abs(f_ode))
@@ -121,14 +155,24 @@ def test_ball_mode_jacobian_matches_finite_differences_of_the_reference(ball_mod
 
     data = ball_mode_data
     shifts = data.onset_s - 3.7e-4
-    force, jac, names = model_histories(data, "hunt-crossley+ball-mode", TRUE, shifts, blocked_force="momentum")
+    force, jac, names = model_histories(
+        data, "hunt-crossley+ball-mode", TRUE, shifts, blocked_force="momentum"
+    )
     t = data.time_s
 
     def reference(p, shift):
         rows = []
         for k, h in enumerate(HEIGHTS_M):
-            ref = reference_ball_mode_impact(h, JIS_RUBBER_BALL.replace(youngs_Pa=p["youngs_Pa"]), p["mode_mass_ratio"], p["mode_frequency_Hz"],
-                                             p["mode_loss_factor"], damping=HuntCrossley(p["alpha_s_per_m"]), blocked_force="momentum", rtol=1e-12)
+            ref = reference_ball_mode_impact(
+                h,
+                JIS_RUBBER_BALL.replace(youngs_Pa=p["youngs_Pa"]),
+                p["mode_mass_ratio"],
+                p["mode_frequency_Hz"],
+                p["mode_loss_factor"],
+                damping=HuntCrossley(p["alpha_s_per_m"]),
+                blocked_force="momentum",
+                rtol=1e-12,
+            )
             rows.append(scipy.signal.sosfilt(SOS, sampled_force(ref, t - shift[k])))
         return np.array(rows)
 
@@ -148,7 +192,11 @@ def test_series_columns_match_finite_differences_of_the_reference():
     h, shift = 1.0, 0.01034567
 
     def samples(theta):
-        m = rbjax.Model(blocked_force="momentum", damping=HuntCrossley(0.05), series=SeriesKelvinVoigt(theta[0], theta[1]))
+        m = rbjax.Model(
+            blocked_force="momentum",
+            damping=HuntCrossley(0.05),
+            series=SeriesKelvinVoigt(theta[0], theta[1]),
+        )
         return _record_samples(h, shift, m)[0]
 
     jac = np.asarray(jax.jacfwd(samples)(jax.numpy.asarray(SERIES)))
@@ -157,8 +205,15 @@ def test_series_columns_match_finite_differences_of_the_reference():
         hi, lo = list(SERIES), list(SERIES)
         hi[i] += step
         lo[i] -= step
-        ref = [sampled_force(reference_series_impact(h, JIS_RUBBER_BALL, *p, damping=HuntCrossley(0.05), blocked_force="momentum"), t - shift)
-               for p in (hi, lo)]
+        ref = [
+            sampled_force(
+                reference_series_impact(
+                    h, JIS_RUBBER_BALL, *p, damping=HuntCrossley(0.05), blocked_force="momentum"
+                ),
+                t - shift,
+            )
+            for p in (hi, lo)
+        ]
         fd = (ref[0] - ref[1]) / (2 * step)
         assert np.max(np.abs(jac[:, i] - fd)) <= 1e-4 * np.max(np.abs(fd)), i
 
@@ -188,7 +243,9 @@ def test_the_mode_frequency_gets_several_starts_unless_given():
 
 def test_the_best_converged_start_is_kept():
     def lane(cost, converged):
-        return Lane(theta=np.zeros(1), out={"r": np.array([np.sqrt(2 * cost)])}, converged=converged)
+        return Lane(
+            theta=np.zeros(1), out={"r": np.array([np.sqrt(2 * cost)])}, converged=converged
+        )
 
     lanes = [lane(5.0, True), lane(1.0, False), lane(3.0, True)]
     assert pick_best(lanes) is lanes[2]  # the cheapest start that did not converge is not taken

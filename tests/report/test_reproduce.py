@@ -71,7 +71,9 @@ def test_json_stdout_matches_results_file(run, results):
     printed = json.loads(run["stdout"])
     assert printed["out_dir"] == str(run["dir"])
     assert printed["comparison"] == results["comparison"]
-    assert sorted(printed["files"]) == sorted(str(run["dir"] / f) for f in [*FIGURES, "report.md", "results.json"])
+    assert sorted(printed["files"]) == sorted(
+        str(run["dir"] / f) for f in [*FIGURES, "report.md", "results.json"]
+    )
 
 
 def test_progress_goes_to_stderr(run):
@@ -91,7 +93,9 @@ def test_matches_the_independent_solver(results):
     for gas in GASES:
         for h in (0.1, 1.0, 1.6):
             ref = reference_impact(h, rbjax.JIS_RUBBER_BALL, gas=gas)
-            assert at(results, gas, "contact_time_s", h) == pytest.approx(ref.contact_time_s, rel=1e-7)
+            assert at(results, gas, "contact_time_s", h) == pytest.approx(
+                ref.contact_time_s, rel=1e-7
+            )
             assert at(results, gas, "peak_force_N", h) == pytest.approx(ref.peak_force_N, rel=1e-7)
             assert at(results, gas, "restitution", h) == pytest.approx(ref.restitution, rel=1e-7)
 
@@ -153,13 +157,31 @@ REPORT_ROWS = [
     ("measured contact time at 10 cm", "21.3 ms", "contact_time", 0.1),
     ("measured contact time at 100 cm", "19.6 ms", "contact_time", 1.0),
     ("measured contact time at 160 cm", "19.3 ms", "contact_time", 1.6),
-    *[(f"L_FE increase per doubling, {band} Hz", "≈ 5.0 dB" if band == "63" else "≈ 3.0 dB", "increase_per_doubling", band) for band in ("31.5", "63", "125", "250", "500", "1000")],
+    *[
+        (
+            f"L_FE increase per doubling, {band} Hz",
+            "≈ 5.0 dB" if band == "63" else "≈ 3.0 dB",
+            "increase_per_doubling",
+            band,
+        )
+        for band in ("31.5", "63", "125", "250", "500", "1000")
+    ],
     ("contact resonance at 10 cm", "66 Hz", "contact_resonance", 0.1),
     ("contact resonance at 160 cm", "73 Hz", "contact_resonance", 1.6),
 ]
-UNITS = {"contact_time": "ms", "peak_force": "N", "increase_per_doubling": "dB", "contact_resonance": "Hz"}
+UNITS = {
+    "contact_time": "ms",
+    "peak_force": "N",
+    "increase_per_doubling": "dB",
+    "contact_resonance": "Hz",
+}
 #: Half a unit in the last printed digit (ms and dB to 0.01, N to 1, Hz to 0.1).
-PRINTED = {"contact_time": 0.005, "peak_force": 0.5, "increase_per_doubling": 0.005, "contact_resonance": 0.05}
+PRINTED = {
+    "contact_time": 0.005,
+    "peak_force": 0.5,
+    "increase_per_doubling": 0.005,
+    "contact_resonance": 0.05,
+}
 GAS_COLUMNS = {"adiabatic": "rbjax, gas on", "none": "rbjax, gas off"}
 
 
@@ -193,8 +215,12 @@ def _octave_lfe(force, rate):
     esd[0] /= 2.0
     esd[-1] /= 2.0  # even record length: the Nyquist bin
     f = np.fft.rfftfreq(force.size, 1.0 / rate)
-    edges = [(1000.0 * 10 ** (0.3 * (x - 0.5)), 1000.0 * 10 ** (0.3 * (x + 0.5))) for x in range(-5, 1)]
-    return np.array([10 * math.log10(np.sum(esd[(f >= lo) & (f < hi)]) * rate / force.size) for lo, hi in edges])
+    edges = [
+        (1000.0 * 10 ** (0.3 * (x - 0.5)), 1000.0 * 10 ** (0.3 * (x + 0.5))) for x in range(-5, 1)
+    ]
+    return np.array(
+        [10 * math.log10(np.sum(esd[(f >= lo) & (f < hi)]) * rate / force.size) for lo, hi in edges]
+    )
 
 
 def _first_notch_Hz(force, rate, fmin=20.0, fmax=200.0, step=0.01):
@@ -249,17 +275,30 @@ def test_report_sets_paper_values_beside_computed_ones(run, independent):
             assert value == pytest.approx(expected, abs=PRINTED[kind] + 1e-6), (quantity, gas, row)
             difference = row[column.replace("rbjax", "difference")]
             if unit == "dB":  # levels: the difference in dB
-                assert number_in(difference, "dB") == pytest.approx(expected - paper_value, abs=0.005 + 1e-6), (quantity, gas, row)
+                assert number_in(difference, "dB") == pytest.approx(
+                    expected - paper_value, abs=0.005 + 1e-6
+                ), (quantity, gas, row)
             else:  # the relative difference in %
-                assert number_in(difference, "%") == pytest.approx(100 * (expected / paper_value - 1), abs=0.05 + 1e-6), (quantity, gas, row)
+                assert number_in(difference, "%") == pytest.approx(
+                    100 * (expected / paper_value - 1), abs=0.05 + 1e-6
+                ), (quantity, gas, row)
 
 
 def test_report_explains_the_differences_and_lists_tolerances_and_figures(run, results):
     report = (run["dir"] / "report.md").read_text()
     rows = {r["key"]: r for r in results["comparison"]}
-    assert rows["peak_force_1.6m"]["relative_difference"]["none"] == pytest.approx(at(results, "none", "peak_force_N", 1.6) / 1800 - 1)
+    assert rows["peak_force_1.6m"]["relative_difference"]["none"] == pytest.approx(
+        at(results, "none", "peak_force_N", 1.6) / 1800 - 1
+    )
     assert "## Why they differ" in report
-    for key in ("contact_time_1.0m", "peak_force_0.1m", "peak_force_1.6m", "measured_contact_time", "increase_per_doubling", "contact_resonance"):
+    for key in (
+        "contact_time_1.0m",
+        "peak_force_0.1m",
+        "peak_force_1.6m",
+        "measured_contact_time",
+        "increase_per_doubling",
+        "contact_resonance",
+    ):
         assert results["explanations"][key] in report
     assert "21.5–24.5" in report  # the 125 Hz tolerance (ISO 10140-5 Table F.1)
     for name in FIGURES:
@@ -302,7 +341,9 @@ def test_impact_result_plot(result):
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels[0] == "10 cm" and labels[-1] == "160 cm"
     peak = max(line.get_ydata().max() for line in ax.lines)
-    assert peak == pytest.approx(float(np.max(result.peak_force_N)), rel=1e-3)  # 44.1 kHz samples near the peak
+    assert peak == pytest.approx(
+        float(np.max(result.peak_force_N)), rel=1e-3
+    )  # 44.1 kHz samples near the peak
     assert ax.get_xlim()[1] == pytest.approx(1.05e3 * float(np.max(result.contact_time_s)))
 
 

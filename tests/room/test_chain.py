@@ -69,7 +69,16 @@ def test_levels_and_rating_are_consistent(bare):
 
 def test_modal_floor_energy_balance():
     # the force of the ball on the floating floor and ∫F u̇ dt, both from the scipy reference
-    floor = floating_floor(0.05, 2000.0, 1.0, 10e6, base_mass_kg=2000.0, base_frequency_Hz=30.0, layer_loss_factor=0.2, base_loss_factor=0.05)
+    floor = floating_floor(
+        0.05,
+        2000.0,
+        1.0,
+        10e6,
+        base_mass_kg=2000.0,
+        base_frequency_Hz=30.0,
+        layer_loss_factor=0.2,
+        base_loss_factor=0.05,
+    )
     ref = reference_floor_impact(1.0, JIS_RUBBER_BALL, floor)
     rate = 88200.0
     times = np.arange(int(np.ceil(ref.contact_time_s * rate)) + 2) / rate  # the whole contact
@@ -97,12 +106,27 @@ def test_gradient_of_the_rating_against_finite_differences():
 #: s′, the layer's loss factor) over a base mode like the first of a 150 mm slab of 4 m × 5 m
 #: at its centre (m₂ = ρtL_xL_y/4 = 1725 kg, 27 Hz, η 0.05); modes near 26 Hz and 85 Hz.
 THETA = np.array([0.15, 0.07, 40e6, 0.1])
-FLOAT = dict(screed_density_kg_per_m3=2200.0, area_m2=1.0, base_mass_kg=1725.0, base_frequency_Hz=27.0, base_loss_factor=0.05)
+FLOAT = dict(
+    screed_density_kg_per_m3=2200.0,
+    area_m2=1.0,
+    base_mass_kg=1725.0,
+    base_frequency_Hz=27.0,
+    base_loss_factor=0.05,
+)
 N_FLOAT = 1000  # 22.7 ms at 44.1 kHz: the whole contact (checked against the reference)
 
 
 def _floating(theta):
-    return FloatingFloor(theta[1], FLOAT["screed_density_kg_per_m3"], FLOAT["area_m2"], theta[2], FLOAT["base_mass_kg"], FLOAT["base_frequency_Hz"], layer_loss_factor=theta[3], base_loss_factor=FLOAT["base_loss_factor"])
+    return FloatingFloor(
+        theta[1],
+        FLOAT["screed_density_kg_per_m3"],
+        FLOAT["area_m2"],
+        theta[2],
+        FLOAT["base_mass_kg"],
+        FLOAT["base_frequency_Hz"],
+        layer_loss_factor=theta[3],
+        base_loss_factor=FLOAT["base_loss_factor"],
+    )
 
 
 def test_gradient_in_the_floating_floor_against_finite_differences():
@@ -110,11 +134,20 @@ def test_gradient_in_the_floating_floor_against_finite_differences():
     n_fft = modal_grid_size(_floating(THETA), RATE, N_FLOAT)
 
     def outputs(theta):
-        lv = room_levels(Slab.of_material("concrete", theta[0]), ROOM, floor=_floating(theta), n_samples=N_FLOAT, solver=solver, n_fft=n_fft)
+        lv = room_levels(
+            Slab.of_material("concrete", theta[0]),
+            ROOM,
+            floor=_floating(theta),
+            n_samples=N_FLOAT,
+            solver=solver,
+            n_fft=n_fft,
+        )
         return rating_unrounded_dB(lv, 1), lv.injected_J
 
     # one program: the four directional derivatives, and the values for the differences
-    program = jax.jit(lambda theta: jax.vmap(lambda v: jax.jvp(outputs, (theta,), (v,)))(jnp.eye(len(THETA))))
+    program = jax.jit(
+        lambda theta: jax.vmap(lambda v: jax.jvp(outputs, (theta,), (v,)))(jnp.eye(len(THETA)))
+    )
     (rating, injected), (tangent, _) = program(THETA)
     # the primal: the energy the slab receives through the layer, from the scipy reference's
     # force (its own ODE), numpy's FFT on the same grid and the screed's equation written out:
@@ -125,10 +158,20 @@ def test_gradient_in_the_floating_floor_against_finite_differences():
     spec[0] /= 2
     freq = np.fft.rfftfreq(n_fft, 1 / RATE)
     stiff = THETA[2] * (1 + 1j * THETA[3])
-    passed = np.abs(stiff / (stiff - (2 * np.pi * freq) ** 2 * FLOAT["screed_density_kg_per_m3"] * THETA[1])) ** 2
+    passed = (
+        np.abs(
+            stiff / (stiff - (2 * np.pi * freq) ** 2 * FLOAT["screed_density_kg_per_m3"] * THETA[1])
+        )
+        ** 2
+    )
     _, _, (lo, hi) = bands(1)
     z = float(Slab.of_material("concrete", THETA[0]).plate.impedance_Ns_per_m)
-    expected = np.array([np.sum((spec * passed)[(freq >= a) & (freq < b)]) for a, b in zip(lo, hi)]) * RATE / n_fft / z
+    expected = (
+        np.array([np.sum((spec * passed)[(freq >= a) & (freq < b)]) for a, b in zip(lo, hi)])
+        * RATE
+        / n_fft
+        / z
+    )
     np.testing.assert_allclose(np.asarray(injected[0]), expected, rtol=1e-5)
     assert np.isfinite(float(rating[0]))
     for i in range(len(THETA)):
@@ -178,14 +221,33 @@ def test_bad_input():
 
 def test_cli_room_json_and_errors(bare, tmp_path):
     # the slab of ``bare`` (the preset concrete-150mm): the compiled impact is reused
-    code, out, _ = run_cli(["room", "--floor", "concrete-150mm", "--room-volume-m3", "100", "--reverberation-s", "1.0", "--json", "--plot", str(tmp_path / "f.png")])
+    code, out, _ = run_cli(
+        [
+            "room",
+            "--floor",
+            "concrete-150mm",
+            "--room-volume-m3",
+            "100",
+            "--reverberation-s",
+            "1.0",
+            "--json",
+            "--plot",
+            str(tmp_path / "f.png"),
+        ]
+    )
     assert code == 0
     data = json.loads(out)
     assert isinstance(data["LiA_Fmax_dB"], int) and isinstance(data["LiA_Fmax_normalised_dB"], int)
     # the room changes the levels only: the injected energy is that of ``bare``
     assert data["injected_energy_J"] == pytest.approx(bare.injected_energy_J, rel=1e-12)
     # V = 100 m³, T = 1 s: normalised = level + 3.01 dB − 1.94 dB in every band
-    np.testing.assert_allclose(np.subtract(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"]), 10 * np.log10(2) - 1.94, atol=0.01)
+    np.testing.assert_allclose(
+        np.subtract(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"]),
+        10 * np.log10(2) - 1.94,
+        atol=0.01,
+    )
     assert (tmp_path / "f.png").stat().st_size > 1000
-    code, _, err = run_cli(["room", "--floor", "rigid", "--room-volume-m3", "50", "--reverberation-s", "0.5"])
+    code, _, err = run_cli(
+        ["room", "--floor", "rigid", "--room-volume-m3", "50", "--reverberation-s", "0.5"]
+    )
     assert code == 2 and "radiates" in err

@@ -20,7 +20,9 @@ def test_time_weighting_is_the_lfilter_recursion():
     p2 = rng.random((2, 4000)) ** 2
     alpha = math.exp(-1 / (rate * tau))
     expected = lfilter([1 - alpha], [1, -alpha], p2, axis=-1)
-    np.testing.assert_allclose(np.asarray(time_weighting(p2, rate, tau)), expected, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(time_weighting(p2, rate, tau)), expected, rtol=1e-12, atol=1e-15
+    )
 
 
 def _ode_cascade(rates, t):
@@ -34,10 +36,26 @@ def _ode_cascade(rates, t):
     return solve_ivp(rhs, (0, t[-1]), x0, t_eval=t, rtol=1e-12, atol=1e-15, method="DOP853").y[-1]
 
 
-@pytest.mark.parametrize("rates", [(40.0,), (40.0, 13.8), (13.8, 13.8), (40.0, 13.8, 8.0), (8.0, 8.0 + 1e-7, 8.0 - 1e-7), (8.0, 8.0005, 30.0), (300.0, 6.9, 8.0)])
+@pytest.mark.parametrize(
+    "rates",
+    [
+        (40.0,),
+        (40.0, 13.8),
+        (13.8, 13.8),
+        (40.0, 13.8, 8.0),
+        (8.0, 8.0 + 1e-7, 8.0 - 1e-7),
+        (8.0, 8.0005, 30.0),
+        (300.0, 6.9, 8.0),
+    ],
+)
 def test_cascade_closed_form_against_ode(rates):
     t = np.linspace(0.0, 1.5, 61)[1:]
-    np.testing.assert_allclose(np.asarray(cascade(list(rates), jnp.asarray(t))), _ode_cascade(rates, t), rtol=1e-7, atol=1e-14)
+    np.testing.assert_allclose(
+        np.asarray(cascade(list(rates), jnp.asarray(t))),
+        _ode_cascade(rates, t),
+        rtol=1e-7,
+        atol=1e-14,
+    )
 
 
 def test_maximum_and_its_exact_gradient():

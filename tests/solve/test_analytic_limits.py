@@ -51,8 +51,12 @@ SOLVER_REL = 1e-8  # rbjax's own integration error at its defaults is ~1e-10
 @pytest.fixture(scope="module")
 def linear_ball():
     # Choose E so that Reissner's k = 4Eh²/(R√(3(1−ν²))) is the chosen stiffness.
-    youngs = STIFFNESS_N_PER_M * HUGE_RADIUS_M * math.sqrt(3.0 * (1.0 - POISSON**2)) / (4.0 * WALL_M**2)
-    return rbjax.Ball(radius_m=HUGE_RADIUS_M, wall_m=WALL_M, mass_kg=MASS_KG, youngs_Pa=youngs, poisson=POISSON)
+    youngs = (
+        STIFFNESS_N_PER_M * HUGE_RADIUS_M * math.sqrt(3.0 * (1.0 - POISSON**2)) / (4.0 * WALL_M**2)
+    )
+    return rbjax.Ball(
+        radius_m=HUGE_RADIUS_M, wall_m=WALL_M, mass_kg=MASS_KG, youngs_Pa=youngs, poisson=POISSON
+    )
 
 
 @pytest.fixture(scope="module")
@@ -80,8 +84,12 @@ def test_linear_limit_peak_force(linear):
     err = np.abs(np.asarray(result.peak_force_N) / expected - 1.0)
     assert np.all(err <= EPS)
     # The first-order correction −ε/3 (mass reduction during compression).
-    np.testing.assert_allclose(np.asarray(result.peak_force_N), expected * (1.0 - EPS / 3.0), rtol=SOLVER_REL)
-    np.testing.assert_allclose(np.asarray(result.peak_time_s), math.pi / (2.0 * OMEGA), rtol=EPS.max())
+    np.testing.assert_allclose(
+        np.asarray(result.peak_force_N), expected * (1.0 - EPS / 3.0), rtol=SOLVER_REL
+    )
+    np.testing.assert_allclose(
+        np.asarray(result.peak_time_s), math.pi / (2.0 * OMEGA), rtol=EPS.max()
+    )
 
 
 def test_linear_limit_restitution(linear):
@@ -128,20 +136,34 @@ def energy_balance(height_m, ball, gas):
 
     # F ≥ kδ and 4R/(2R − s) ≥ 2 bound δ_max by the linear v0√(M/k).
     d_lin = v0 * math.sqrt(m / k)
-    d_max = brentq(lambda d: v0**2 - compression_work(d), 0.5 * d_lin, d_lin * (1 + 1e-9), xtol=1e-17, rtol=1e-15)
+    d_max = brentq(
+        lambda d: v0**2 - compression_work(d),
+        0.5 * d_lin,
+        d_lin * (1 + 1e-9),
+        xtol=1e-17,
+        rtol=1e-15,
+    )
 
     def u_c(d):  # written from δ_max downwards: no cancellation near the turning point
         return 4.0 * r / m * quad(lambda s: force(s) / (2.0 * r - s), d, d_max, **QUAD)[0]
 
     def u_r(d):
-        return 4.0 * r / m * quad(lambda s: force(s) * (2.0 * r - s), d, d_max, **QUAD)[0] / (2.0 * r - d) ** 2
+        return (
+            4.0
+            * r
+            / m
+            * quad(lambda s: force(s) * (2.0 * r - s), d, d_max, **QUAD)[0]
+            / (2.0 * r - d) ** 2
+        )
 
     def integrand(sigma):
         d = d_max * (1.0 - sigma**2)
         return 2.0 * d_max * sigma * (1.0 / math.sqrt(u_c(d)) + 1.0 / math.sqrt(u_r(d)))
 
     contact_time = quad(integrand, 0.0, 1.0, epsabs=0.0, epsrel=1e-12, limit=200)[0]
-    v_out_sq = quad(lambda s: force(s) * (2.0 * r - s), 0.0, d_max, **QUAD)[0] / (m * r)  # the note's v_out²
+    v_out_sq = quad(lambda s: force(s) * (2.0 * r - s), 0.0, d_max, **QUAD)[0] / (
+        m * r
+    )  # the note's v_out²
     return dict(
         max_deflection_m=d_max,
         peak_force_N=force(d_max),
@@ -161,10 +183,14 @@ def balance(request):
     return gas, result, expected
 
 
-@pytest.mark.parametrize("quantity", ["contact_time_s", "restitution", "max_deflection_m", "peak_force_N"])
+@pytest.mark.parametrize(
+    "quantity", ["contact_time_s", "restitution", "max_deflection_m", "peak_force_N"]
+)
 def test_energy_balance_quadrature(balance, quantity):
     gas, result, expected = balance
-    np.testing.assert_allclose(np.asarray(getattr(result, quantity)), expected[quantity], rtol=SOLVER_REL, err_msg=gas)
+    np.testing.assert_allclose(
+        np.asarray(getattr(result, quantity)), expected[quantity], rtol=SOLVER_REL, err_msg=gas
+    )
 
 
 def test_energy_balance_checks_the_reference_too(balance):

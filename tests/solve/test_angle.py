@@ -26,8 +26,14 @@ MODELS = {
     "elastic-momentum-no-gas": {"blocked_force": "momentum", "gas": "none"},
     "kelvin-voigt": {"damping": rbjax.KelvinVoigt(damping_Ns_per_m=300.0)},
     "hunt-crossley": {"damping": rbjax.HuntCrossley(alpha_s_per_m=0.3)},
-    "hunt-crossley-momentum": {"damping": rbjax.HuntCrossley(alpha_s_per_m=0.05), "blocked_force": "momentum"},
-    "zener-momentum": {"damping": rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3), "blocked_force": "momentum"},
+    "hunt-crossley-momentum": {
+        "damping": rbjax.HuntCrossley(alpha_s_per_m=0.05),
+        "blocked_force": "momentum",
+    },
+    "zener-momentum": {
+        "damping": rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3),
+        "blocked_force": "momentum",
+    },
     "zener-stiff": {"damping": rbjax.Zener(stiffness_ratio=1.0, relaxation_time_s=2e-3)},
 }
 SCALARS = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m")
@@ -54,7 +60,9 @@ def test_agrees_with_scipy_reference(name):
 def test_error_estimate_flags_what_fixed_steps_cannot_resolve_and_simulate_falls_back():
     # a relaxation time 1/100 of the contact: far too fast for 12 steps in the phase angle
     kw = {"damping": rbjax.Zener(stiffness_ratio=0.5, relaxation_time_s=2e-4)}
-    estimate = jax.vmap(lambda h: angle_error_estimate(h, BALL.as_arrays(), make_model(**kw)))(HEIGHTS)
+    estimate = jax.vmap(lambda h: angle_error_estimate(h, BALL.as_arrays(), make_model(**kw)))(
+        HEIGHTS
+    )
     assert np.all(np.asarray(estimate) > ERROR_TOLERANCE)
     only = rbjax.simulate(HEIGHTS, BALL, method="angle", **kw)
     assert list(only.status_name) == ["solver_failed"] * HEIGHTS.size
@@ -76,7 +84,9 @@ def test_limits_are_reported_like_the_ode():
 
 
 def test_models_it_cannot_solve_are_refused_by_name():
-    with pytest.raises(ValueError, match=r"method='angle' cannot solve this model: the floor \(dashpot\) moves"):
+    with pytest.raises(
+        ValueError, match=r"method='angle' cannot solve this model: the floor \(dashpot\) moves"
+    ):
         rbjax.simulate(1.0, floor=rbjax.Dashpot(1e5), method="angle")
     with pytest.raises(ValueError, match="method='angle' cannot solve this model: the ball mode"):
         rbjax.simulate(1.0, ball_mode=rbjax.BallMode(0.5, 300.0, 0.1), method="angle")
@@ -87,14 +97,27 @@ def test_jacobian_matches_finite_differences_of_the_reference():
     theta = np.array([1.6e6, 2e-3])
 
     def ours(th):
-        res = rbjax.simulate(1.0, BALL.replace(youngs_Pa=th[0]), damping=rbjax.Zener(law.stiffness_ratio, th[1]), method="angle")
+        res = rbjax.simulate(
+            1.0,
+            BALL.replace(youngs_Pa=th[0]),
+            damping=rbjax.Zener(law.stiffness_ratio, th[1]),
+            method="angle",
+        )
         return jax.numpy.stack([res.contact_time_s, res.peak_force_N, res.restitution])
 
     def reference(th):
-        ref = reference_impact(1.0, BALL.replace(youngs_Pa=th[0]), damping=rbjax.Zener(law.stiffness_ratio, th[1]))
+        ref = reference_impact(
+            1.0, BALL.replace(youngs_Pa=th[0]), damping=rbjax.Zener(law.stiffness_ratio, th[1])
+        )
         return np.array([ref.contact_time_s, ref.peak_force_N, ref.restitution])
 
     jac = np.asarray(jax.jit(jax.jacfwd(ours))(theta))
     steps = 1e-4 * theta
-    fd = np.stack([(reference(theta + e) - reference(theta - e)) / (2 * e[j]) for j, e in enumerate(np.diag(steps))], axis=1)
+    fd = np.stack(
+        [
+            (reference(theta + e) - reference(theta - e)) / (2 * e[j])
+            for j, e in enumerate(np.diag(steps))
+        ],
+        axis=1,
+    )
     assert np.allclose(jac, fd, rtol=2e-5, atol=0.0), (jac, fd)

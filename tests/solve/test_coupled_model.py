@@ -20,7 +20,9 @@ BALL = rbjax.JIS_RUBBER_BALL
         rbjax.Model(),
         rbjax.Model(blocked_force="momentum", ball_mode=rbjax.BallMode(12.0, 450.0, 0.3)),
         rbjax.Model(floor=rbjax.ModalFloor([40.0, 9.0], [25.0, 180.0], [0.03, 0.05])),
-        rbjax.Model(damping=rbjax.Zener(0.2, 1e-3), floor=rbjax.InfinitePlate(0.015, 4.9e9, 600.0, 0.3)),
+        rbjax.Model(
+            damping=rbjax.Zener(0.2, 1e-3), floor=rbjax.InfinitePlate(0.015, 4.9e9, 600.0, 0.3)
+        ),
         rbjax.Model(floor=rbjax.Dashpot(2500.0)),
     ],
 )
@@ -60,7 +62,9 @@ def test_bad_terms_get_named_errors(make, match):
 
 
 def test_from_modal_mass_is_the_mass_ratio():
-    assert float(from_modal_mass(0.125, 600.0, 0.2, BALL).mode_mass_ratio) == pytest.approx(2.5 / 0.125)
+    assert float(from_modal_mass(0.125, 600.0, 0.2, BALL).mode_mass_ratio) == pytest.approx(
+        2.5 / 0.125
+    )
 
 
 def test_energy_balance_on_the_rigid_floor_matches_the_reference_restitution():
@@ -70,7 +74,9 @@ def test_energy_balance_on_the_rigid_floor_matches_the_reference_restitution():
     out = rbjax.energy_balance(heights, BALL, rbjax.Model())
     ref = reference_scalars(heights, BALL)
     v0 = np.sqrt(2 * 9.80665 * heights)
-    np.testing.assert_allclose(np.asarray(out.rebound_energy_J), 0.5 * 2.5 * (ref["restitution"] * v0) ** 2, rtol=1e-8)
+    np.testing.assert_allclose(
+        np.asarray(out.rebound_energy_J), 0.5 * 2.5 * (ref["restitution"] * v0) ** 2, rtol=1e-8
+    )
     np.testing.assert_allclose(np.asarray(out.floor_energy_J), 0.0, atol=1e-12)
     np.testing.assert_allclose(np.asarray(out.cap_work_J), 0.0, atol=1e-12)
     assert np.all(np.abs(np.asarray(out.residual_J)) < 1e-8 * np.asarray(out.impact_energy_J))
@@ -90,7 +96,17 @@ def test_quadrature_refuses_coupled_models_with_the_reason():
 
 
 def test_parameter_layer_sees_the_new_terms():
-    model = rbjax.Model(damping=rbjax.KelvinVoigt(3.0), ball_mode=rbjax.BallMode(5.0, 400.0, 0.1), floor=rbjax.Dashpot(1e4))
+    model = rbjax.Model(
+        damping=rbjax.KelvinVoigt(3.0),
+        ball_mode=rbjax.BallMode(5.0, 400.0, 0.1),
+        floor=rbjax.Dashpot(1e4),
+    )
     names = rbjax.parameter_names(1.0, BALL, model)
-    assert {"mode_mass_ratio", "mode_frequency_Hz", "mode_loss_factor", "floor_impedance_Ns_per_m", "damping_Ns_per_m"} <= set(names)
+    assert {
+        "mode_mass_ratio",
+        "mode_frequency_Hz",
+        "mode_loss_factor",
+        "floor_impedance_Ns_per_m",
+        "damping_Ns_per_m",
+    } <= set(names)
     assert jnp.shape(rbjax.terms.parameters.to_vector(1.0, BALL, model)) == (len(names),)

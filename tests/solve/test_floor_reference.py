@@ -57,7 +57,11 @@ QUANTITIES = ("contact_time_s", "peak_force_N", "restitution")
 
 #: OSB-like 15 mm plate (E 4.9 GPa, ρ 600 kg/m³, ν 0.3, η 0.02).
 OSB = dict(thickness_m=0.015, youngs_Pa=4.9e9, density_kg_per_m3=600.0, poisson=0.3)
-PLATE_Z = float(rbjax.plate_impedance_Ns_per_m(OSB["thickness_m"], OSB["youngs_Pa"], OSB["density_kg_per_m3"], OSB["poisson"]))
+PLATE_Z = float(
+    rbjax.plate_impedance_Ns_per_m(
+        OSB["thickness_m"], OSB["youngs_Pa"], OSB["density_kg_per_m3"], OSB["poisson"]
+    )
+)
 
 #: A linear-spring ball: same shell stiffness k = 4Eh²/(R√(3(1−ν²))) as the JIS ball, with R
 #: and E scaled by 1e9 so that the cap terms (dynamic mass Mδ/2R, flux (M/2R)δ̇², the gas
@@ -68,7 +72,13 @@ LINEAR_BALL = BALL.replace(radius_m=BALL.radius_m * SCALE, youngs_Pa=BALL.youngs
 #: Floating floor: 50 mm screed (2000 kg/m³) over 0.01 m² moving with the ball (1 kg), base
 #: 5000 kg at 60 Hz; the soft layer (1 MN/m³: screed-on-layer resonance 16 Hz, below the
 #: ball's ≈ 25 Hz) and the stiffer layer (10 MN/m³: 50 Hz, coupled with the base's 60 Hz).
-FLOAT = dict(screed_thickness_m=0.05, screed_density_kg_per_m3=2000.0, area_m2=0.01, base_mass_kg=5000.0, base_frequency_Hz=60.0)
+FLOAT = dict(
+    screed_thickness_m=0.05,
+    screed_density_kg_per_m3=2000.0,
+    area_m2=0.01,
+    base_mass_kg=5000.0,
+    base_frequency_Hz=60.0,
+)
 SOFT = floating_floor(dynamic_stiffness_N_per_m3=1e6, **FLOAT)
 STIFF = floating_floor(dynamic_stiffness_N_per_m3=1e7, **FLOAT)
 
@@ -101,13 +111,21 @@ def _dashpot_rows():
 def dashpot_results() -> dict:
     rows = _dashpot_rows()
     heights = np.array([r[1] for r in rows])
-    ball = rbjax.Ball(*(np.array([getattr(r[4], f) for r in rows]) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")))
+    ball = rbjax.Ball(
+        *(
+            np.array([getattr(r[4], f) for r in rows])
+            for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+        )
+    )
     floor = rbjax.Dashpot(np.array([r[2] for r in rows]))
     weights = np.array([r[3] for r in rows])
     model = rbjax.Model(momentum_flux_weight=weights, floor=floor)
     out = _simulate(heights, ball, model, rbjax.Solver(), method="ode")
     assert np.all(np.asarray(out.status) == 0)
-    return {r[0]: {q: float(getattr(out, q)[i]) for q in (*QUANTITIES, "max_deflection_m")} for i, r in enumerate(rows)}
+    return {
+        r[0]: {q: float(getattr(out, q)[i]) for q in (*QUANTITIES, "max_deflection_m")}
+        for i, r in enumerate(rows)
+    }
 
 
 @functools.cache
@@ -130,7 +148,10 @@ def test_dashpot_matches_reference(z, bf):
     for h in HEIGHTS:
         ref = reference(h, ("dashpot", z), bf)
         for q in QUANTITIES:
-            assert _rel(got[("dashpot", z, bf, h)][q], getattr(ref, q)) < REL, (q, h)  # README "Floors": ≤ 4e-10
+            assert _rel(got[("dashpot", z, bf, h)][q], getattr(ref, q)) < REL, (
+                q,
+                h,
+            )  # README "Floors": ≤ 4e-10
 
 
 @functools.cache
@@ -156,7 +177,9 @@ def test_modal_floor_matches_reference(bf):
         assert _rel(float(out.contact_time_s[j]), ref.contact_time_s) < REL
         assert _rel(float(out.restitution[j]), ref.restitution) < REL
         assert _rel(float(out.max_deflection_m[j]), _global_max_deflection(ref)) < REL
-        assert _rel(float(energy.floor_energy_J[j]), ref.injected_energy_J) < ENERGY_REL  # README "Floors": ≤ 1e-9
+        assert (
+            _rel(float(energy.floor_energy_J[j]), ref.injected_energy_J) < ENERGY_REL
+        )  # README "Floors": ≤ 1e-9
         assert _rel(float(out.peak_force_N[j]), ref.peak_force_N) < REL
 
 
@@ -170,7 +193,9 @@ def _global_max_deflection(ref):
     ts = np.linspace(0.0, ref.contact_time_s, 4001)
     i = int(np.argmax([deflection(t) for t in ts]))
     lo, hi = ts[max(i - 1, 0)], ts[min(i + 1, ts.size - 1)]
-    best = minimize_scalar(lambda t: -deflection(t), bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
+    best = minimize_scalar(
+        lambda t: -deflection(t), bounds=(lo, hi), method="bounded", options={"xatol": 1e-13}
+    )
     return max(-best.fun, deflection(ts[i]))
 
 
@@ -185,18 +210,26 @@ def test_injected_energy_dashpot():
     """∫F u̇ dt and the energy balance (momentum convention, elastic ball) on dashpots."""
     zs = np.array([500.0, 2000.0, 1e5, 500.0, 2000.0, 1e5])
     hs = np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
-    e = rbjax.energy_balance(hs, BALL, rbjax.Model(blocked_force="momentum", floor=rbjax.Dashpot(zs)))
-    assert np.all(np.abs(np.asarray(e.residual_J)) < ENERGY_REL * np.asarray(e.impact_energy_J))  # measured 1.5e-10
+    e = rbjax.energy_balance(
+        hs, BALL, rbjax.Model(blocked_force="momentum", floor=rbjax.Dashpot(zs))
+    )
+    assert np.all(
+        np.abs(np.asarray(e.residual_J)) < ENERGY_REL * np.asarray(e.impact_energy_J)
+    )  # measured 1.5e-10
     for i, (z, h) in enumerate(zip(zs, hs)):
         ref = reference(float(h), ("dashpot", float(z)), "momentum")
-        assert _rel(float(e.floor_energy_J[i]), ref.injected_energy_J) < ENERGY_REL  # README "Floors": ≤ 1e-9
+        assert (
+            _rel(float(e.floor_energy_J[i]), ref.injected_energy_J) < ENERGY_REL
+        )  # README "Floors": ≤ 1e-9
         assert _rel(float(e.rebound_energy_J[i]), ref.restitution**2 * ref.impact_energy_J) < REL
 
 
 def test_energy_balance_modal():
     _, energy = stiff_results()
     assert np.all(np.asarray(energy.status) == 0)
-    assert np.all(np.abs(np.asarray(energy.residual_J)) < ENERGY_REL * np.asarray(energy.impact_energy_J))  # measured 6e-10
+    assert np.all(
+        np.abs(np.asarray(energy.residual_J)) < ENERGY_REL * np.asarray(energy.impact_energy_J)
+    )  # measured 6e-10
 
 
 # ------------------------------------------------------------------------------------------------
@@ -227,8 +260,15 @@ def test_linear_spring_on_dashpot_closed_form(z):
         v0 = np.sqrt(2 * 9.80665 * h)
         w0 = np.sqrt(k / BALL.mass_kg)
         a, wd = exact["damping_ratio"] * w0, np.pi / exact["contact_time_s"]
-        np.testing.assert_allclose(linear_oscillator_expm(h, BALL.mass_kg, k, z, t), v0 / wd * np.exp(-a * t) * np.sin(wd * t), rtol=1e-12)
-        assert abs(linear_oscillator_expm(h, BALL.mass_kg, k, z, [exact["contact_time_s"]])[0]) < 1e-12 * v0 / wd
+        np.testing.assert_allclose(
+            linear_oscillator_expm(h, BALL.mass_kg, k, z, t),
+            v0 / wd * np.exp(-a * t) * np.sin(wd * t),
+            rtol=1e-12,
+        )
+        assert (
+            abs(linear_oscillator_expm(h, BALL.mass_kg, k, z, [exact["contact_time_s"]])[0])
+            < 1e-12 * v0 / wd
+        )
         for q in QUANTITIES:
             assert _rel(got[("linear", z, h)][q], exact[q]) < REL, q  # README "Floors": ≤ 4e-10
 
@@ -240,7 +280,9 @@ def test_many_mode_plate_approaches_infinite_plate():
     infinite plate (Z = 8√(B′m″), rbjax and the reference): within 0.5 % (measured 0.1–0.4 %;
     the truncated modes leave the finite model stiffer by ~1/(2π²√(B′m″)f_max), see
     ``simply_supported_plate_modes``)."""
-    plate = simply_supported_plate_modes(6.0, 6.6, loss_factor=0.02, drive_x_m=2.793, drive_y_m=3.541, max_frequency_Hz=1000.0, **OSB)
+    plate = simply_supported_plate_modes(
+        6.0, 6.6, loss_factor=0.02, drive_x_m=2.793, drive_y_m=3.541, max_frequency_Hz=1000.0, **OSB
+    )
     assert plate.num_modes > 1000
     out = rbjax.simulate(np.array(HEIGHTS), BALL, floor=plate, method="ode")
     got = dashpot_results()
@@ -248,7 +290,10 @@ def test_many_mode_plate_approaches_infinite_plate():
         ref = reference(h, ("dashpot", PLATE_Z))
         for q in QUANTITIES:
             assert _rel(got[("plate", h)][q], getattr(ref, q)) < REL
-            assert _rel(float(getattr(out, q)[i]), getattr(ref, q)) < 5e-3, (q, h)  # README "Floors": 0.1–0.4 %
+            assert _rel(float(getattr(out, q)[i]), getattr(ref, q)) < 5e-3, (
+                q,
+                h,
+            )  # README "Floors": 0.1–0.4 %
 
 
 def _maxima(f):
@@ -260,7 +305,9 @@ def _floor_histories(floor, times):
     return rbjax.trajectory(np.array(HEIGHTS), times, BALL, rbjax.Model(floor=floor))
 
 
-@pytest.mark.parametrize("floor, n_peaks", [(STIFF, 2), (SOFT, 1)], ids=["stiff-layer", "soft-layer"])
+@pytest.mark.parametrize(
+    "floor, n_peaks", [(STIFF, 2), (SOFT, 1)], ids=["stiff-layer", "soft-layer"]
+)
 def test_floating_floor_force_peaks(floor, n_peaks):
     """README "Floors": a floating floor with a soft layer (1 MN/m³) gives one force peak and
     with a stiffer one (10 MN/m³) two, 947 N and the global 1070 N at 1 m. Counted on rbjax's
@@ -273,7 +320,10 @@ def test_floating_floor_force_peaks(floor, n_peaks):
         ref = reference(h, _modal_key(floor))
         assert len(peaks) == n_peaks == len(ref.force_maxima_N), (h, peaks, ref.force_maxima_N)
         np.testing.assert_allclose(peaks, ref.force_maxima_N, rtol=1e-4)  # grid-sampled maxima
-        assert float(np.max(np.abs(np.asarray(hist.force_N[i]) - ref.force_N(times)))) < 1e-7 * ref.peak_force_N
+        assert (
+            float(np.max(np.abs(np.asarray(hist.force_N[i]) - ref.force_N(times))))
+            < 1e-7 * ref.peak_force_N
+        )
     if floor is STIFF:  # the two maxima at 1 m as the README prints them
         first, second = reference(1.0, _modal_key(STIFF)).force_maxima_N
         assert abs(first - 947.0) < 0.5 and abs(second - 1070.0) < 5.0, (first, second)
@@ -288,12 +338,16 @@ def test_contact_time_gradients():
     the independent reference to ≤ 3e-9 (measured 1e-10 and 2.8e-9; asserted 1e-8)."""
 
     def contact_time(z, e):
-        return rbjax.simulate(1.0, BALL.replace(youngs_Pa=e), floor=rbjax.Dashpot(z), method="ode").contact_time_s
+        return rbjax.simulate(
+            1.0, BALL.replace(youngs_Pa=e), floor=rbjax.Dashpot(z), method="ode"
+        ).contact_time_s
 
     def reference_fd(z_scale, e_scale):
         def tc(k):
             ball = BALL.replace(youngs_Pa=FD_E * (1.0 + k * FD_STEP * e_scale))
-            return reference_floor_impact(1.0, ball, ("dashpot", FD_Z * (1.0 + k * FD_STEP * z_scale)), rtol=FD_RTOL).contact_time_s
+            return reference_floor_impact(
+                1.0, ball, ("dashpot", FD_Z * (1.0 + k * FD_STEP * z_scale)), rtol=FD_RTOL
+            ).contact_time_s
 
         step = FD_STEP * (FD_Z * z_scale + FD_E * e_scale)
         return (8.0 * (tc(1) - tc(-1)) - (tc(2) - tc(-2))) / (12.0 * step)
@@ -308,23 +362,63 @@ def test_contact_time_gradients():
 
 
 def test_plate_modes_closed_form():
-    plate = simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=1.7, drive_y_m=2.3, max_frequency_Hz=200.0)
+    plate = simply_supported_plate_modes(
+        4.0,
+        5.0,
+        0.14,
+        30e9,
+        2300.0,
+        0.2,
+        0.02,
+        drive_x_m=1.7,
+        drive_y_m=2.3,
+        max_frequency_Hz=200.0,
+    )
     bending = 30e9 * 0.14**3 / (12 * (1 - 0.2**2))
     f11 = np.pi / 2 * np.sqrt(bending / (2300 * 0.14)) * (1 / 4.0**2 + 1 / 5.0**2)
     m11 = 2300 * 0.14 * 4.0 * 5.0 / 4 / (np.sin(np.pi * 1.7 / 4.0) * np.sin(np.pi * 2.3 / 5.0)) ** 2
     assert plate.frequency_Hz[0] == pytest.approx(f11, rel=1e-14)
     assert plate.mass_kg[0] == pytest.approx(m11, rel=1e-14)
-    assert list(plate.frequency_Hz) == sorted(plate.frequency_Hz) and max(plate.frequency_Hz) <= 200.0
+    assert (
+        list(plate.frequency_Hz) == sorted(plate.frequency_Hz) and max(plate.frequency_Hz) <= 200.0
+    )
     # a drive point on the centre lines leaves out the modes with a node there (m or n even)
-    centre = simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=2.0, drive_y_m=2.5, max_frequency_Hz=400.0)
-    assert centre.num_modes < simply_supported_plate_modes(4.0, 5.0, 0.14, 30e9, 2300.0, 0.2, 0.02, drive_x_m=1.7, drive_y_m=2.3, max_frequency_Hz=400.0).num_modes
+    centre = simply_supported_plate_modes(
+        4.0,
+        5.0,
+        0.14,
+        30e9,
+        2300.0,
+        0.2,
+        0.02,
+        drive_x_m=2.0,
+        drive_y_m=2.5,
+        max_frequency_Hz=400.0,
+    )
+    assert (
+        centre.num_modes
+        < simply_supported_plate_modes(
+            4.0,
+            5.0,
+            0.14,
+            30e9,
+            2300.0,
+            0.2,
+            0.02,
+            drive_x_m=1.7,
+            drive_y_m=2.3,
+            max_frequency_Hz=400.0,
+        ).num_modes
+    )
 
 
 def test_floating_floor_modal_masses():
     """Σ 1/m_k = 1/m₁ (the screed's mass at high frequency); the soft layer's lower mode is the
     screed on the layer, f₀ = √(s′A/m₁)/2π over the heavy base."""
     for floor in (SOFT, STIFF):
-        assert sum(1.0 / m for m in floor.mass_kg) == pytest.approx(1.0 / (0.05 * 2000.0 * 0.01), rel=1e-12)
+        assert sum(1.0 / m for m in floor.mass_kg) == pytest.approx(
+            1.0 / (0.05 * 2000.0 * 0.01), rel=1e-12
+        )
     assert SOFT.frequency_Hz[0] == pytest.approx(np.sqrt(1e6 * 0.01 / 1.0) / (2 * np.pi), rel=1e-3)
     free = floating_floor(0.05, 2000.0, 0.01, 1e7, base_mass_kg=100.0, base_frequency_Hz=0.0)
     assert free.frequency_Hz[0] == 0.0 and free.loss_factor[0] == 0.0
@@ -342,7 +436,18 @@ def test_floating_floor_modal_masses():
     ],
 )
 def test_plate_modes_named_errors(change, name):
-    args = dict(length_x_m=6.0, length_y_m=6.6, loss_factor=0.02, drive_x_m=2.8, drive_y_m=3.5, max_frequency_Hz=100.0, **OSB) | change
+    args = (
+        dict(
+            length_x_m=6.0,
+            length_y_m=6.6,
+            loss_factor=0.02,
+            drive_x_m=2.8,
+            drive_y_m=3.5,
+            max_frequency_Hz=100.0,
+            **OSB,
+        )
+        | change
+    )
     with pytest.raises(ValueError, match=name):
         simply_supported_plate_modes(**args)
 

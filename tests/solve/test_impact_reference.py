@@ -42,7 +42,13 @@ CONFIGS = {
     "hunt-crossley": dict(damping=rbjax.HuntCrossley(0.5)),
     "zener-momentum": dict(damping=rbjax.Zener(0.3, 1e-3), blocked_force="momentum"),
 }
-SCALAR_CONFIGS = ["adiabatic-paper", "none-paper", "kelvin-voigt", "hunt-crossley", "zener-momentum"]
+SCALAR_CONFIGS = [
+    "adiabatic-paper",
+    "none-paper",
+    "kelvin-voigt",
+    "hunt-crossley",
+    "zener-momentum",
+]
 HISTORY_CONFIGS = ["adiabatic-paper", "none-paper", "adiabatic-momentum", "zener-momentum"]
 
 
@@ -94,7 +100,9 @@ def test_status_ok(case):
     assert np.all(np.asarray(case.result.ok))
 
 
-@pytest.mark.parametrize("quantity", ["contact_time_s", "peak_force_N", "restitution", "max_deflection_m"])
+@pytest.mark.parametrize(
+    "quantity", ["contact_time_s", "peak_force_N", "restitution", "max_deflection_m"]
+)
 def test_scalar_outputs_match_reference(case, quantity):
     err = _rel_err(getattr(case.result, quantity), case.ref(quantity))
     assert np.all(err <= REL), f"{case.name} {quantity}: relative errors {err}"
@@ -158,7 +166,9 @@ E0, M0 = float(BALL.youngs_Pa), float(BALL.mass_kg)
 
 
 def _outputs(youngs_Pa, mass_kg, solver=None):
-    res = rbjax.simulate(GRAD_HEIGHT_M, BALL.replace(youngs_Pa=youngs_Pa, mass_kg=mass_kg), solver=solver)
+    res = rbjax.simulate(
+        GRAD_HEIGHT_M, BALL.replace(youngs_Pa=youngs_Pa, mass_kg=mass_kg), solver=solver
+    )
     return jnp.stack([res.contact_time_s, res.peak_force_N])
 
 

@@ -37,12 +37,18 @@ import rbjax
 from scipy_reference import STANDARD_GRAVITY, gas_force, shell_stiffness
 
 N = 16
-SETTINGS = settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+SETTINGS = settings(
+    max_examples=6,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 OUTPUTS = ("contact_time_s", "peak_force_N", "peak_time_s", "restitution", "max_deflection_m")
 
 
 def _log_uniform(lo, hi):
-    return st.floats(0.0, 1.0).map(lambda u: math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo))))
+    return st.floats(0.0, 1.0).map(
+        lambda u: math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo)))
+    )
 
 
 PARAMS = st.tuples(
@@ -57,7 +63,10 @@ PARAMS = st.tuples(
 BATCHES = st.lists(PARAMS, min_size=N, max_size=N)
 #: A batch inside the shell model (δ_max ≤ 0.34·2h for every variant, by _max_deflection): run
 #: as an explicit example, so every monotonicity check sees all N points at least once.
-INSIDE = [(0.05 + 0.005 * i, 0.3 + 0.01 * i, 0.5 + 0.15 * i, 1e6, 0.3 + 0.01 * i, 0.02 * 1.3**i, 0.3 * i) for i in range(N)]
+INSIDE = [
+    (0.05 + 0.005 * i, 0.3 + 0.01 * i, 0.5 + 0.15 * i, 1e6, 0.3 + 0.01 * i, 0.02 * 1.3**i, 0.3 * i)
+    for i in range(N)
+]
 #: Points with |δ_max/2h − 1| below this are too close to the limit to say which side a solve
 #: within its tolerance lands on; they are neither required to solve nor to be flagged.
 LIMIT_BAND = 1e-6
@@ -95,7 +104,13 @@ def _max_deflection(radius, wall, mass, youngs, poisson, height):
     v0_sq = 2.0 * STANDARD_GRAVITY * height
 
     def excess(d):
-        work = quad(lambda s: (k * s + gas_force(s, radius)) / (2.0 * radius - s), 0.0, d, epsabs=0.0, epsrel=1e-11)[0]
+        work = quad(
+            lambda s: (k * s + gas_force(s, radius)) / (2.0 * radius - s),
+            0.0,
+            d,
+            epsabs=0.0,
+            epsrel=1e-11,
+        )[0]
         return 4.0 * radius / mass * work - v0_sq
 
     top = 1.999 * radius
@@ -106,7 +121,10 @@ def _max_deflection(radius, wall, mass, youngs, poisson, height):
 
 def _deflection_ratio(heights, ball):
     """δ_max / 2h per point (2h: the deflection limit of the shell model, paper §2.1)."""
-    fields = [np.broadcast_to(np.asarray(getattr(ball, f), dtype=float), heights.shape) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")]
+    fields = [
+        np.broadcast_to(np.asarray(getattr(ball, f), dtype=float), heights.shape)
+        for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+    ]
     ratio = np.empty(heights.shape)
     for idx in np.ndindex(heights.shape):
         r, h, m, e, nu = (float(f[idx]) for f in fields)
@@ -121,7 +139,10 @@ def _check_solved_exactly_where_valid(res, heights, ball):
     status = np.asarray(res.status)
     inside, beyond = ratio < 1.0 - LIMIT_BAND, ratio > 1.0 + LIMIT_BAND
     assert np.all(status[inside] == 0), (ratio[inside], status[inside])
-    assert np.all(status[beyond] == rbjax.STATUS_CODES["deflection_limit"]), (ratio[beyond], status[beyond])
+    assert np.all(status[beyond] == rbjax.STATUS_CODES["deflection_limit"]), (
+        ratio[beyond],
+        status[beyond],
+    )
     return inside
 
 
@@ -175,4 +196,6 @@ def test_damped_model_never_gains_energy(params):
     assert np.all(np.asarray(res.status)[both] == 0), np.asarray(res.status)[both]
     # (up to the two paths' accuracy: the elastic model runs the quadrature, ~1e-12, the damped
     # one the phase-angle path, ≤ 1e-7 against the scipy reference; ζ = 0 is among the draws)
-    assert np.all(np.asarray(res.restitution)[both] <= np.asarray(elastic.restitution)[both] * (1.0 + 1e-7))
+    assert np.all(
+        np.asarray(res.restitution)[both] <= np.asarray(elastic.restitution)[both] * (1.0 + 1e-7)
+    )

@@ -26,7 +26,12 @@ HEIGHTS = np.array([0.01, 0.1, 1.0, 1.6])
 BETA = 0.2
 TIGHT = rbjax.Solver(rtol=1e-12, atol=1e-14)
 FIELDS = ("contact_time_s", "restitution", "peak_force_N", "max_deflection_m")
-CONFIGS = [(gas, blocked, stiff) for gas in ("adiabatic", "none") for blocked in ("paper", "momentum") for stiff in (False, True)]
+CONFIGS = [
+    (gas, blocked, stiff)
+    for gas in ("adiabatic", "none")
+    for blocked in ("paper", "momentum")
+    for stiff in (False, True)
+]
 
 
 # --------------------------------------------------------------------------------------------
@@ -43,7 +48,9 @@ def _reference(height_m, *, gas, blocked_force, beta, youngs_Pa=1.6e6, poisson=0
         if gas == "adiabatic":
             cavity = 4.0 * math.pi * r**3 / 3.0
             cap = math.pi * d**2 * (3.0 * r - d) / 3.0
-            f = f + 101325.0 * ((cavity / (cavity - cap)) ** 1.4 - 1.0) * math.pi * d * (2.0 * r - d)
+            f = f + 101325.0 * ((cavity / (cavity - cap)) ** 1.4 - 1.0) * math.pi * d * (
+                2.0 * r - d
+            )
         return f
 
     def rhs(flux):
@@ -70,7 +77,9 @@ def _reference(height_m, *, gas, blocked_force, beta, youngs_Pa=1.6e6, poisson=0
 
     def floor(t):  # the blocked force at times t (zero outside the contact)
         t = np.asarray(t, dtype=float)
-        y = np.where(t <= t_max, comp.sol(np.clip(t, 0.0, t_max)), rest.sol(np.clip(t, t_max, t_end)))
+        y = np.where(
+            t <= t_max, comp.sol(np.clip(t, 0.0, t_max)), rest.sol(np.clip(t, t_max, t_end))
+        )
         f = force(y[0])
         if blocked_force == "momentum":
             f = f + np.where(t <= t_max, m / (2.0 * r) * y[1] ** 2, 0.0)
@@ -79,7 +88,13 @@ def _reference(height_m, *, gas, blocked_force, beta, youngs_Pa=1.6e6, poisson=0
     # The peak of the floor force, searched on the dense solution around the candidates.
     grid = np.concatenate([np.linspace(0.0, t_end, 4001), [t_max]])
     peak = max(float(np.max(floor(grid[:-1]))), force(d_max))
-    return dict(contact_time_s=t_end, restitution=abs(v_end) / v0, peak_force_N=peak, max_deflection_m=d_max, floor=floor)
+    return dict(
+        contact_time_s=t_end,
+        restitution=abs(v_end) / v0,
+        peak_force_N=peak,
+        max_deflection_m=d_max,
+        floor=floor,
+    )
 
 
 def _batched(tree, size):
@@ -100,7 +115,9 @@ def _rel(a, b):
 @pytest.fixture(scope="module")
 def references():
     return {
-        (gas, blocked, stiff, h): _reference(h, gas=gas, blocked_force=blocked, beta=BETA if stiff else 0.0)
+        (gas, blocked, stiff, h): _reference(
+            h, gas=gas, blocked_force=blocked, beta=BETA if stiff else 0.0
+        )
         for gas, blocked, stiff in CONFIGS
         for h in HEIGHTS
     }
@@ -110,7 +127,9 @@ def references():
 def quadrature_results():
     n = len(HEIGHTS)
     return {
-        config: impact_quadrature_batch(jnp.asarray(HEIGHTS), _batched(BALL.as_arrays(), n), _model(*config, size=n))
+        config: impact_quadrature_batch(
+            jnp.asarray(HEIGHTS), _batched(BALL.as_arrays(), n), _model(*config, size=n)
+        )
         for config in CONFIGS
     }
 
@@ -168,7 +187,9 @@ def test_error_falls_with_nodes_and_coarse_rules_are_flagged(references):
     assert all(err <= est for err, est in zip(errors, estimates))
     assert statuses == [rbjax.STATUS_CODES["solver_failed"]] * 4 + [0]
     out = jax.jit(lambda h: impact_quadrature(h, BALL, rbjax.Model(), n_nodes=6))(1.0)
-    assert int(out.status) == rbjax.STATUS_CODES["solver_failed"] and np.isnan(float(out.contact_time_s))
+    assert int(out.status) == rbjax.STATUS_CODES["solver_failed"] and np.isnan(
+        float(out.contact_time_s)
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -189,7 +210,9 @@ def finite_difference_jacobian():
     steps = 1e-5 * THETA
     points = np.concatenate([THETA + np.diag(steps), THETA - np.diag(steps)])
     values = np.asarray(jax.jit(jax.vmap(_outputs))(jnp.asarray(points)))
-    return (values[:4] - values[4:]).T / (2.0 * steps), np.asarray(jax.jit(_outputs)(jnp.asarray(THETA)))
+    return (values[:4] - values[4:]).T / (2.0 * steps), np.asarray(
+        jax.jit(_outputs)(jnp.asarray(THETA))
+    )
 
 
 def _assert_close_elasticities(jac, fd, values):
@@ -227,7 +250,9 @@ def test_force_history_matches_ode_and_reference():
         quad = history(h, jnp.asarray(times))
         peak = float(out.peak_force_N[i])
         assert np.max(np.abs(np.asarray(quad.force_N) - np.asarray(ode.force_N[i]))) <= 1e-8 * peak
-        assert np.max(np.abs(np.asarray(quad.deflection_m) - np.asarray(ode.deflection_m[i]))) <= 1e-8 * float(out.max_deflection_m[i])
+        assert np.max(
+            np.abs(np.asarray(quad.deflection_m) - np.asarray(ode.deflection_m[i]))
+        ) <= 1e-8 * float(out.max_deflection_m[i])
         ref = _reference(h, gas="adiabatic", blocked_force="momentum", beta=0.0)
         assert np.max(np.abs(np.asarray(quad.force_N) - ref["floor"](times))) <= 1e-8 * peak
         inside = (times >= 0.0) & (times < float(out.contact_time_s[i]))
@@ -250,7 +275,9 @@ def test_deflection_limit_at_10_m():
         return y[0] - 2.0 * h
 
     at_limit.terminal = True
-    sol = solve_ivp(rhs, (0.0, 1.0), [0.0, math.sqrt(2.0 * 9.80665 * 10.0)], events=at_limit, rtol=1e-10)
+    sol = solve_ivp(
+        rhs, (0.0, 1.0), [0.0, math.sqrt(2.0 * 9.80665 * 10.0)], events=at_limit, rtol=1e-10
+    )
     assert sol.t_events[0].size == 1 and sol.y_events[0][0][1] > 0.0  # (gas only stiffens it)
 
 
@@ -278,7 +305,9 @@ def test_too_coarse_a_rule_near_the_mass_singularity_is_flagged():
         assert np.isnan(float(coarse.contact_time_s))
     # further from the pole (δ_max = 0.84·2R), 48 points resolve it
     fine_height = 1.0
-    fine_ref = _reference(fine_height, gas="none", blocked_force="paper", beta=0.0, youngs_Pa=youngs)
+    fine_ref = _reference(
+        fine_height, gas="none", blocked_force="paper", beta=0.0, youngs_Pa=youngs
+    )
     fine = impact_quadrature(fine_height, ball, model, n_nodes=48)
     assert int(fine.status) == 0
     for name in FIELDS:

@@ -45,7 +45,14 @@ CONFIGS = {
 def _case(name):
     refs = [reference_impact(h, BALL, **CONFIGS[name]) for h in HEIGHTS]
     contact = np.array([r.contact_time_s for r in refs])
-    history = force_history(HEIGHTS, BALL, rbjax.Model(**CONFIGS[name]), rbjax.Solver(), rate_Hz=RATE_Hz, contact_time_s=contact)
+    history = force_history(
+        HEIGHTS,
+        BALL,
+        rbjax.Model(**CONFIGS[name]),
+        rbjax.Solver(),
+        rate_Hz=RATE_Hz,
+        contact_time_s=contact,
+    )
     return refs, history
 
 
@@ -82,11 +89,17 @@ def test_jacfwd_matches_central_differences_of_the_reference():
     t = np.arange(1000) / RATE_Hz
 
     def energy(e):
-        return jnp.sum(sampled_history(height, BALL.replace(youngs_Pa=e), model, num_samples=t.size).force_N ** 2)
+        return jnp.sum(
+            sampled_history(height, BALL.replace(youngs_Pa=e), model, num_samples=t.size).force_N
+            ** 2
+        )
 
     got = float(jax.jit(jax.jacfwd(energy))(youngs))
     step = 1e-5 * youngs
-    refs = [reference_impact(height, BALL.replace(youngs_Pa=e), **options) for e in (youngs - step, youngs + step)]
+    refs = [
+        reference_impact(height, BALL.replace(youngs_Pa=e), **options)
+        for e in (youngs - step, youngs + step)
+    ]
     assert len({int(np.sum(t < r.contact_time_s)) for r in refs}) == 1  # no sample crosses the end
     minus, plus = (np.sum(r.force_N(t) ** 2) for r in refs)
     want = (plus - minus) / (2.0 * step)
@@ -97,12 +110,24 @@ def test_jacfwd_matches_central_differences_of_the_reference():
     ("height", "youngs", "options", "samples", "expected"),
     [
         (10.0, 1.6e6, {}, 1500, "deflection_limit"),  # the JIS ball from 10 m: δ_max > 2h
-        (10.0, 1e4, dict(gas="none", max_deflection_ratio=100.0), 3000, "mass_singularity"),  # δ reaches 2R
+        (
+            10.0,
+            1e4,
+            dict(gas="none", max_deflection_ratio=100.0),
+            3000,
+            "mass_singularity",
+        ),  # δ reaches 2R
         (1.0, 1.6e6, {}, 100, "step_limit"),  # the contact goes on after the last sample
     ],
 )
 def test_failed_impact_gives_nan_samples_and_its_status(height, youngs, options, samples, expected):
-    traj = sampled_history(height, BALL.replace(youngs_Pa=youngs), rbjax.Model(**options), num_samples=samples, substeps=2)
+    traj = sampled_history(
+        height,
+        BALL.replace(youngs_Pa=youngs),
+        rbjax.Model(**options),
+        num_samples=samples,
+        substeps=2,
+    )
     assert rbjax.STATUS_NAMES[int(traj.status)] == expected
     for field in ("force_N", "deflection_m", "velocity_m_per_s"):
         assert np.all(np.isnan(np.asarray(getattr(traj, field)))), field
@@ -112,9 +137,18 @@ def test_failed_impact_gives_nan_samples_and_its_status(height, youngs, options,
 def test_deflection_limit_stays_nan_over_the_padded_record():
     # the scalar solve gives NaN for the 10 m drop; its history is NaN over the whole record
     contact = np.array([reference_impact(1.0, BALL).contact_time_s, np.nan])
-    history = force_history(np.array([1.0, 10.0]), BALL, rbjax.Model(), rbjax.Solver(), duration_s=0.05, contact_time_s=contact)
+    history = force_history(
+        np.array([1.0, 10.0]),
+        BALL,
+        rbjax.Model(),
+        rbjax.Solver(),
+        duration_s=0.05,
+        contact_time_s=contact,
+    )
     assert np.asarray(history.status).tolist() == [0, rbjax.STATUS_CODES["deflection_limit"]]
-    assert np.all(np.isnan(np.asarray(history.force_N[1]))) and np.all(np.isfinite(np.asarray(history.force_N[0])))
+    assert np.all(np.isnan(np.asarray(history.force_N[1]))) and np.all(
+        np.isfinite(np.asarray(history.force_N[0]))
+    )
 
 
 @pytest.mark.parametrize(
@@ -125,7 +159,10 @@ def test_deflection_limit_stays_nan_over_the_padded_record():
         ({"num_samples": 10, "substeps": 0}, "substeps"),
         ({"num_samples": 10, "rate_Hz": -1.0}, "rate_Hz"),
         ({"num_samples": 10, "height_m": -0.1}, "height_m"),
-        ({"num_samples": 10, "model": rbjax.Model(ball_mode=rbjax.BallMode(0.9, 60.0, 1.0))}, "ball mode"),
+        (
+            {"num_samples": 10, "model": rbjax.Model(ball_mode=rbjax.BallMode(0.9, 60.0, 1.0))},
+            "ball mode",
+        ),
         ({"num_samples": 10, "model": rbjax.Model(floor=rbjax.Dashpot(1e4))}, "floor"),
     ],
 )
@@ -150,7 +187,12 @@ class _Ran(Exception):
         (rbjax.Model(), rbjax.Solver(), "auto", "sampled"),
         (rbjax.Model(damping=rbjax.Zener(0.3, 2e-3)), None, "auto", "sampled"),
         (rbjax.Model(), rbjax.Solver(), "ode", "ode"),
-        (rbjax.Model(), rbjax.Solver(rtol=1e-11), "auto", "ode"),  # a solver of one's own asks for the ODE
+        (
+            rbjax.Model(),
+            rbjax.Solver(rtol=1e-11),
+            "auto",
+            "ode",
+        ),  # a solver of one's own asks for the ODE
         (rbjax.Model(floor=rbjax.Dashpot(1e4)), rbjax.Solver(), "auto", "ode"),
     ],
 )

@@ -23,7 +23,12 @@ from scipy_reference import HEIGHTS_M, reference_impact, reference_scalars
 BALL = rbjax.JIS_RUBBER_BALL
 #: Heights over the paper's range 0.1–1.6 m (one batch per configuration).
 HEIGHTS = np.array([0.1, 0.25, 0.5, 0.8, 1.0, 1.3, 1.6])
-ELASTIC = [("adiabatic", "paper"), ("adiabatic", "momentum"), ("none", "paper"), ("none", "momentum")]
+ELASTIC = [
+    ("adiabatic", "paper"),
+    ("adiabatic", "momentum"),
+    ("none", "paper"),
+    ("none", "momentum"),
+]
 DAMPED = {
     "kelvin-voigt": rbjax.KelvinVoigt(damping_Ns_per_m=100.0),
     "hunt-crossley": rbjax.HuntCrossley(alpha_s_per_m=0.3),
@@ -44,7 +49,9 @@ def test_auto_picks_the_quadrature_for_undamped_models():
         model = rbjax.Model(gas=gas, blocked_force=blocked)
         assert quadrature_unsupported(model) is None
         assert resolve_method("auto", model) == "quadrature"
-    assert resolve_method("auto", rbjax.Model(stiffening=rbjax.CubicStiffening(0.2))) == "quadrature"
+    assert (
+        resolve_method("auto", rbjax.Model(stiffening=rbjax.CubicStiffening(0.2))) == "quadrature"
+    )
     assert rbjax.simulate(1.0).method == "quadrature"
 
 
@@ -54,7 +61,9 @@ def test_auto_picks_the_phase_angle_path_for_damped_models_on_the_rigid_floor(na
     reason = quadrature_unsupported(model)
     assert reason is not None and name in reason
     assert resolve_method("auto", model) == "angle"
-    assert resolve_method("auto", rbjax.Model(damping=DAMPED[name], floor=rbjax.Dashpot(1e5))) == "ode"
+    assert (
+        resolve_method("auto", rbjax.Model(damping=DAMPED[name], floor=rbjax.Dashpot(1e5))) == "ode"
+    )
     with pytest.raises(ValueError, match="method='quadrature' cannot solve this model.*damping"):
         resolve_method("quadrature", model)
 
@@ -67,9 +76,14 @@ def test_a_given_solver_asks_for_the_ode():
 
 def test_method_is_validated():
     assert METHODS == ("auto", "ode", "quadrature", "angle")
-    with pytest.raises(ValueError, match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'"):
+    with pytest.raises(
+        ValueError,
+        match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'",
+    ):
         rbjax.simulate(1.0, method="rk4")
-    with pytest.raises(ValueError, match="method='quadrature' cannot solve this model: the damping \\(zener\\)"):
+    with pytest.raises(
+        ValueError, match="method='quadrature' cannot solve this model: the damping \\(zener\\)"
+    ):
         rbjax.simulate(1.0, damping=DAMPED["zener"], method="quadrature")
 
 
@@ -129,7 +143,9 @@ def test_history_after_quadrature_scalars_matches_reference():
 # derivatives through the default path against finite differences of the reference
 
 
-THETA = np.array([1.6e6, 0.45])  # E, ν (ν inside its open range, so the central difference is physical)
+THETA = np.array(
+    [1.6e6, 0.45]
+)  # E, ν (ν inside its open range, so the central difference is physical)
 
 
 def _reference_outputs(theta, height=1.0):
@@ -142,7 +158,9 @@ def _fd_jacobian(theta, rel_step=1e-4):
     for j in range(theta.size):
         step = np.zeros_like(theta)
         step[j] = rel_step * theta[j]
-        cols.append((_reference_outputs(theta + step) - _reference_outputs(theta - step)) / (2.0 * step[j]))
+        cols.append(
+            (_reference_outputs(theta + step) - _reference_outputs(theta - step)) / (2.0 * step[j])
+        )
     return np.stack(cols, axis=1)
 
 
@@ -164,13 +182,17 @@ def test_jacfwd_through_auto_matches_finite_differences(fd_jacobian):
     fd, values = fd_jacobian
     jac = jax.jit(jax.jacfwd(_outputs))(jnp.asarray(THETA))  # no Solver(adjoint="forward") needed
     assert np.max(np.abs(_elasticities(fd, values))) > 0.1
-    np.testing.assert_allclose(_elasticities(jac, values), _elasticities(fd, values), rtol=0, atol=1e-6)
+    np.testing.assert_allclose(
+        _elasticities(jac, values), _elasticities(fd, values), rtol=0, atol=1e-6
+    )
 
 
 def test_grad_through_auto_matches_finite_differences(fd_jacobian):
     fd, values = fd_jacobian
     grad = jax.jit(jax.grad(lambda th: _outputs(th)[0]))(jnp.asarray(THETA))
-    np.testing.assert_allclose(np.asarray(grad) * THETA / values[0], fd[0] * THETA / values[0], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(
+        np.asarray(grad) * THETA / values[0], fd[0] * THETA / values[0], rtol=0, atol=1e-6
+    )
 
 
 def test_auto_under_jit_uses_the_quadrature():
@@ -185,11 +207,19 @@ def test_a_model_is_the_one_calling_convention():
     same Model; giving both is refused by name."""
     model = rbjax.Model(gas="none", blocked_force="momentum", damping=rbjax.KelvinVoigt(30.0))
     by_model = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model)
-    by_keywords = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, gas="none", blocked_force="momentum", damping=rbjax.KelvinVoigt(30.0))
+    by_keywords = rbjax.simulate(
+        1.0,
+        rbjax.JIS_RUBBER_BALL,
+        gas="none",
+        blocked_force="momentum",
+        damping=rbjax.KelvinVoigt(30.0),
+    )
     assert by_model.model == by_keywords.model
     assert float(by_model.contact_time_s) == float(by_keywords.contact_time_s)
     elastic = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, rbjax.Model(gas="none"))
-    assert abs(float(elastic.contact_time_s) - float(by_model.contact_time_s)) > 1e-5  # the model is used
+    assert (
+        abs(float(elastic.contact_time_s) - float(by_model.contact_time_s)) > 1e-5
+    )  # the model is used
     with pytest.raises(ValueError, match="keyword options \\['gas'\\]"):
         rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model, gas="none")
     with pytest.raises(ValueError, match="model="):

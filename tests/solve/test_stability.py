@@ -123,7 +123,9 @@ def test_gas_none_points_are_correct(near_singular):
         if i == 0:
             assert ref.max_deflection_m > 0.9 * 2.0 * BALL.radius_m  # really close to 2R
         for field in FIELDS + ("max_deflection_m",):
-            assert float(getattr(near_singular, field)[i]) == pytest.approx(getattr(ref, field), rel=REL), (h, e, field)
+            assert float(getattr(near_singular, field)[i]) == pytest.approx(
+                getattr(ref, field), rel=REL
+            ), (h, e, field)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -146,7 +148,9 @@ def test_failed_solve_gives_a_nan_history_not_a_plausible_one():
     assert np.asarray(bad.status).tolist() == [rbjax.STATUS_CODES["step_limit"]] * 2
     assert np.all(np.isnan(np.asarray(bad.force_N))) and not np.any(np.asarray(bad.in_contact))
     assert np.asarray(good.status).tolist() == [0, 0]
-    assert np.all(np.isfinite(np.asarray(good.force_N))) and np.max(np.asarray(good.force_N)) > 400.0
+    assert (
+        np.all(np.isfinite(np.asarray(good.force_N))) and np.max(np.asarray(good.force_N)) > 400.0
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -169,7 +173,10 @@ def test_heavy_damping_is_correct(damped):
     for idx in np.ndindex(h.shape):
         ref = reference_impact(h[idx], BALL, damping=("kv", float(c[idx])))
         for field in FIELDS:
-            assert float(getattr(res, field)[idx]) == pytest.approx(getattr(ref, field), rel=REL), (idx, field)
+            assert float(getattr(res, field)[idx]) == pytest.approx(getattr(ref, field), rel=REL), (
+                idx,
+                field,
+            )
         assert 0.0 <= float(res.restitution[idx]) < 0.2  # strongly over-damped: little rebound
 
 
@@ -234,13 +241,20 @@ def test_reverse_gradient_tiny_height():
         res = rbjax.simulate(1e-3, BALL.replace(youngs_Pa=e, mass_kg=m))
         return jnp.stack([res.contact_time_s, res.peak_force_N])
 
-    grad = np.array([float(g) for g in jax.jit(jax.grad(lambda e, m: outputs(e, m)[0], argnums=(0, 1)))(e0, m0)])
+    grad = np.array(
+        [float(g) for g in jax.jit(jax.grad(lambda e, m: outputs(e, m)[0], argnums=(0, 1)))(e0, m0)]
+    )
 
     def ref(e, m):
         r = reference_impact(1e-3, BALL.replace(youngs_Pa=e, mass_kg=m))
         return r.contact_time_s
 
-    fd = np.array([_central_difference(lambda x: ref(x, m0), e0, 1e-4), _central_difference(lambda x: ref(e0, x), m0, 1e-4)])
+    fd = np.array(
+        [
+            _central_difference(lambda x: ref(x, m0), e0, 1e-4),
+            _central_difference(lambda x: ref(e0, x), m0, 1e-4),
+        ]
+    )
     assert np.all(np.isfinite(grad))
     np.testing.assert_allclose(grad, fd, rtol=1e-5)
 
@@ -252,7 +266,9 @@ def test_forward_derivatives_heavy_damping_match_finite_differences():
     e = jnp.array([1.6e6, 1.6e6])
 
     def outputs(h, e, c):
-        r = rbjax.simulate(h, BALL.replace(youngs_Pa=e), damping=rbjax.KelvinVoigt(c), solver=FORWARD)
+        r = rbjax.simulate(
+            h, BALL.replace(youngs_Pa=e), damping=rbjax.KelvinVoigt(c), solver=FORWARD
+        )
         return jnp.stack([r.contact_time_s, r.peak_force_N], axis=-1)
 
     zeros = jnp.zeros(2)
@@ -262,6 +278,21 @@ def test_forward_derivatives_heavy_damping_match_finite_differences():
     for i in range(2):
         hi, ei, ci = float(h[i]), float(e[i]), float(c[i])
         value = _ref_outputs(hi, ei, ci)
-        _assert_elasticity(np.asarray(d_h[i]), _central_difference(lambda x: _ref_outputs(x, ei, ci), hi, 1e-4), value, hi)
-        _assert_elasticity(np.asarray(d_e[i]), _central_difference(lambda x: _ref_outputs(hi, x, ci), ei, 1e-4), value, ei)
-        _assert_elasticity(np.asarray(d_c[i]), _central_difference(lambda x: _ref_outputs(hi, ei, x), ci, 1e-4), value, ci)
+        _assert_elasticity(
+            np.asarray(d_h[i]),
+            _central_difference(lambda x: _ref_outputs(x, ei, ci), hi, 1e-4),
+            value,
+            hi,
+        )
+        _assert_elasticity(
+            np.asarray(d_e[i]),
+            _central_difference(lambda x: _ref_outputs(hi, x, ci), ei, 1e-4),
+            value,
+            ei,
+        )
+        _assert_elasticity(
+            np.asarray(d_c[i]),
+            _central_difference(lambda x: _ref_outputs(hi, ei, x), ci, 1e-4),
+            value,
+            ci,
+        )

@@ -42,7 +42,11 @@ def test_bad_height_inside_an_array(bad):
         ("poisson", -1.0),
         ("poisson", -1.5),
         ("poisson", math.nan),
-        *[(f, v) for f in ("youngs_Pa", "radius_m", "wall_m", "mass_kg") for v in (0.0, -1.0, math.nan, math.inf)],
+        *[
+            (f, v)
+            for f in ("youngs_Pa", "radius_m", "wall_m", "mass_kg")
+            for v in (0.0, -1.0, math.nan, math.inf)
+        ],
     ],
 )
 def test_bad_ball_field(field, value):
@@ -167,7 +171,14 @@ def test_raise_for_status_returns_the_result_when_ok():
 # records, sample times, parameter files, sweeps
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [({"rate_Hz": -1.0}, "rate_Hz"), ({"duration_s": float("nan")}, "duration_s"), ({"duration_s": 1e-9}, "duration_s")])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"rate_Hz": -1.0}, "rate_Hz"),
+        ({"duration_s": float("nan")}, "duration_s"),
+        ({"duration_s": 1e-9}, "duration_s"),
+    ],
+)
 def test_bad_record_for_a_history(kwargs, name):
     result = rbjax.simulate(1.0)
     with pytest.raises(ValueError, match=name):
@@ -183,7 +194,17 @@ def test_bad_sample_times_for_a_trajectory(times):
 @pytest.mark.parametrize(
     ("model", "match"),
     [
-        ({"damping": {"name": "zener", "stiffness_ratio": 1.0, "relaxation_time_s": 1e-3, "foo": 1}}, "unknown keys"),
+        (
+            {
+                "damping": {
+                    "name": "zener",
+                    "stiffness_ratio": 1.0,
+                    "relaxation_time_s": 1e-3,
+                    "foo": 1,
+                }
+            },
+            "unknown keys",
+        ),
         ({"damping": 5}, "damping"),
         ({"stiffening": {"b": 1.0}}, "stiffening"),
         (3, "model"),
@@ -204,7 +225,14 @@ def test_sweep_samples_are_validated_jointly():
         evaluate({"radius_m": np.array([0.09, 0.03]), "wall_m": np.array([0.03, 0.04])})
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [({"extra_weights": {"lfe": float("nan")}}, "extra_weights"), ({"max_steps": -1}, "max_steps"), ({"max_steps": 2.5}, "max_steps")])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"extra_weights": {"lfe": float("nan")}}, "extra_weights"),
+        ({"max_steps": -1}, "max_steps"),
+        ({"max_steps": 2.5}, "max_steps"),
+    ],
+)
 def test_bad_fit_options(kwargs, name):
     from rbjax.fit import fit
 
@@ -216,8 +244,12 @@ def test_record_features_of_a_cut_off_pulse_are_nan_not_made_up():
     from rbjax.fit import record_features
 
     t = np.arange(441) / 44100.0
-    whole = np.where(t < 0.005, 0.0, np.sin(np.pi * (t - 0.005) / 0.004)).clip(min=0.0)  # 4 ms pulse, inside
+    whole = np.where(t < 0.005, 0.0, np.sin(np.pi * (t - 0.005) / 0.004)).clip(
+        min=0.0
+    )  # 4 ms pulse, inside
     cut = np.sin(np.pi * (t + 0.001) / 0.004).clip(min=0.0)  # already at 70 % of its peak at t = 0
     f = record_features(np.stack([whole, cut]), 44100.0)
-    assert f["contact_time_s"][0] == pytest.approx(0.004 * (1 - 2 * np.arcsin(0.05) / np.pi), rel=1e-3)
+    assert f["contact_time_s"][0] == pytest.approx(
+        0.004 * (1 - 2 * np.arcsin(0.05) / np.pi), rel=1e-3
+    )
     assert np.isnan(f["contact_time_s"][1]) and np.isnan(f["onset_s"][1])

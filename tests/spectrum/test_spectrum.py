@@ -47,7 +47,9 @@ def half_sine_psd(f_Hz, F0_N=F0, T_s=T_PULSE):
 
 def half_sine_band_energy(lo_Hz, hi_Hz, F0_N=F0, T_s=T_PULSE):
     """One-sided energy in [lo, hi]: 2 ∫ |F(f)|² df (scipy quad)."""
-    value, _ = quad(half_sine_psd, lo_Hz, hi_Hz, args=(F0_N, T_s), limit=400, epsabs=0.0, epsrel=1e-11)
+    value, _ = quad(
+        half_sine_psd, lo_Hz, hi_Hz, args=(F0_N, T_s), limit=400, epsabs=0.0, epsrel=1e-11
+    )
     return 2.0 * value
 
 
@@ -102,7 +104,9 @@ def test_lfe_total_is_eq11(pulse):
     """L_FE = 10 log10(∫F²dt / (T0 F0²)); a half-sine of F0, T has ∫F² = F0² T/2."""
     expected = 10 * np.log10(np.sum(pulse**2) / RATE)
     assert float(S.lfe_total_dB(pulse, RATE)) == pytest.approx(expected, abs=1e-12)
-    assert float(S.lfe_total_dB(pulse, RATE)) == pytest.approx(10 * np.log10(F0**2 * T_PULSE / 2), abs=1e-9)
+    assert float(S.lfe_total_dB(pulse, RATE)) == pytest.approx(
+        10 * np.log10(F0**2 * T_PULSE / 2), abs=1e-9
+    )
     assert float(S.lfe_dB(4.0, T0_s=2.0, F0_N=2.0)) == pytest.approx(10 * np.log10(0.5), abs=1e-14)
 
 
@@ -116,7 +120,9 @@ def test_contiguous_bands_tiling_0_to_nyquist_add_up_to_total(n):
     assert energies.shape == (2, cuts.size - 1)
     total = np.sum(force**2, axis=-1) / RATE
     np.testing.assert_allclose(jnp.sum(energies, axis=-1), total, rtol=1e-12)
-    np.testing.assert_allclose(S.lfe_dB(jnp.sum(energies, axis=-1)), S.lfe_total_dB(force, RATE), atol=1e-10)
+    np.testing.assert_allclose(
+        S.lfe_dB(jnp.sum(energies, axis=-1)), S.lfe_total_dB(force, RATE), atol=1e-10
+    )
 
 
 def test_band_membership_is_half_open():
@@ -195,7 +201,9 @@ def test_lfe_third_octave_uses_iec_thirds(pulse):
     _, lo, hi = iec_edges(3, THIRD_X)
     got = S.lfe_third_octave_dB(pulse, RATE)
     assert got.shape == (len(S.THIRD_OCTAVE_BANDS),)
-    np.testing.assert_allclose(got, 10 * np.log10(S.band_energies_N2s(pulse, RATE, lo, hi)), atol=1e-12)
+    np.testing.assert_allclose(
+        got, 10 * np.log10(S.band_energies_N2s(pulse, RATE, lo, hi)), atol=1e-12
+    )
     # three thirds make an octave (the edges coincide): energies add up
     oct_e = 10 ** (np.asarray(S.lfe_octave_dB(pulse, RATE)) / 10)
     thirds_e = 10 ** (np.asarray(got) / 10)  # (25, 31.5, 40) make the 31.5 Hz octave, ...
@@ -358,6 +366,7 @@ def test_grad_lfe_total_wrt_samples():
     force = rng.standard_normal(257)
     g = jax.jit(jax.grad(lambda f: S.lfe_total_dB(f, RATE)))(force)
     np.testing.assert_allclose(g, 20 * force / (np.log(10) * np.sum(force**2)), rtol=1e-10)
+
     # and through the band filter: the bands tile 0..Nyquist, so they sum to the total
     def total_from_bands(f):
         return 10 * jnp.log10(jnp.sum(S.band_energies_N2s(f, RATE, [0.0, 1000.0], [1000.0, RATE])))
@@ -377,7 +386,9 @@ def test_lfe_increase_per_doubling_known_slopes():
     lfe = intercepts + np.log2(h)[:, None] * slopes  # (heights, bands)
     got = S.lfe_increase_per_doubling_dB(h, lfe)
     np.testing.assert_allclose(got, slopes, rtol=1e-12)
-    np.testing.assert_allclose(S.lfe_increase_per_doubling_dB(h, lfe, ref_height_m=0.1), slopes, rtol=1e-12)
+    np.testing.assert_allclose(
+        S.lfe_increase_per_doubling_dB(h, lfe, ref_height_m=0.1), slopes, rtol=1e-12
+    )
     # with scatter: the least-squares slope, as np.polyfit computes it
     rng = np.random.default_rng(0)
     noisy = lfe + rng.normal(0, 0.5, lfe.shape)

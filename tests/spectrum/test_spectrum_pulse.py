@@ -44,7 +44,9 @@ def padded_band_energies(x, n_record, lower, upper, rate=RATE):
     if n_record % 2 == 0:
         weight[-1] = 1.0
     esd = weight * np.abs(spectrum) ** 2 / rate**2  # (N²·s)/Hz per bin
-    per_band = [np.sum(esd[..., (freq >= lo) & (freq < hi)], axis=-1) for lo, hi in zip(lower, upper)]
+    per_band = [
+        np.sum(esd[..., (freq >= lo) & (freq < hi)], axis=-1) for lo, hi in zip(lower, upper)
+    ]
     return np.stack(per_band, axis=-1) * (rate / n_record)
 
 
@@ -88,7 +90,9 @@ def test_band_energies_equal_the_zero_padded_record(kind, n_record):
         np.testing.assert_allclose(got, expected, rtol=1e-12, atol=0.0)
 
 
-@pytest.mark.parametrize("n,n_record", [(1, 10), (2, 7), (3, 44100), (37, 44101), (300, 1000), (513, 44100)])
+@pytest.mark.parametrize(
+    "n,n_record", [(1, 10), (2, 7), (3, 44100), (37, 44101), (300, 1000), (513, 44100)]
+)
 def test_band_energies_small_and_odd_pulses(n, n_record):
     """Short and odd pulse lengths (odd FFT sizes inside), bands from DC to past Nyquist."""
     x = records("random", (2,), n)
@@ -140,7 +144,9 @@ def test_large_batch_in_blocks():
     got = jax.jit(lambda f: S.band_energies_N2s(f, RATE, lower, upper, n_record=8000))(x)
     np.testing.assert_allclose(got, expected, rtol=1e-12)
     grad = jax.grad(lambda f: jnp.sum(S.band_energies_N2s(f, RATE, lower, upper, n_record=8000)))(x)
-    one = jax.grad(lambda f: jnp.sum(S.band_energies_N2s(f, RATE, lower, upper, n_record=8000)))(x[2, 7])
+    one = jax.grad(lambda f: jnp.sum(S.band_energies_N2s(f, RATE, lower, upper, n_record=8000)))(
+        x[2, 7]
+    )
     np.testing.assert_allclose(grad[2, 7], one, rtol=1e-12, atol=1e-12 * np.max(np.abs(one)))
 
 

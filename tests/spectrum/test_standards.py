@@ -46,9 +46,17 @@ def test_printed_band_table():
 
 def test_printed_mechanical_properties():
     tol = ST.RUBBER_BALL_TOLERANCES
-    assert (tol.drop_height.nominal, tol.drop_height.minus, tol.drop_height.plus) == (1.00, 0.01, 0.01)
+    assert (tol.drop_height.nominal, tol.drop_height.minus, tol.drop_height.plus) == (
+        1.00,
+        0.01,
+        0.01,
+    )
     assert tol.drop_height.unit == "m"
-    assert (tol.contact_time.nominal, tol.contact_time.minus, tol.contact_time.plus) == (0.020, 0.002, 0.002)
+    assert (tol.contact_time.nominal, tol.contact_time.minus, tol.contact_time.plus) == (
+        0.020,
+        0.002,
+        0.002,
+    )
     assert tol.contact_time.unit == "s"
     assert (tol.mass.nominal, tol.mass.minus, tol.mass.plus) == (2.5, 0.1, 0.1)
     assert tol.mass.unit == "kg"
@@ -63,7 +71,14 @@ def test_printed_mechanical_properties():
 def test_clauses_cite_all_three_standards():
     tol = ST.RUBBER_BALL_TOLERANCES
     for item in (*tol.octave_bands, tol.drop_height, tol.contact_time, tol.mass, tol.restitution):
-        for ref in ("ISO 16283-2:2020", "Table A.1", "ISO 10140-5:2010", "Table F.1", "JIS A 1418-2:2019", "Table A.2"):
+        for ref in (
+            "ISO 16283-2:2020",
+            "Table A.1",
+            "ISO 10140-5:2010",
+            "Table F.1",
+            "JIS A 1418-2:2019",
+            "Table A.2",
+        ):
             assert ref in item.clause
 
 
@@ -78,7 +93,9 @@ def test_table_is_immutable():
 
 
 def test_nominal_values_pass_with_full_margin():
-    res = ST.check_conformance(NOMINAL, contact_time_s=0.020, restitution=0.8, mass_kg=2.5, height_m=1.0)
+    res = ST.check_conformance(
+        NOMINAL, contact_time_s=0.020, restitution=0.8, mass_kg=2.5, height_m=1.0
+    )
     assert res.passed and bool(res)
     assert [it.name for it in res.items] == [
         "L_FE 31.5 Hz", "L_FE 63 Hz", "L_FE 125 Hz", "L_FE 250 Hz", "L_FE 500 Hz",
@@ -105,7 +122,9 @@ def test_values_on_the_limits_pass_with_zero_margin(limits):
 
 def test_out_of_range_fails_with_negative_margin():
     values = [37.5, 33.0, 23.0, 14.0, 12.5]  # 0.5 below, 0.5 above, inside, 1.0 below, inside
-    res = ST.check_conformance(values, contact_time_s=0.0235, restitution=0.65, mass_kg=2.45, height_m=1.02)
+    res = ST.check_conformance(
+        values, contact_time_s=0.0235, restitution=0.65, mass_kg=2.45, height_m=1.02
+    )
     assert not res.passed and not bool(res)
     by_name = {it.name: it for it in res.items}
     assert by_name["L_FE 31.5 Hz"].margin == pytest.approx(-0.5)

@@ -33,7 +33,14 @@ def test_items_and_geometries():
     assert RUBBER_BALL_TOLERANCES.mass.nominal == 2.5
 
 
-@pytest.mark.parametrize(("kwargs", "needle"), [({"geometry": "din"}, "geometry='din'"), ({"n_starts": 0}, "n_starts=0"), ({"model": "maxwell"}, "model='maxwell'")])
+@pytest.mark.parametrize(
+    ("kwargs", "needle"),
+    [
+        ({"geometry": "din"}, "geometry='din'"),
+        ({"n_starts": 0}, "n_starts=0"),
+        ({"model": "maxwell"}, "model='maxwell'"),
+    ],
+)
 def test_bad_design_input_is_named(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
         design(**kwargs)

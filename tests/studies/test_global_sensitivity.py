@@ -75,9 +75,19 @@ def test_sobol_indices_of_the_ishigami_function_on_the_sobol_sequence():
 
 def test_sobol_indices_of_a_linear_model_both_designs():
     for design, n in (("sobol", 1024), ("random", 1000)):
-        res = sobol_indices(linear, LINEAR_RANGES, n, second_order=False, design=design, n_bootstrap=100, confidence=0.99)
+        res = sobol_indices(
+            linear,
+            LINEAR_RANGES,
+            n,
+            second_order=False,
+            design=design,
+            n_bootstrap=100,
+            confidence=0.99,
+        )
         assert res.n_evaluations == n * 5 and res.second_order is None
-        assert within(res.first_order_ci["y"], LINEAR_S) and within(res.total_order_ci["y"], LINEAR_S), design
+        assert within(res.first_order_ci["y"], LINEAR_S) and within(
+            res.total_order_ci["y"], LINEAR_S
+        ), design
         np.testing.assert_allclose(res.total_order["y"], LINEAR_S, atol=0.02, err_msg=design)
     assert res.driver("y") == "a"
 
@@ -135,13 +145,17 @@ def test_pawn_ranks_the_linear_model_and_finds_no_influence_of_an_absent_input()
 
 
 def _ishigami_jacobian(x):
-    grad = jax.vmap(jax.grad(lambda v: jnp.sin(v[0]) + A * jnp.sin(v[1]) ** 2 + B * v[2] ** 4 * jnp.sin(v[0])))
+    grad = jax.vmap(
+        jax.grad(lambda v: jnp.sin(v[0]) + A * jnp.sin(v[1]) ** 2 + B * v[2] ** 4 * jnp.sin(v[0]))
+    )
     return np.asarray(grad(jnp.stack([x["x1"], x["x2"], x["x3"]], axis=1)))
 
 
 def test_dgsm_from_exact_gradients_matches_the_analytic_measures_and_salib():
     # Sobol' & Kucherenko (2009): ν_i = E[(∂f/∂x_i)²] of the Ishigami function
-    nu = np.array([0.5 * (1 + 2 * B * np.pi**4 / 5 + B**2 * np.pi**8 / 9), A**2 / 2, 8 * B**2 * np.pi**6 / 7])
+    nu = np.array(
+        [0.5 * (1 + 2 * B * np.pi**4 / 5 + B**2 * np.pi**8 / 9), A**2 / 2, 8 * B**2 * np.pi**6 / 7]
+    )
     res = dgsm_measures(ishigami, PI_RANGES, 1024, jacobian=_ishigami_jacobian)
     assert res.n_evaluations == 1024 * 4 and res.n_valid["y"] == 1024
     assert within(res.nu_ci["y"], nu)
@@ -182,7 +196,11 @@ def test_results_give_table_plot_json(tmp_path):
         fig = res.plot()
         fig.savefig(tmp_path / f"{summary['method']}.png")
         assert (tmp_path / f"{summary['method']}.png").stat().st_size > 1000
-    assert set(json.loads(json.dumps(results[0].to_dict()))["outputs"]["y"]["second_order"]) == {"a,b", "a,c", "b,c"}
+    assert set(json.loads(json.dumps(results[0].to_dict()))["outputs"]["y"]["second_order"]) == {
+        "a,b",
+        "a,c",
+        "b,c",
+    }
 
 
 def test_bad_input_is_named():

@@ -143,11 +143,19 @@ def test_plot_growth_draws_data_and_models():
     from rbjax.plot import plot_growth
 
     h = np.array([0.1, 0.2, 0.4, 0.8])
-    data = growth_per_doubling_dB(np.repeat(h, 2), 60 + 3 * np.log2(np.repeat(h, 2))[:, None] + np.arange(6) + np.tile([0, 0.1], 4)[:, None], label="data")
+    data = growth_per_doubling_dB(
+        np.repeat(h, 2),
+        60 + 3 * np.log2(np.repeat(h, 2))[:, None] + np.arange(6) + np.tile([0, 0.1], 4)[:, None],
+        label="data",
+    )
     model = growth_per_doubling_dB(h, 60 + 3 * np.log2(h)[:, None] * np.ones(6), label="model")
     ax = Figure().subplots()
     fig = plot_growth([data, model], ax, paper=[3, 5, 3, 3, 3, 3], title="growth")
     assert fig is ax.figure
-    assert sorted(t.get_text() for t in ax.get_legend().get_texts()) == ["data", "model", "paper (≈, §4.2)"]
+    assert sorted(t.get_text() for t in ax.get_legend().get_texts()) == [
+        "data",
+        "model",
+        "paper (≈, §4.2)",
+    ]
     with pytest.raises(ValueError, match="empty"):
         plot_growth([], ax)

@@ -30,7 +30,12 @@ README_HELD_OUT = {
 @pytest.fixture(scope="module")
 def selection():
     data = prepare_data(load_data(examples_dir()))
-    return select_model(data, ["hunt-crossley", "hunt-crossley+ball-mode"], blocked_forces=("momentum",), progress=False)
+    return select_model(
+        data,
+        ["hunt-crossley", "hunt-crossley+ball-mode"],
+        blocked_forces=("momentum",),
+        progress=False,
+    )
 
 
 def test_the_ball_mode_is_recommended_and_nothing_else_is_within_the_noise(selection):

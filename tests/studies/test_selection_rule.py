@@ -35,7 +35,9 @@ class Stand:
         self.label = label
         self.n_physical = n_physical
         self.fold_errors_pct = np.asarray(folds, dtype=float)
-        self.cv_error_pct = float(np.mean(self.fold_errors_pct))  # as rbjax.studies.selection.Candidate
+        self.cv_error_pct = float(
+            np.mean(self.fold_errors_pct)
+        )  # as rbjax.studies.selection.Candidate
 
     def __repr__(self):
         return f"Stand({self.label!r}, p={self.n_physical}, cv={self.cv_error_pct:.3g} %)"
@@ -115,7 +117,11 @@ def test_equal_parameter_counts_go_to_the_smaller_error():
     # best: zener (p = 3), mean 6 %. kv (p = 2): excess mean 0.5 (mean 6.5 %); hc (p = 2):
     # excess mean 0.2 (mean 6.2 %); both within (≤ SE 1), both p = 2: the smaller error, hc.
     # kv comes first in the list, so the first of the tied counts would be the wrong answer.
-    candidates = [Stand("kv", 2, excess(0.5)), Stand("hc", 2, excess(0.2)), Stand("zener", 3, BEST_FOLDS)]
+    candidates = [
+        Stand("kv", 2, excess(0.5)),
+        Stand("hc", 2, excess(0.2)),
+        Stand("zener", 3, BEST_FOLDS),
+    ]
     assert choose(candidates) == ("hc", {"zener", "kv", "hc"})
 
 

@@ -46,10 +46,15 @@ def central_difference(height_m, name, step=1e-6, **kw):
     """∂outputs/∂name by a central difference of relative step ``step`` on the reference."""
     if name == "height_m":
         dx = step * height_m
-        return (reference_outputs(height_m + dx, **kw) - reference_outputs(height_m - dx, **kw)) / (2 * dx)
+        return (reference_outputs(height_m + dx, **kw) - reference_outputs(height_m - dx, **kw)) / (
+            2 * dx
+        )
     x = float(getattr(BALL, name))
     dx = step * x
-    up, down = reference_outputs(height_m, **kw, **{name: x + dx}), reference_outputs(height_m, **kw, **{name: x - dx})
+    up, down = (
+        reference_outputs(height_m, **kw, **{name: x + dx}),
+        reference_outputs(height_m, **kw, **{name: x - dx}),
+    )
     return (up - down) / (2 * dx)
 
 
@@ -83,7 +88,9 @@ def test_elasticities_obey_the_shell_stiffness_scaling(local):
     for o in local.outputs:
         e_young = el[o]["youngs_Pa"][:2]
         np.testing.assert_allclose(el[o]["wall_m"][:2], 2.0 * e_young, rtol=1e-6, err_msg=o)
-        np.testing.assert_allclose(el[o]["poisson"][:2], nu**2 / (1 - nu**2) * e_young, rtol=1e-6, err_msg=o)
+        np.testing.assert_allclose(
+            el[o]["poisson"][:2], nu**2 / (1 - nu**2) * e_young, rtol=1e-6, err_msg=o
+        )
     # elasticity of a scalar output: ∂ln y/∂ln x, checked on the reference by a log-difference
     x, step = float(BALL.youngs_Pa), 1e-6
     up = reference_outputs(1.0, lfe=False, youngs_Pa=x * (1 + step))
@@ -122,7 +129,9 @@ def test_damping_parameter_sensitivity_matches_reference():
     up = reference_outputs(1.0, damping=("kv", c + dc), lfe=False)
     down = reference_outputs(1.0, damping=("kv", c - dc), lfe=False)
     fd = (up - down) / (2 * dc)
-    np.testing.assert_allclose([s.jacobian[o]["damping_Ns_per_m"][0] for o in s.outputs], fd, rtol=1e-4)
+    np.testing.assert_allclose(
+        [s.jacobian[o]["damping_Ns_per_m"][0] for o in s.outputs], fd, rtol=1e-4
+    )
     fd_e = central_difference(1.0, "youngs_Pa", damping=("kv", c), lfe=False)
     np.testing.assert_allclose([s.jacobian[o]["youngs_Pa"][0] for o in s.outputs], fd_e, rtol=1e-4)
 
@@ -130,7 +139,9 @@ def test_damping_parameter_sensitivity_matches_reference():
 def test_unknown_parameter_is_rejected():
     with pytest.raises(ValueError, match="stiffness_Pa.*valid"):
         local_sensitivity(1.0, wrt=("stiffness_Pa",))
-    with pytest.raises(ValueError, match="damping_Ns_per_m"):  # a damping field without a damping model
+    with pytest.raises(
+        ValueError, match="damping_Ns_per_m"
+    ):  # a damping field without a damping model
         local_sensitivity(1.0, wrt=("damping_Ns_per_m",))
 
 
@@ -164,7 +175,9 @@ def test_conformance_probability_of_a_uniform_drop_height_against_analytic_fract
     p_rest = fraction(lambda h: -restitution(h), -tol.restitution.upper, -tol.restitution.lower)
     assert 0.1 < p_band < 0.9 and 0.1 < p_rest < 0.9  # a case that can fail either way
 
-    res = conformance_probability(2000, {"height_m": ("uniform", lo_h, hi_h)}, seed=5, confidence=0.999, chunk_size=64)
+    res = conformance_probability(
+        2000, {"height_m": ("uniform", lo_h, hi_h)}, seed=5, confidence=0.999, chunk_size=64
+    )
     assert res.n_valid == 2000
     for key, p in (("lfe_31.5_dB", p_band), ("restitution", p_rest)):
         low, high = res.interval[key]
@@ -175,14 +188,23 @@ def test_conformance_probability_of_a_uniform_drop_height_against_analytic_fract
     s = res.samples
     for i in range(0, 2000, 97):
         bands = [s[f"lfe_{b}_dB"][i] for b in ("31.5", "63", "125", "250", "500", "1000")]
-        expected = check_conformance(bands, contact_time_s=s["contact_time_s"][i], restitution=s["restitution"][i], mass_kg=2.5, height_m=s["input_height_m"][i])
+        expected = check_conformance(
+            bands,
+            contact_time_s=s["contact_time_s"][i],
+            restitution=s["restitution"][i],
+            mass_kg=2.5,
+            height_m=s["input_height_m"][i],
+        )
         assert bool(s["pass_overall"][i]) == expected.passed
         assert bool(s["pass_lfe_31.5_dB"][i]) == expected["L_FE 31.5 Hz"].passed
 
 
 def test_conformance_flags_on_the_limits():
     tol = RUBBER_BALL_TOLERANCES
-    values = {f"lfe_{b}_dB": np.array([t.lower, t.upper, t.upper + 1e-9]) for b, t in tol.lfe_octave_dB.items()}
+    values = {
+        f"lfe_{b}_dB": np.array([t.lower, t.upper, t.upper + 1e-9])
+        for b, t in tol.lfe_octave_dB.items()
+    }
     values |= {
         "contact_time_s": np.full(3, 0.02),
         "restitution": np.full(3, 0.8),
@@ -209,7 +231,19 @@ def test_bad_distribution_is_rejected():
 
 def test_cli_sensitivity_json(local, capsys):
     # lower-case names, all of them: the same parameter set as the fixture (no recompile)
-    argv = ["sensitivity", "--height-m", *map(str, HEIGHTS), "--wrt", "HEIGHT_M", "radius_m", "wall_m", "mass_kg", "youngs_pa", "poisson", "--json"]
+    argv = [
+        "sensitivity",
+        "--height-m",
+        *map(str, HEIGHTS),
+        "--wrt",
+        "HEIGHT_M",
+        "radius_m",
+        "wall_m",
+        "mass_kg",
+        "youngs_pa",
+        "poisson",
+        "--json",
+    ]
     assert main(argv) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [r["height_m"] for r in rows] == HEIGHTS
@@ -217,7 +251,9 @@ def test_cli_sensitivity_json(local, capsys):
     assert set(row) >= {"height_m", "status", "jacobian", "elasticity", "values"}
     assert set(row["jacobian"]) == set(local.outputs)
     assert set(row["jacobian"]["lfe_63_dB"]) == set(local.parameters)
-    assert row["jacobian"]["contact_time_s"]["youngs_Pa"] == pytest.approx(local.jacobian["contact_time_s"]["youngs_Pa"][1], rel=1e-12)
+    assert row["jacobian"]["contact_time_s"]["youngs_Pa"] == pytest.approx(
+        local.jacobian["contact_time_s"]["youngs_Pa"][1], rel=1e-12
+    )
     assert rows[2]["jacobian"]["peak_force_N"]["mass_kg"] is None  # NaN → null for a flagged height
 
 

@@ -46,22 +46,36 @@ FIELDS = ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
 
 def reference(height_m, damping=None, **changes):
     """Scalar outputs and L_FE per octave band of the scipy reference (44.1 kHz × 1 s record)."""
-    ball = types.SimpleNamespace(**{k: float(getattr(rbjax.JIS_RUBBER_BALL, k)) for k in FIELDS} | changes)
+    ball = types.SimpleNamespace(
+        **{k: float(getattr(rbjax.JIS_RUBBER_BALL, k)) for k in FIELDS} | changes
+    )
     r = ref.reference_impact(height_m, ball, damping=damping)
     n = int(math.ceil(r.contact_time_s * RATE)) + 2
     force = np.zeros(int(RATE))
     force[:n] = r.force_N(np.arange(n) / RATE)
-    return {"contact_time_s": r.contact_time_s, "peak_force_N": r.peak_force_N, "restitution": r.restitution, "max_deflection_m": r.max_deflection_m} | dict(
-        zip(rbjax.solve.batch.lfe_output_names(), np.asarray(lfe_octave_dB(force, RATE)))
-    )
+    return {
+        "contact_time_s": r.contact_time_s,
+        "peak_force_N": r.peak_force_N,
+        "restitution": r.restitution,
+        "max_deflection_m": r.max_deflection_m,
+    } | dict(zip(rbjax.solve.batch.lfe_output_names(), np.asarray(lfe_octave_dB(force, RATE))))
 
 
-SAMPLES = {"YOUNGS_PA": np.array([1.3e6, 1.9e6, 1.6e6]), "mass_kg": np.array([2.45, 2.55, 2.5]), "height_m": np.array([0.5, 1.2, 1.0])}
+SAMPLES = {
+    "YOUNGS_PA": np.array([1.3e6, 1.9e6, 1.6e6]),
+    "mass_kg": np.array([2.45, 2.55, 2.5]),
+    "height_m": np.array([0.5, 1.2, 1.0]),
+}
 
 
 @pytest.fixture(scope="module")
 def references():
-    return [reference(SAMPLES["height_m"][i], youngs_Pa=SAMPLES["YOUNGS_PA"][i], mass_kg=SAMPLES["mass_kg"][i]) for i in range(3)]
+    return [
+        reference(
+            SAMPLES["height_m"][i], youngs_Pa=SAMPLES["YOUNGS_PA"][i], mass_kg=SAMPLES["mass_kg"][i]
+        )
+        for i in range(3)
+    ]
 
 
 def test_evaluate_matches_scipy_reference(references):
@@ -69,11 +83,18 @@ def test_evaluate_matches_scipy_reference(references):
     assert evaluation_paths(rbjax.Model(damping=rbjax.KelvinVoigt(5.0))) == ("angle", "sampled")
     assert evaluation_paths(rbjax.Model(), rbjax.Solver()) == ("ode", "ode")
     for method, lfe in (("auto", True), ("ode", False)):  # quadrature + sampled history; the ODE
-        out = evaluate(SAMPLES, chunk_size=64, method=method, lfe=lfe)  # chunk 64 as in the CLI test: one compile
+        out = evaluate(
+            SAMPLES, chunk_size=64, method=method, lfe=lfe
+        )  # chunk 64 as in the CLI test: one compile
         assert out["status"].tolist() == [0, 0, 0]
         for i, r in enumerate(references):
-            for k in [*rbjax.solve.batch.SCALAR_OUTPUTS, *(rbjax.solve.batch.lfe_output_names() if lfe else ())]:
-                np.testing.assert_allclose(out[k][i], r[k], rtol=1e-7, err_msg=f"{k} method={method}")
+            for k in [
+                *rbjax.solve.batch.SCALAR_OUTPUTS,
+                *(rbjax.solve.batch.lfe_output_names() if lfe else ()),
+            ]:
+                np.testing.assert_allclose(
+                    out[k][i], r[k], rtol=1e-7, err_msg=f"{k} method={method}"
+                )
 
 
 def test_exact_derivatives_match_central_differences_of_the_reference(references):
@@ -91,7 +112,9 @@ def test_exact_derivatives_match_central_differences_of_the_reference(references
         fd_down = reference(down.pop("height_m"), **down)
         for k in names:
             fd = (fd_up[k] - fd_down[k]) / (2 * step)
-            np.testing.assert_allclose(jac[k][i, j], fd, rtol=2e-4, atol=1e-9 * abs(r[k]) / base[p], err_msg=f"d{k}/d{p}")
+            np.testing.assert_allclose(
+                jac[k][i, j], fd, rtol=2e-4, atol=1e-9 * abs(r[k]) / base[p], err_msg=f"d{k}/d{p}"
+            )
 
 
 def test_flagged_rows_are_computed_again_in_place():
@@ -105,7 +128,14 @@ def test_flagged_rows_are_computed_again_in_place():
     np.testing.assert_array_equal(out["n"][[1, 4, 7]], 64.0)
     many = {"y": np.zeros(200), "n": np.zeros(200)}
     rows = np.arange(0, 200, 2)  # 100 rows: the next power of two
-    _redo(many, rows, _double_plus, {"a": np.arange(200.0), "b": np.arange(200.0)}, np.float64(0.5), sharded_map)
+    _redo(
+        many,
+        rows,
+        _double_plus,
+        {"a": np.arange(200.0), "b": np.arange(200.0)},
+        np.float64(0.5),
+        sharded_map,
+    )
     np.testing.assert_array_equal(many["y"][rows], 2.0 * rows + 0.5)
     np.testing.assert_array_equal(many["n"][rows], 128.0)
 
@@ -136,12 +166,24 @@ SHARDED_SCRIPT = textwrap.dedent(
 def test_sharded_sweep_on_four_cpu_devices_equals_one_device(tmp_path):
     rng = np.random.default_rng(0)
     n = 150  # not a multiple of the 64-impact step: the last step is padded
-    samples = {"youngs_Pa": rng.uniform(1.2e6, 2e6, n), "mass_kg": rng.uniform(2.4, 2.6, n), "height_m": rng.uniform(0.3, 1.6, n)}
+    samples = {
+        "youngs_Pa": rng.uniform(1.2e6, 2e6, n),
+        "mass_kg": rng.uniform(2.4, 2.6, n),
+        "height_m": rng.uniform(0.3, 1.6, n),
+    }
     np.savez(tmp_path / "samples.npz", **samples)
     script = tmp_path / "sharded.py"
     script.write_text(SHARDED_SCRIPT)
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu")
-    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "samples.npz"), str(tmp_path / "four.npz")], env=env, capture_output=True, text=True, timeout=300)
+    env = dict(
+        os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4", JAX_PLATFORMS="cpu"
+    )
+    proc = subprocess.run(
+        [sys.executable, str(script), str(tmp_path / "samples.npz"), str(tmp_path / "four.npz")],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     four = np.load(tmp_path / "four.npz")
     one = evaluate(samples, chunk_size=64)  # this process: one CPU device
@@ -174,7 +216,9 @@ def test_bad_configs_are_rejected(tmp_path):
         run_sweep({"kind": "sobol", "ranges": ranges, "sobol": {"n_levels": 4}})
     with pytest.raises(ValueError, match="n_base=1000 must be a power of two"):
         run_sweep({"kind": "sobol", "ranges": ranges, "sobol": {"n_base": 1000}})
-    with pytest.raises(ValueError, match="kind='hdmr'.*sobol, morris, fast, pawn, dgsm, conformance"):
+    with pytest.raises(
+        ValueError, match="kind='hdmr'.*sobol, morris, fast, pawn, dgsm, conformance"
+    ):
         run_sweep({"kind": "hdmr", "ranges": ranges})
     bad = tmp_path / "bad.toml"
     bad.write_text("kind = \n")
@@ -214,14 +258,25 @@ def test_cli_sweep_sobol_writes_json_and_samples(tmp_path, capsys):
     assert samples["block"].shape == (256,)
     # every saved row is the impact of its saved inputs (scipy reference)
     for i in (0, 100, 255):
-        r = ref.reference_impact(samples["height_m"][i], types.SimpleNamespace(**{k: float(getattr(rbjax.JIS_RUBBER_BALL, k)) for k in ("radius_m", "wall_m", "mass_kg", "poisson")}, youngs_Pa=samples["youngs_Pa"][i]))
+        r = ref.reference_impact(
+            samples["height_m"][i],
+            types.SimpleNamespace(
+                **{
+                    k: float(getattr(rbjax.JIS_RUBBER_BALL, k))
+                    for k in ("radius_m", "wall_m", "mass_kg", "poisson")
+                },
+                youngs_Pa=samples["youngs_Pa"][i],
+            ),
+        )
         np.testing.assert_allclose(samples["contact_time_s"][i], r.contact_time_s, rtol=1e-7)
         np.testing.assert_allclose(samples["restitution"][i], r.restitution, rtol=1e-7)
 
 
 def test_cli_sweep_bad_config_is_one_line_error(tmp_path, capsys):
     config = tmp_path / "bad.toml"
-    config.write_text('kind = "conformance"\n[distributions]\nmass_kg = {kind = "normal", mean = 2.5}\n')
+    config.write_text(
+        'kind = "conformance"\n[distributions]\nmass_kg = {kind = "normal", mean = 2.5}\n'
+    )
     assert main(["sweep", str(config), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and err[-1].startswith("rbjax: error:") and "mass_kg" in err[-1]

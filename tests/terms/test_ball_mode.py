@@ -22,7 +22,12 @@ from scipy_ball_mode_reference import reference_ball_mode_impact
 from scipy_reference import reference_impact
 
 #: (height, μ, f, η): modes at 300 and 800 Hz, μ from 5 to 50, heights 0.1 and 1 m.
-CASES = [(0.1, 20.0, 300.0, 0.1), (1.0, 20.0, 800.0, 0.05), (0.1, 5.0, 800.0, 0.1), (1.0, 50.0, 300.0, 0.02)]
+CASES = [
+    (0.1, 20.0, 300.0, 0.1),
+    (1.0, 20.0, 800.0, 0.05),
+    (0.1, 5.0, 800.0, 0.1),
+    (1.0, 50.0, 300.0, 0.02),
+]
 
 
 def _mode(mu, f, eta):
@@ -71,10 +76,16 @@ def test_force_history_matches_the_reference(case):
 
 def test_damped_momentum_model_with_a_mode_matches_the_reference():
     law = HuntCrossley(0.05)
-    heights = np.array([0.1, 1.0])  # one batch, the shape of the shared-structure test below: one compile
-    batch = rbjax.simulate(heights, BALL, damping=law, blocked_force="momentum", ball_mode=_mode(20.0, 800.0, 0.05))
+    heights = np.array(
+        [0.1, 1.0]
+    )  # one batch, the shape of the shared-structure test below: one compile
+    batch = rbjax.simulate(
+        heights, BALL, damping=law, blocked_force="momentum", ball_mode=_mode(20.0, 800.0, 0.05)
+    )
     for i, h in enumerate(heights):
-        ref = reference_ball_mode_impact(h, BALL, 20.0, 800.0, 0.05, damping=law, blocked_force="momentum")
+        ref = reference_ball_mode_impact(
+            h, BALL, 20.0, 800.0, 0.05, damping=law, blocked_force="momentum"
+        )
         assert float(batch.contact_time_s[i]) == pytest.approx(ref.contact_time_s, rel=1e-9)
         assert float(batch.peak_force_N[i]) == pytest.approx(ref.max_force_N, rel=1e-8)
         assert float(batch.restitution[i]) == pytest.approx(ref.restitution, rel=1e-8)
@@ -94,7 +105,9 @@ def test_peak_force_is_the_global_maximum_when_the_force_rings():
     assert float(res.peak_time_s) == pytest.approx(ref.max_force_time_s, rel=1e-6)
     assert float(res.contact_time_s) == pytest.approx(ref.contact_time_s, rel=1e-9)
     times = np.linspace(ref.max_force_time_s - 2e-5, ref.max_force_time_s + 2e-5, 41)
-    assert float(np.max(_history(h, times, _mode(mu, f, eta)))) == pytest.approx(ref.max_force_N, rel=1e-6)
+    assert float(np.max(_history(h, times, _mode(mu, f, eta)))) == pytest.approx(
+        ref.max_force_N, rel=1e-6
+    )
 
 
 # --- limits ------------------------------------------------------------------------------------
@@ -108,7 +121,9 @@ def test_zero_mass_ratio_is_the_model_without_the_mode(h):
     assert float(res.peak_force_N) == pytest.approx(ref.peak_force_N, rel=1e-9)
     assert float(res.restitution) == pytest.approx(ref.restitution, rel=1e-9)
     times = np.arange(0.0, 1.05 * ref.contact_time_s, 1 / 44_100)
-    np.testing.assert_allclose(_history(h, times, BallMode.off()), ref.force_N(times), rtol=0, atol=1e-7 * ref.peak_force_N)
+    np.testing.assert_allclose(
+        _history(h, times, BallMode.off()), ref.force_N(times), rtol=0, atol=1e-7 * ref.peak_force_N
+    )
 
 
 @pytest.mark.parametrize("h", [0.1, 1.0])
@@ -132,13 +147,17 @@ HISTORY_SAMPLE_S = 0.006
 def _grad_outputs(theta, solver=None):
     h = GRAD[0]
     mode = BallMode(theta[0], theta[1], theta[2])
-    tc = rbjax.simulate(h, BALL, ball_mode=mode, solver=solver or rbjax.Solver(), method="ode").contact_time_s
+    tc = rbjax.simulate(
+        h, BALL, ball_mode=mode, solver=solver or rbjax.Solver(), method="ode"
+    ).contact_time_s
     return tc
 
 
 def _sample(theta):
     model = rbjax.Model(ball_mode=BallMode(theta[0], theta[1], theta[2]))
-    return rbjax.trajectory(GRAD[0], jnp.array([HISTORY_SAMPLE_S]), BALL, model, rbjax.Solver(adjoint="forward")).force_N[0]
+    return rbjax.trajectory(
+        GRAD[0], jnp.array([HISTORY_SAMPLE_S]), BALL, model, rbjax.Solver(adjoint="forward")
+    ).force_N[0]
 
 
 @pytest.fixture(scope="module")
@@ -151,14 +170,25 @@ def reference_fd():
         plus, minus = theta.copy(), theta.copy()
         plus[i] += step
         minus[i] -= step
-        rp, rm = reference_ball_mode_impact(GRAD[0], BALL, *plus), reference_ball_mode_impact(GRAD[0], BALL, *minus)
-        rows.append([(rp.contact_time_s - rm.contact_time_s) / (2 * step),
-                     (rp.force_N(HISTORY_SAMPLE_S)[0] - rm.force_N(HISTORY_SAMPLE_S)[0]) / (2 * step)])
+        rp, rm = (
+            reference_ball_mode_impact(GRAD[0], BALL, *plus),
+            reference_ball_mode_impact(GRAD[0], BALL, *minus),
+        )
+        rows.append(
+            [
+                (rp.contact_time_s - rm.contact_time_s) / (2 * step),
+                (rp.force_N(HISTORY_SAMPLE_S)[0] - rm.force_N(HISTORY_SAMPLE_S)[0]) / (2 * step),
+            ]
+        )
     return np.array(rows).T
 
 
 def test_jacfwd_of_contact_time_matches_finite_differences(reference_fd):
-    g = np.asarray(jax.jit(jax.jacfwd(lambda t: _grad_outputs(t, rbjax.Solver(adjoint="forward"))))(jnp.asarray(GRAD[1:])))
+    g = np.asarray(
+        jax.jit(jax.jacfwd(lambda t: _grad_outputs(t, rbjax.Solver(adjoint="forward"))))(
+            jnp.asarray(GRAD[1:])
+        )
+    )
     assert np.all(np.isfinite(g)) and np.all(g != 0.0)
     np.testing.assert_allclose(g, reference_fd[0], rtol=1e-4)
 
@@ -168,8 +198,12 @@ class ReverseModeNaN(Exception):
     Lineax refuses the NaN that reaches the event's linear solve."""
 
 
-@pytest.mark.xfail(strict=True, raises=ReverseModeNaN, reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
-                   "event's linear solve (solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses")
+@pytest.mark.xfail(
+    strict=True,
+    raises=ReverseModeNaN,
+    reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
+    "event's linear solve (solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses",
+)
 def test_grad_of_contact_time_matches_finite_differences(reference_fd):
     # Only that failure is expected: a finite but wrong gradient fails the assertion below, and
     # a working one passes it, so strict xfail reports both (README: "an expected-failure test
@@ -194,8 +228,13 @@ def test_jacfwd_of_a_history_sample_matches_finite_differences(reference_fd):
 
 @pytest.mark.parametrize(
     "args, name",
-    [((-1.0, 500.0, 0.1), "mode_mass_ratio"), ((5.0, 0.0, 0.1), "mode_frequency_Hz"), ((5.0, -300.0, 0.1), "mode_frequency_Hz"),
-     ((5.0, 500.0, -0.1), "mode_loss_factor"), ((float("nan"), 500.0, 0.1), "mode_mass_ratio")],
+    [
+        ((-1.0, 500.0, 0.1), "mode_mass_ratio"),
+        ((5.0, 0.0, 0.1), "mode_frequency_Hz"),
+        ((5.0, -300.0, 0.1), "mode_frequency_Hz"),
+        ((5.0, 500.0, -0.1), "mode_loss_factor"),
+        ((float("nan"), 500.0, 0.1), "mode_mass_ratio"),
+    ],
 )
 def test_bad_parameters_are_named(args, name):
     with pytest.raises(ValueError, match=name):
@@ -206,7 +245,9 @@ def test_bad_parameters_are_named(args, name):
 def test_from_modal_mass_rejects_a_non_positive_mass(mass):
     with pytest.raises(ValueError, match="mass_kg"):
         from_modal_mass(mass, 500.0, 0.1, BALL)
-    assert float(from_modal_mass(0.125, 500.0, 0.1, BALL).mode_mass_ratio) == pytest.approx(float(BALL.mass_kg) / 0.125)
+    assert float(from_modal_mass(0.125, 500.0, 0.1, BALL).mode_mass_ratio) == pytest.approx(
+        float(BALL.mass_kg) / 0.125
+    )
 
 
 # --- the end of a ringing contact ----------------------------------------------------------------
@@ -241,13 +282,17 @@ def test_model_names_with_the_ball_mode():
     assert parse_model_name("paper+ball-mode") == ((), False)
     assert "hunt-crossley+ball-mode" in all_model_names()
     with pytest.raises(ValueError, match="not a known model"):
-        parse_model_terms("hunt-crossley+ball-mode+stiffening")  # the suffixes in Model.name's order
+        parse_model_terms(
+            "hunt-crossley+ball-mode+stiffening"
+        )  # the suffixes in Model.name's order
     m = model_from_name("hunt-crossley+ball-mode", values={"mode_frequency_Hz": 400.0})
     assert m.name == "hunt-crossley+ball-mode" and float(m.ball_mode.mode_frequency_Hz) == 400.0
     names = fitted_parameter_names(m)
     assert {"mode_mass_ratio", "mode_frequency_Hz", "mode_loss_factor"} <= set(names)
     assert candidate_pairs(["hunt-crossley+ball-mode/momentum", "zener"], ["momentum"]) == [
-        ("hunt-crossley+ball-mode", "momentum"), ("zener", "momentum")]
+        ("hunt-crossley+ball-mode", "momentum"),
+        ("zener", "momentum"),
+    ]
 
 
 def test_the_shared_structure_holds_the_mode_off_for_candidates_without_it():
@@ -256,12 +301,22 @@ def test_the_shared_structure_holds_the_mode_off_for_candidates_without_it():
     assert sup.ball_mode is not None and float(sup.ball_mode.mode_mass_ratio) == 0.0
     law = HuntCrossley(0.05)
     plain = rbjax.Model(blocked_force="momentum", damping=law)
-    inside = embed(plain, superset_model(rbjax.Model(blocked_force="momentum"), [HuntCrossley], stiffening=False, ball_mode=True), BALL)
+    inside = embed(
+        plain,
+        superset_model(
+            rbjax.Model(blocked_force="momentum"), [HuntCrossley], stiffening=False, ball_mode=True
+        ),
+        BALL,
+    )
     assert float(inside.ball_mode.mode_mass_ratio) == 0.0
     heights = np.array([0.1, 1.0])
     a = rbjax.simulate(heights, BALL, damping=law, blocked_force="momentum")
-    b = rbjax.simulate(heights, BALL, damping=inside.damping, blocked_force="momentum", ball_mode=inside.ball_mode)
-    np.testing.assert_allclose(np.asarray(b.contact_time_s), np.asarray(a.contact_time_s), rtol=1e-9)
+    b = rbjax.simulate(
+        heights, BALL, damping=inside.damping, blocked_force="momentum", ball_mode=inside.ball_mode
+    )
+    np.testing.assert_allclose(
+        np.asarray(b.contact_time_s), np.asarray(a.contact_time_s), rtol=1e-9
+    )
     np.testing.assert_allclose(np.asarray(b.peak_force_N), np.asarray(a.peak_force_N), rtol=1e-9)
     # a ball-mode model does not fit in a structure without the mode
     with pytest.raises(ValueError, match="superset lacks"):
@@ -279,6 +334,9 @@ def test_cli_names_the_ball_mode_candidates(capsys):
         assert "+ball-mode" in capsys.readouterr().out
     from rbjax.commands.select import _parse_candidates
 
-    assert _parse_candidates("hunt-crossley,hunt-crossley+ball-mode", ("momentum",)) == ("hunt-crossley", "hunt-crossley+ball-mode")
+    assert _parse_candidates("hunt-crossley,hunt-crossley+ball-mode", ("momentum",)) == (
+        "hunt-crossley",
+        "hunt-crossley+ball-mode",
+    )
     with pytest.raises(ValueError, match="--candidates"):
         _parse_candidates("hunt-crossley+ballmode", ("momentum",))

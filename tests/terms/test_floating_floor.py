@@ -18,7 +18,11 @@ def _reference(t, rho, area, s, m2, f2, eta1, eta2):
     w2, phi = eigh(np.array([[k1, -k1], [-k1, k1 + k2]]), np.diag([m1, m2]))  # φᵀMφ = 1
     w2 = np.where(w2 > 1e-9 * w2.max(), w2, 0.0)
     strain = eta1 * k1 * (phi[0] - phi[1]) ** 2 + eta2 * k2 * phi[1] ** 2
-    return 1 / phi[0] ** 2, np.sqrt(w2) / (2 * math.pi), np.where(w2 > 0, strain / np.where(w2 > 0, w2, 1), 0.0)
+    return (
+        1 / phi[0] ** 2,
+        np.sqrt(w2) / (2 * math.pi),
+        np.where(w2 > 0, strain / np.where(w2 > 0, w2, 1), 0.0),
+    )
 
 
 @pytest.mark.parametrize(
@@ -34,7 +38,9 @@ def test_modes_match_scipy_eigh(args):
     for got, want in zip((floor.mass_kg, floor.frequency_Hz, floor.loss_factor), _reference(*args)):
         np.testing.assert_allclose(np.asarray(got), want, rtol=1e-9, atol=1e-12)
     # the drive-point flexibility at low frequency: Σ 1/m_k = 1/m₁
-    assert float(np.sum(1 / np.asarray(floor.mass_kg))) == pytest.approx(1 / (args[0] * args[1] * args[2]), rel=1e-12)
+    assert float(np.sum(1 / np.asarray(floor.mass_kg))) == pytest.approx(
+        1 / (args[0] * args[1] * args[2]), rel=1e-12
+    )
 
 
 def test_parameters_are_declared_leaves():
@@ -43,12 +49,31 @@ def test_parameters_are_declared_leaves():
     assert {"screed_thickness_m", "dynamic_stiffness_N_per_m3", "layer_loss_factor"} <= set(names)
     # traceable: the modes under jit follow the stiffness given
     f = jax.jit(lambda s: FloatingFloor(0.07, 2200.0, 1.0, s, 1725.0, 27.0).frequency_Hz)
-    np.testing.assert_allclose(np.asarray(f(20e6)), np.asarray(FloatingFloor(0.07, 2200.0, 1.0, 20e6, 1725.0, 27.0).frequency_Hz), rtol=1e-14)
+    np.testing.assert_allclose(
+        np.asarray(f(20e6)),
+        np.asarray(FloatingFloor(0.07, 2200.0, 1.0, 20e6, 1725.0, 27.0).frequency_Hz),
+        rtol=1e-14,
+    )
 
 
-@pytest.mark.parametrize(("field", "value"), [("screed_thickness_m", 0.0), ("dynamic_stiffness_N_per_m3", -1.0), ("base_frequency_Hz", -5.0), ("layer_loss_factor", -0.1)])
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("screed_thickness_m", 0.0),
+        ("dynamic_stiffness_N_per_m3", -1.0),
+        ("base_frequency_Hz", -5.0),
+        ("layer_loss_factor", -0.1),
+    ],
+)
 def test_bad_parameters_are_named(field, value):
-    args = dict(screed_thickness_m=0.07, screed_density_kg_per_m3=2200.0, area_m2=1.0, dynamic_stiffness_N_per_m3=40e6, base_mass_kg=1725.0, base_frequency_Hz=27.0)
+    args = dict(
+        screed_thickness_m=0.07,
+        screed_density_kg_per_m3=2200.0,
+        area_m2=1.0,
+        dynamic_stiffness_N_per_m3=40e6,
+        base_mass_kg=1725.0,
+        base_frequency_Hz=27.0,
+    )
     with pytest.raises(ValueError, match=f"{field}={value}"):
         FloatingFloor(**(args | {field: value}))
 

@@ -64,11 +64,15 @@ def test_materials_have_sources_and_valid_values():
 def test_clt_modulus():
     # one layer: the board's own orthotropy, √(E_0 E_90); five equal C24 layers (E_0 = 11 GPa,
     # E_90 = 0.37 GPa): per unit layer thickness the layers along x have I = 3/12 + 2² + 2², across 2/12 + 1 + 1
-    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 1) == pytest.approx(math.sqrt(11e9 * 0.37e9), rel=1e-12)
+    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 1) == pytest.approx(
+        math.sqrt(11e9 * 0.37e9), rel=1e-12
+    )
     along, across = 3 / 12 + 8.0, 2 / 12 + 2.0
     ex = (11e9 * along + 0.37e9 * across) / (along + across)
     ey = (11e9 * across + 0.37e9 * along) / (along + across)
-    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 5) == pytest.approx(math.sqrt(ex * ey), rel=1e-12)
+    assert cross_laminated_youngs_Pa(11e9, 0.37e9, 5) == pytest.approx(
+        math.sqrt(ex * ey), rel=1e-12
+    )
     with pytest.raises(ValueError, match="layers=4"):
         cross_laminated_youngs_Pa(11e9, 0.37e9, 4)
 
@@ -94,24 +98,42 @@ def test_material_validates(kwargs, words):
 
 
 def test_presets_have_the_impedance_of_the_formula():
-    assert {"rigid", "concrete-140mm", "concrete-150mm", "chipboard-22mm", "osb-15mm", "clt-140mm", "steel-10mm"} <= set(FLOOR_PRESETS)
+    assert {
+        "rigid",
+        "concrete-140mm",
+        "concrete-150mm",
+        "chipboard-22mm",
+        "osb-15mm",
+        "clt-140mm",
+        "steel-10mm",
+    } <= set(FLOOR_PRESETS)
     assert isinstance(floor_preset("rigid"), Rigid)
     for name, (mat, t) in PLATE_PRESETS.items():
         floor = floor_preset(name)
         assert isinstance(floor, InfinitePlate)
         if mat in CITED:
-            assert float(floor.impedance_Ns_per_m) == pytest.approx(plate_Z(t, *CITED[mat]), rel=1e-3), name
+            assert float(floor.impedance_Ns_per_m) == pytest.approx(
+                plate_Z(t, *CITED[mat]), rel=1e-3
+            ), name
     z150 = float(floor_preset("concrete-150mm").impedance_Ns_per_m)
     assert 3e5 < z150 < 6e5  # of order 4e5 N s/m
     assert z150 == pytest.approx(plate_Z(0.15, 33e9, 2300.0, 0.2), rel=1e-12)
     # lightweight floors are ~300-700 times softer than a concrete slab
-    assert float(floor_preset("osb-15mm").impedance_Ns_per_m) < float(floor_preset("chipboard-22mm").impedance_Ns_per_m) < 2e3
+    assert (
+        float(floor_preset("osb-15mm").impedance_Ns_per_m)
+        < float(floor_preset("chipboard-22mm").impedance_Ns_per_m)
+        < 2e3
+    )
 
 
 def test_unknown_preset_lists_the_valid_names():
     with pytest.raises(ValueError) as err:
         floor_preset("marble-20mm")
-    assert "marble-20mm" in str(err.value) and "concrete-150mm" in str(err.value) and "osb-15mm" in str(err.value)
+    assert (
+        "marble-20mm" in str(err.value)
+        and "concrete-150mm" in str(err.value)
+        and "osb-15mm" in str(err.value)
+    )
     with pytest.raises(ValueError, match="neither a floor preset nor a floor file.*rigid"):
         load_floor("marble-20mm")
 
@@ -127,7 +149,9 @@ def test_unknown_preset_lists_the_valid_names():
     ],
 )
 def test_infinite_plate_rejects_values_out_of_range(field, value, words):
-    kwargs = dict(plate_thickness_m=0.1, plate_youngs_Pa=3e9, plate_density_kg_per_m3=650.0, plate_poisson=0.3)
+    kwargs = dict(
+        plate_thickness_m=0.1, plate_youngs_Pa=3e9, plate_density_kg_per_m3=650.0, plate_poisson=0.3
+    )
     with pytest.raises(ValueError) as err:
         InfinitePlate(**{**kwargs, field: value})
     assert all(w in str(err.value) for w in words)
@@ -142,10 +166,14 @@ def test_example_floor_file_loads():
     path = Path(rbjax.__file__).parent / "examples" / "floors" / "floating-screed.toml"
     name, floor = load_named_floor(path)
     assert name == "floating-screed" and isinstance(floor, ModalFloor)
-    assert floor.num_modes == 9 and set(floor.mass_kg) == {500.0} and set(floor.loss_factor) == {0.1}
+    assert (
+        floor.num_modes == 9 and set(floor.mass_kg) == {500.0} and set(floor.loss_factor) == {0.1}
+    )
     name, floor = load_named_floor(path.with_name("floating-screed-70mm.toml"))
     assert name == "floating-screed-70mm"
-    assert floor == FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.1, base_loss_factor=0.05)
+    assert floor == FloatingFloor(
+        0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.1, base_loss_factor=0.05
+    )
     # its comment's figures: f0 = √(s′/m″)/2π over a rigid base, the base mode ρ t Lx Ly / 4 at f11
     assert math.sqrt(10e6 / 140.0) / (2 * math.pi) == pytest.approx(42.5, abs=0.05)
     B, m = 33e9 * 0.15**3 / (12 * (1 - 0.2**2)), 2300.0 * 0.15
@@ -155,14 +183,41 @@ def test_example_floor_file_loads():
 
 FILES = {
     "plate-material": {"type": "infinite-plate", "material": "osb", "thickness_m": 0.015},
-    "plate-explicit": {"type": "infinite-plate", "thickness_m": 0.15, "youngs_Pa": 33e9, "density_kg_per_m3": 2300.0, "poisson": 0.2},
-    "plate-override": {"type": "infinite-plate", "material": "concrete", "thickness_m": 0.15, "density_kg_per_m3": 2400.0},
-    "dashpot": {"type": "dashpot", "impedance_Ns_per_m": 5e4, "name": "my dashpot", "description": "a test"},
-    "modal": {"type": "modal", "mass_kg": [200.0, 150.0], "frequency_Hz": [0.0, 40.0], "loss_factor": [0.0, 0.05]},
+    "plate-explicit": {
+        "type": "infinite-plate",
+        "thickness_m": 0.15,
+        "youngs_Pa": 33e9,
+        "density_kg_per_m3": 2300.0,
+        "poisson": 0.2,
+    },
+    "plate-override": {
+        "type": "infinite-plate",
+        "material": "concrete",
+        "thickness_m": 0.15,
+        "density_kg_per_m3": 2400.0,
+    },
+    "dashpot": {
+        "type": "dashpot",
+        "impedance_Ns_per_m": 5e4,
+        "name": "my dashpot",
+        "description": "a test",
+    },
+    "modal": {
+        "type": "modal",
+        "mass_kg": [200.0, 150.0],
+        "frequency_Hz": [0.0, 40.0],
+        "loss_factor": [0.0, 0.05],
+    },
     "rigid": {"type": "rigid"},
     "floating": {
-        "type": "floating", "screed_thickness_m": 0.07, "screed_density_kg_per_m3": 2000.0, "area_m2": 1.0,
-        "dynamic_stiffness_N_per_m3": 10e6, "base_mass_kg": 1725.0, "base_frequency_Hz": 27.0, "layer_loss_factor": 0.15,
+        "type": "floating",
+        "screed_thickness_m": 0.07,
+        "screed_density_kg_per_m3": 2000.0,
+        "area_m2": 1.0,
+        "dynamic_stiffness_N_per_m3": 10e6,
+        "base_mass_kg": 1725.0,
+        "base_frequency_Hz": 27.0,
+        "layer_loss_factor": 0.15,
     },
 }
 
@@ -194,15 +249,26 @@ def test_floor_file_round_trip(tmp_path, key, suffix):
         E = table.get("youngs_Pa", mat.youngs_Pa if mat else None)
         rho = table.get("density_kg_per_m3", mat.density_kg_per_m3 if mat else None)
         nu = table.get("poisson", mat.poisson if mat else None)
-        assert float(floor.impedance_Ns_per_m) == pytest.approx(plate_Z(table["thickness_m"], E, rho, nu), rel=1e-12)
+        assert float(floor.impedance_Ns_per_m) == pytest.approx(
+            plate_Z(table["thickness_m"], E, rho, nu), rel=1e-12
+        )
     elif key == "dashpot":
         assert isinstance(floor, Dashpot) and float(floor.impedance_Ns_per_m) == 5e4
     elif key == "floating":
         # the floor built in Python, and its modes: the default base loss 0.02 where not given
-        assert floor == FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.15, base_loss_factor=0.02)
-        np.testing.assert_array_equal(np.asarray(floor.frequency_Hz), np.asarray(FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, 0.15).frequency_Hz))
+        assert floor == FloatingFloor(
+            0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, layer_loss_factor=0.15, base_loss_factor=0.02
+        )
+        np.testing.assert_array_equal(
+            np.asarray(floor.frequency_Hz),
+            np.asarray(FloatingFloor(0.07, 2000.0, 1.0, 10e6, 1725.0, 27.0, 0.15).frequency_Hz),
+        )
     elif key == "modal":
-        assert floor.mass_kg == (200.0, 150.0) and floor.frequency_Hz == (0.0, 40.0) and floor.loss_factor == (0.0, 0.05)
+        assert (
+            floor.mass_kg == (200.0, 150.0)
+            and floor.frequency_Hz == (0.0, 40.0)
+            and floor.loss_factor == (0.0, 0.05)
+        )
     else:
         assert isinstance(floor, Rigid)
     assert load_floor(str(path)) == floor
@@ -211,27 +277,88 @@ def test_floor_file_round_trip(tmp_path, key, suffix):
 @pytest.mark.parametrize(
     "table, words",
     [
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.0}, ["thickness_m", "0.0", "(0, inf)"]),
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": -0.02}, ["thickness_m", "-0.02", "(0, inf)"]),
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "density_kg_per_m3": 0.0}, ["density_kg_per_m3", "(0, inf)"]),
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "youngs_Pa": -3e9}, ["youngs_Pa", "-3000000000.0", "(0, inf)"]),
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "poisson": 0.6}, ["poisson", "0.6", "(-1, 0.5]"]),
-        ({"type": "infinite-plate", "material": "osb", "thickness_m": "thin"}, ["thickness_m", "'thin'", "not a number"]),
-        ({"type": "infinite-plate", "material": "marble", "thickness_m": 0.02}, ["material", "'marble'", "concrete"]),
-        ({"type": "infinite-plate", "thickness_m": 0.02, "youngs_Pa": 3e9}, ["material", "density_kg_per_m3", "poisson"]),
+        (
+            {"type": "infinite-plate", "material": "osb", "thickness_m": 0.0},
+            ["thickness_m", "0.0", "(0, inf)"],
+        ),
+        (
+            {"type": "infinite-plate", "material": "osb", "thickness_m": -0.02},
+            ["thickness_m", "-0.02", "(0, inf)"],
+        ),
+        (
+            {
+                "type": "infinite-plate",
+                "material": "osb",
+                "thickness_m": 0.02,
+                "density_kg_per_m3": 0.0,
+            },
+            ["density_kg_per_m3", "(0, inf)"],
+        ),
+        (
+            {"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "youngs_Pa": -3e9},
+            ["youngs_Pa", "-3000000000.0", "(0, inf)"],
+        ),
+        (
+            {"type": "infinite-plate", "material": "osb", "thickness_m": 0.02, "poisson": 0.6},
+            ["poisson", "0.6", "(-1, 0.5]"],
+        ),
+        (
+            {"type": "infinite-plate", "material": "osb", "thickness_m": "thin"},
+            ["thickness_m", "'thin'", "not a number"],
+        ),
+        (
+            {"type": "infinite-plate", "material": "marble", "thickness_m": 0.02},
+            ["material", "'marble'", "concrete"],
+        ),
+        (
+            {"type": "infinite-plate", "thickness_m": 0.02, "youngs_Pa": 3e9},
+            ["material", "density_kg_per_m3", "poisson"],
+        ),
         ({"type": "infinite-plate", "material": "osb"}, ["thickness_m"]),
-        ({"type": "modal", "mass_kg": [100.0, 0.0], "frequency_Hz": [10.0, 20.0], "loss_factor": 0.1}, ["mass_kg[1]", "0.0", "(0, inf)"]),
-        ({"type": "modal", "mass_kg": [100.0], "frequency_Hz": [10.0], "loss_factor": -0.1}, ["loss_factor", "-0.1", "[0, inf)"]),
-        ({"type": "modal", "mass_kg": [100.0], "frequency_Hz": [-10.0], "loss_factor": 0.1}, ["frequency_Hz[0]", "-10.0", "[0, inf)"]),
-        ({"type": "modal", "mass_kg": [100.0, 50.0], "frequency_Hz": [10.0], "loss_factor": 0.1}, ["one value per mode"]),
-        ({"type": "modal", "mass_kg": [], "frequency_Hz": [], "loss_factor": 0.1}, ["mass_kg", "empty"]),
+        (
+            {
+                "type": "modal",
+                "mass_kg": [100.0, 0.0],
+                "frequency_Hz": [10.0, 20.0],
+                "loss_factor": 0.1,
+            },
+            ["mass_kg[1]", "0.0", "(0, inf)"],
+        ),
+        (
+            {"type": "modal", "mass_kg": [100.0], "frequency_Hz": [10.0], "loss_factor": -0.1},
+            ["loss_factor", "-0.1", "[0, inf)"],
+        ),
+        (
+            {"type": "modal", "mass_kg": [100.0], "frequency_Hz": [-10.0], "loss_factor": 0.1},
+            ["frequency_Hz[0]", "-10.0", "[0, inf)"],
+        ),
+        (
+            {"type": "modal", "mass_kg": [100.0, 50.0], "frequency_Hz": [10.0], "loss_factor": 0.1},
+            ["one value per mode"],
+        ),
+        (
+            {"type": "modal", "mass_kg": [], "frequency_Hz": [], "loss_factor": 0.1},
+            ["mass_kg", "empty"],
+        ),
         ({"type": "dashpot", "impedance_Ns_per_m": 0.0}, ["impedance_Ns_per_m", "0.0", "(0, inf)"]),
-        ({"type": "dashpot", "impedance_Ns_per_m": 1e4, "mass_kg": 3.0}, ["'mass_kg'", "dashpot", "impedance_Ns_per_m"]),
+        (
+            {"type": "dashpot", "impedance_Ns_per_m": 1e4, "mass_kg": 3.0},
+            ["'mass_kg'", "dashpot", "impedance_Ns_per_m"],
+        ),
         ({"type": "trampoline"}, ["type", "'trampoline'", "infinite-plate", "modal", "floating"]),
-        ({**FLOATING, "dynamic_stiffness_N_per_m3": 0.0}, ["dynamic_stiffness_N_per_m3", "0.0", "(0, inf)"]),
+        (
+            {**FLOATING, "dynamic_stiffness_N_per_m3": 0.0},
+            ["dynamic_stiffness_N_per_m3", "0.0", "(0, inf)"],
+        ),
         ({**FLOATING, "base_frequency_Hz": -1.0}, ["base_frequency_Hz", "-1.0", "[0, inf)"]),
-        ({**FLOATING, "layer_loss_factor": "high"}, ["layer_loss_factor", "'high'", "not a number"]),
-        ({**FLOATING, "screed_mass_kg": 140.0}, ["'screed_mass_kg'", "floating", "screed_thickness_m", "base_loss_factor"]),
+        (
+            {**FLOATING, "layer_loss_factor": "high"},
+            ["layer_loss_factor", "'high'", "not a number"],
+        ),
+        (
+            {**FLOATING, "screed_mass_kg": 140.0},
+            ["'screed_mass_kg'", "floating", "screed_thickness_m", "base_loss_factor"],
+        ),
         ({k: v for k, v in FLOATING.items() if k != "area_m2"}, ["floating", "'area_m2'"]),
         ({"thickness_m": 0.1}, ["type", "None", "rigid"]),
     ],
@@ -265,18 +392,33 @@ def test_unreadable_floor_files(tmp_path):
 
 @pytest.fixture(scope="module")
 def concrete_rows():
-    code, out, err = run_cli(["simulate", "--height-m", "1.0", "--floor", "concrete-150mm", "--json"])
+    code, out, err = run_cli(
+        ["simulate", "--height-m", "1.0", "--floor", "concrete-150mm", "--json"]
+    )
     assert code == 0, err
     return json.loads(out)
 
 
 def test_cli_floor_json_keys(concrete_rows):
     (row,) = concrete_rows
-    base = {"height_m", "contact_time_s", "peak_force_N", "restitution", "lfe_total_dB", "lfe_octave_dB", "lfe_third_octave_dB", "conformance", "status", "method"}
+    base = {
+        "height_m",
+        "contact_time_s",
+        "peak_force_N",
+        "restitution",
+        "lfe_total_dB",
+        "lfe_octave_dB",
+        "lfe_third_octave_dB",
+        "conformance",
+        "status",
+        "method",
+    }
     assert set(row) == base | {"floor", "floor_energy_J", "lfe_ratio_dB"}
     assert row["floor"] == "concrete-150mm" and row["status"] == "ok" and row["method"] == "ode"
     assert tuple(row["lfe_ratio_dB"]) == OCTAVES
-    assert 0.0 < row["floor_energy_J"] < 0.01 * 0.5 * 2.5 * 2 * 9.80665  # < 1 % of the impact energy
+    assert (
+        0.0 < row["floor_energy_J"] < 0.01 * 0.5 * 2.5 * 2 * 9.80665
+    )  # < 1 % of the impact energy
 
 
 def test_concrete_150mm_is_the_rigid_floor_to_0_05_dB(concrete_rows):
@@ -286,7 +428,9 @@ def test_concrete_150mm_is_the_rigid_floor_to_0_05_dB(concrete_rows):
 
 def test_cli_floor_file_and_ratio_agree_with_simulate(tmp_path, concrete_rows):
     path = tmp_path / "slab.toml"
-    path.write_text('name = "slab"\ntype = "infinite-plate"\nmaterial = "concrete"\nthickness_m = 0.15\n')
+    path.write_text(
+        'name = "slab"\ntype = "infinite-plate"\nmaterial = "concrete"\nthickness_m = 0.15\n'
+    )
     code, out, err = run_cli(["simulate", "--height-m", "1.0", "--floor", str(path), "--json"])
     assert code == 0, err
     (row,) = json.loads(out)
@@ -295,9 +439,13 @@ def test_cli_floor_file_and_ratio_agree_with_simulate(tmp_path, concrete_rows):
         assert row[key] == pytest.approx(concrete_rows[0][key], rel=1e-12)
     # the ratio is the difference of the two L_FE computed directly
     floor = floor_preset("concrete-150mm")
-    on_floor = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0, floor=floor).force_N, 44_100.0))
+    on_floor = np.asarray(
+        rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0, floor=floor).force_N, 44_100.0)
+    )
     blocked = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0).force_N, 44_100.0))
-    np.testing.assert_allclose([row["lfe_ratio_dB"][b] for b in OCTAVES], on_floor - blocked, atol=1e-9)
+    np.testing.assert_allclose(
+        [row["lfe_ratio_dB"][b] for b in OCTAVES], on_floor - blocked, atol=1e-9
+    )
 
 
 def test_cli_rigid_floor_keeps_the_blocked_force_keys():
@@ -310,7 +458,10 @@ def test_cli_rigid_floor_keeps_the_blocked_force_keys():
 
 @pytest.mark.parametrize(
     "floor, words",
-    [("marble-20mm", ["--floor", "marble-20mm", "concrete-150mm"]), ("/nonexistent/floor.toml", ["/nonexistent/floor.toml", "does not exist"])],
+    [
+        ("marble-20mm", ["--floor", "marble-20mm", "concrete-150mm"]),
+        ("/nonexistent/floor.toml", ["/nonexistent/floor.toml", "does not exist"]),
+    ],
 )
 def test_cli_bad_floor_exits_2_with_one_line(floor, words):
     code, out, err = run_cli(["simulate", "--height-m", "1", "--floor", floor])

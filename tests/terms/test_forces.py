@@ -28,7 +28,9 @@ QUAD = dict(epsabs=0.0, epsrel=1e-13)
 
 
 def _params(ball):
-    return (float(getattr(ball, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson"))
+    return (
+        float(getattr(ball, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+    )
 
 
 # --- Eqs. 1–3: Reissner's point-load stiffness ------------------------------------------------
@@ -90,15 +92,21 @@ def test_gas_force_is_adiabatic_overpressure_on_the_flattened_area(ball):
     v0 = 4.0 * math.pi * r**3 / 3.0
     area = np.array([math.pi * _cap_base_radius_sq(d, r) for d in DEFLECTIONS_M])
     # (V0/V)^γ − 1 = expm1(−γ log1p(−ΔV/V0)), free of cancellation at small ΔV/V0.
-    overpressure = np.array([P_A * math.expm1(-GAMMA * math.log1p(-_cap_volume(d, r) / v0)) for d in DEFLECTIONS_M])
+    overpressure = np.array(
+        [P_A * math.expm1(-GAMMA * math.log1p(-_cap_volume(d, r) / v0)) for d in DEFLECTIONS_M]
+    )
     actual = np.asarray(rbjax.gas_force_N(DEFLECTIONS_M, ball))
     # Tolerance: 1e-12 relative, plus the round-off of forming (V0/V)^γ − 1 directly, a few
     # ulps of p_a on the area (it dominates below δ ≈ 1 mm, where F_G < 0.01 N).
     tolerance = 1e-12 * np.abs(overpressure * area) + 8 * np.finfo(float).eps * P_A * area
     assert np.all(np.abs(actual - overpressure * area) <= tolerance)
-    np.testing.assert_allclose(np.asarray(rbjax.contact_area_m2(DEFLECTIONS_M, r)), area, rtol=1e-12)
     np.testing.assert_allclose(
-        np.asarray(forces.cap_volume_m3(DEFLECTIONS_M, r)), [_cap_volume(d, r) for d in DEFLECTIONS_M], rtol=1e-13
+        np.asarray(rbjax.contact_area_m2(DEFLECTIONS_M, r)), area, rtol=1e-12
+    )
+    np.testing.assert_allclose(
+        np.asarray(forces.cap_volume_m3(DEFLECTIONS_M, r)),
+        [_cap_volume(d, r) for d in DEFLECTIONS_M],
+        rtol=1e-13,
     )
 
 
@@ -106,7 +114,9 @@ def test_gas_force_small_deflection_limit():
     # V0 − V ≈ πRδ², so F_G ≈ p_a γ (3δ²/4R²) · 2πRδ = (3/2)πγ p_a δ³/R for δ ≪ R.
     r = float(JIS.radius_m)
     d = 1e-5
-    assert float(rbjax.gas_force_N(d, JIS)) == pytest.approx(1.5 * math.pi * GAMMA * P_A * d**3 / r, rel=1e-3)
+    assert float(rbjax.gas_force_N(d, JIS)) == pytest.approx(
+        1.5 * math.pi * GAMMA * P_A * d**3 / r, rel=1e-3
+    )
 
 
 def test_gas_force_zero_positive_increasing_and_secondary():
@@ -149,7 +159,9 @@ def test_dynamic_mass_eq6_is_the_cap_surface_fraction():
 def test_momentum_flux_term():
     r, _, m, _, _ = _params(JIS)
     v = np.array([-3.0, 0.0, 4.4])
-    np.testing.assert_allclose(np.asarray(forces.momentum_flux_N(v, JIS)), m / (2 * r) * v**2, rtol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(forces.momentum_flux_N(v, JIS)), m / (2 * r) * v**2, rtol=1e-15
+    )
 
 
 # --- damping extensions -----------------------------------------------------------------------
@@ -178,7 +190,9 @@ def test_damping_laws_in_parallel_add_their_forces_and_states():
     state = np.array([12.0])
     both = rbjax.Model(damping=(rbjax.KelvinVoigt(30.0), rbjax.Zener(0.2, 1e-3)), gas="none")
     k = float(JIS.stiffness_N_per_m)
-    assert float(forces.contact_force_N(d, v, state, JIS, both)) == pytest.approx(k * d + 30.0 * v + 12.0, rel=1e-14)
+    assert float(forces.contact_force_N(d, v, state, JIS, both)) == pytest.approx(
+        k * d + 30.0 * v + 12.0, rel=1e-14
+    )
     assert both.num_internal_states == 1
     with pytest.raises(ValueError, match="each law may appear once"):
         rbjax.Model(damping=(rbjax.KelvinVoigt(1.0), rbjax.KelvinVoigt(2.0)))
@@ -187,7 +201,11 @@ def test_damping_laws_in_parallel_add_their_forces_and_states():
 def test_contact_force_is_the_sum_of_the_terms():
     d, v = 0.02, -1.5
     k = float(JIS.stiffness_N_per_m)
-    total = forces.contact_force_N(d, v, np.zeros(0), JIS, rbjax.Model(gas="adiabatic", damping=rbjax.KelvinVoigt(50.0)))
+    total = forces.contact_force_N(
+        d, v, np.zeros(0), JIS, rbjax.Model(gas="adiabatic", damping=rbjax.KelvinVoigt(50.0))
+    )
     expected = k * d + float(rbjax.gas_force_N(d, JIS)) + 50.0 * v
     assert float(total) == pytest.approx(expected, rel=1e-14)
-    assert float(forces.contact_force_N(d, v, np.zeros(0), JIS, rbjax.Model(gas="none"))) == pytest.approx(k * d, rel=1e-15)
+    assert float(
+        forces.contact_force_N(d, v, np.zeros(0), JIS, rbjax.Model(gas="none"))
+    ) == pytest.approx(k * d, rel=1e-15)

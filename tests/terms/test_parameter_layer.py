@@ -27,7 +27,11 @@ class ToyViscous(AbstractDamping):
 
     toy_Ns_per_m: float
     name = "toy-viscous"
-    PARAMETERS: ClassVar = {"toy_Ns_per_m": Parameter("N s/m", lower=0.0, lower_open=False, transform="log", description="toy b")}
+    PARAMETERS: ClassVar = {
+        "toy_Ns_per_m": Parameter(
+            "N s/m", lower=0.0, lower_open=False, transform="log", description="toy b"
+        )
+    }
 
     def force_N(self, deflection_m, velocity_m_per_s, internal, ball):
         return self.toy_Ns_per_m * velocity_m_per_s
@@ -49,7 +53,9 @@ def test_a_new_law_is_fitted_through_the_public_api():
     true_c = 40.0
     ball = JIS_RUBBER_BALL.replace(youngs_Pa=1.9e6)
     data = synthetic_data(ball, KelvinVoigt(true_c), "momentum", seed=7)
-    res = rbjax.fit.fit(data, Model(damping=ToyViscous(10.0), blocked_force="momentum"), progress=False)
+    res = rbjax.fit.fit(
+        data, Model(damping=ToyViscous(10.0), blocked_force="momentum"), progress=False
+    )
     assert res.converged, res.message
     est = res.parameters["toy_Ns_per_m"]
     assert est.unit == "N s/m"
@@ -61,13 +67,28 @@ def test_a_new_law_is_fitted_through_the_public_api():
 def test_vector_round_trip_and_replace():
     model = Model(damping=Zener(0.3, 2e-3), blocked_force="momentum")
     names = params.parameter_names(0.5, JIS_RUBBER_BALL, model)
-    assert names == ("height_m", "radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson",
-                     "stiffness_ratio", "relaxation_time_s", "momentum_flux_weight")
+    assert names == (
+        "height_m",
+        "radius_m",
+        "wall_m",
+        "mass_kg",
+        "youngs_Pa",
+        "poisson",
+        "stiffness_ratio",
+        "relaxation_time_s",
+        "momentum_flux_weight",
+    )
     vec = params.to_vector(0.5, JIS_RUBBER_BALL, model)
-    np.testing.assert_array_equal(np.asarray(vec), [0.5, 0.089, 0.032, 2.5, 1.6e6, 0.5, 0.3, 2e-3, 1.0])
+    np.testing.assert_array_equal(
+        np.asarray(vec), [0.5, 0.089, 0.032, 2.5, 1.6e6, 0.5, 0.3, 2e-3, 1.0]
+    )
     h, ball, m2 = params.from_vector(vec * 1.01, JIS_RUBBER_BALL, model)
-    assert float(h) == pytest.approx(0.505) and float(m2.damping[0].stiffness_ratio) == pytest.approx(0.303)
-    _, ball, m3 = params.replace({"relaxation_time_s": 1e-3, "youngs_Pa": 2e6}, 1.0, JIS_RUBBER_BALL, model)
+    assert float(h) == pytest.approx(0.505) and float(
+        m2.damping[0].stiffness_ratio
+    ) == pytest.approx(0.303)
+    _, ball, m3 = params.replace(
+        {"relaxation_time_s": 1e-3, "youngs_Pa": 2e6}, 1.0, JIS_RUBBER_BALL, model
+    )
     assert float(m3.damping[0].relaxation_time_s) == 1e-3 and float(ball.youngs_Pa) == 2e6
     with pytest.raises(ValueError, match="relaxation_time_s=-1.0"):
         params.replace({"relaxation_time_s": -1.0}, 1.0, JIS_RUBBER_BALL, model)
@@ -78,12 +99,19 @@ def test_vector_round_trip_and_replace():
 
 @pytest.mark.parametrize("transform", ["log", "interval", "identity"])
 def test_transforms_invert_and_their_slope_is_the_derivative(transform):
-    spec = Parameter("1", lower=-1.0 if transform != "log" else 0.0, upper=0.5 if transform == "interval" else np.inf, transform=transform)
+    spec = Parameter(
+        "1",
+        lower=-1.0 if transform != "log" else 0.0,
+        upper=0.5 if transform == "interval" else np.inf,
+        transform=transform,
+    )
     for x in (0.1, 0.3, 0.45):
         phi = float(spec.to_unconstrained(x))
         assert float(spec.from_unconstrained(phi)) == pytest.approx(x, rel=1e-12)
         step = 1e-6
-        fd = (float(spec.from_unconstrained(phi + step)) - float(spec.from_unconstrained(phi - step))) / (2 * step)
+        fd = (
+            float(spec.from_unconstrained(phi + step)) - float(spec.from_unconstrained(phi - step))
+        ) / (2 * step)
         assert float(spec.slope(phi)) == pytest.approx(fd, rel=1e-7)
 
 
@@ -93,7 +121,9 @@ def test_the_superset_with_its_extra_terms_off_is_the_elastic_model(blocked_forc
     heights = np.array([0.1, 1.0, 1.6])
     model = superset_model(Model(blocked_force=blocked_force))
     assert len(model.damping) == len(rbjax.DAMPING_MODELS) and model.stiffening is not None
-    res = rbjax.simulate(heights, blocked_force=blocked_force, damping=model.damping, stiffening=model.stiffening)
+    res = rbjax.simulate(
+        heights, blocked_force=blocked_force, damping=model.damping, stiffening=model.stiffening
+    )
     assert np.all(res.status == 0)
     for i, h in enumerate(heights):
         ref = reference_impact(float(h), JIS_RUBBER_BALL, blocked_force=blocked_force, rtol=1e-12)

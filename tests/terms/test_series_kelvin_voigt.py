@@ -31,7 +31,9 @@ CASES = [
 
 
 def _model(damping, blocked_force, compliance, tau):
-    return rbjax.Model(blocked_force=blocked_force, damping=damping, series=SeriesKelvinVoigt(compliance, tau))
+    return rbjax.Model(
+        blocked_force=blocked_force, damping=damping, series=SeriesKelvinVoigt(compliance, tau)
+    )
 
 
 @pytest.mark.parametrize("case", CASES, ids=["momentum", "paper"])
@@ -65,10 +67,22 @@ def test_the_ball_mode_tends_to_it_as_its_mass_vanishes():
     for mass in (1e-2, 1e-3):
         omega = math.sqrt(k_b / mass)
         mode = BallMode(float(BALL.mass_kg) / mass, omega / (2 * math.pi), c_b / (mass * omega))
-        res = rbjax.simulate(h, BALL, rbjax.Model(blocked_force=bf, damping=damping, ball_mode=mode), solver=rbjax.Solver(max_steps=65536))
+        res = rbjax.simulate(
+            h,
+            BALL,
+            rbjax.Model(blocked_force=bf, damping=damping, ball_mode=mode),
+            solver=rbjax.Solver(max_steps=65536),
+        )
         assert int(res.status) == 0
-        gaps.append(np.abs([float(res.contact_time_s - ref.contact_time_s) / float(ref.contact_time_s),
-                            float(res.restitution - ref.restitution), float(res.peak_force_N - ref.peak_force_N) / float(ref.peak_force_N)]))
+        gaps.append(
+            np.abs(
+                [
+                    float(res.contact_time_s - ref.contact_time_s) / float(ref.contact_time_s),
+                    float(res.restitution - ref.restitution),
+                    float(res.peak_force_N - ref.peak_force_N) / float(ref.peak_force_N),
+                ]
+            )
+        )
     coarse, fine = gaps
     assert np.all(fine <= np.array([1e-6, 1e-5, 1e-5]))
     assert np.all((coarse / fine >= 7.0) & (coarse / fine <= 13.0))
@@ -77,7 +91,9 @@ def test_the_ball_mode_tends_to_it_as_its_mass_vanishes():
 def test_zero_compliance_is_the_model_without_it():
     """C = 0 holds w ≡ 0: the ODE with the element off equals the phase-angle path without it."""
     h, damping, bf, _, _ = CASES[1]
-    off = rbjax.simulate(h, BALL, rbjax.Model(blocked_force=bf, damping=damping, series=SeriesKelvinVoigt.off()))
+    off = rbjax.simulate(
+        h, BALL, rbjax.Model(blocked_force=bf, damping=damping, series=SeriesKelvinVoigt.off())
+    )
     plain = rbjax.simulate(h, BALL, rbjax.Model(blocked_force=bf, damping=damping))
     assert off.method == "ode" and plain.method != "ode"
     assert float(off.contact_time_s) == pytest.approx(float(plain.contact_time_s), rel=1e-7)
@@ -87,9 +103,18 @@ def test_zero_compliance_is_the_model_without_it():
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        ({"series_compliance_m_per_N": -1e-6, "series_time_constant_s": 1e-3}, "series_compliance_m_per_N=-1e-06"),
-        ({"series_compliance_m_per_N": 1e-6, "series_time_constant_s": 0.0}, "series_time_constant_s=0.0"),
-        ({"series_compliance_m_per_N": float("nan"), "series_time_constant_s": 1e-3}, "series_compliance_m_per_N=nan"),
+        (
+            {"series_compliance_m_per_N": -1e-6, "series_time_constant_s": 1e-3},
+            "series_compliance_m_per_N=-1e-06",
+        ),
+        (
+            {"series_compliance_m_per_N": 1e-6, "series_time_constant_s": 0.0},
+            "series_time_constant_s=0.0",
+        ),
+        (
+            {"series_compliance_m_per_N": float("nan"), "series_time_constant_s": 1e-3},
+            "series_compliance_m_per_N=nan",
+        ),
     ],
 )
 def test_bad_values_are_named(kwargs, message):
@@ -112,17 +137,35 @@ def test_names_files_and_the_fit_layer():
     assert name in all_model_names() and "zener+stiffening+series-kelvin-voigt" in all_model_names()
     assert parse_model_terms(name) == ((HuntCrossley,), False, False, True)
     assert parse_model_terms("hunt-crossley+ball-mode") == ((HuntCrossley,), False, True, False)
-    model = model_from_name(name, blocked_force="momentum", values={"series_compliance_m_per_N": 3e-6})
+    model = model_from_name(
+        name, blocked_force="momentum", values={"series_compliance_m_per_N": 3e-6}
+    )
     assert model.name == name and float(model.series.series_compliance_m_per_N) == 3e-6
-    assert fitted_parameter_names(model) == ("youngs_Pa", "poisson", "alpha_s_per_m", "series_compliance_m_per_N", "series_time_constant_s")
+    assert fitted_parameter_names(model) == (
+        "youngs_Pa",
+        "poisson",
+        "alpha_s_per_m",
+        "series_compliance_m_per_N",
+        "series_time_constant_s",
+    )
     back = model_from_dict(model_to_dict(model))
-    assert back.name == name and float(back.series.series_time_constant_s) == float(model.series.series_time_constant_s)
-    assert "series" not in model_to_dict(rbjax.Model())  # files without the element stay as they were
+    assert back.name == name and float(back.series.series_time_constant_s) == float(
+        model.series.series_time_constant_s
+    )
+    assert "series" not in model_to_dict(
+        rbjax.Model()
+    )  # files without the element stay as they were
     superset = shared_structure(["hunt-crossley", name, "hunt-crossley+ball-mode"])
-    assert float(superset.series.series_compliance_m_per_N) == 0.0 and float(superset.ball_mode.mode_mass_ratio) == 0.0
+    assert (
+        float(superset.series.series_compliance_m_per_N) == 0.0
+        and float(superset.ball_mode.mode_mass_ratio) == 0.0
+    )
     # a selection fits the candidates without the element in a structure without it
     structures = shared_structures(["paper", "hunt-crossley+ball-mode", name])
-    assert structures["paper"] is structures["hunt-crossley+ball-mode"] and structures["paper"].series is None
+    assert (
+        structures["paper"] is structures["hunt-crossley+ball-mode"]
+        and structures["paper"].series is None
+    )
     assert structures[name].series is not None and structures[name].ball_mode is None
     reading = series_structure(_model(None, "paper", 1.0 / 3.3e5, 1.5e3 / 3.3e5))
     assert "3.3e+05 N/m" in reading and "1.5e+03 N s/m" in reading

@@ -27,12 +27,16 @@ def test_breathing_mode_closed_form():
     a = 0.089 - 0.016
     expected = math.sqrt(2 * 1.6e6 / (rho * (1 - 0.3))) / a / (2 * math.pi)
     for theory in ("membrane", "thin"):
-        assert shell_frequencies_Hz(ball, 0, theory).frequency(0) == pytest.approx(expected, rel=1e-12)
+        assert shell_frequencies_Hz(ball, 0, theory).frequency(0) == pytest.approx(
+            expected, rel=1e-12
+        )
 
 
 def test_density_of_jis_ball():
     # ρ = 2.5 kg / (4π/3 (0.089³ − 0.057³) m³)
-    assert shell_density_kg_per_m3() == pytest.approx(2.5 / (4 * math.pi / 3 * (0.089**3 - 0.057**3)), rel=1e-12)
+    assert shell_density_kg_per_m3() == pytest.approx(
+        2.5 / (4 * math.pi / 3 * (0.089**3 - 0.057**3)), rel=1e-12
+    )
 
 
 @pytest.mark.parametrize("nu", [0.0, 0.3, 0.5])
@@ -41,9 +45,13 @@ def test_membrane_roots_solve_baker_equation_and_thin_shell_tends_to_it(n, nu):
     lam = n * (n + 1)
     for om in membrane_omega(n, nu):
         w2 = om**2
-        assert w2**2 - (1 + 3 * nu + lam) * w2 + (lam - 2) * (1 - nu**2) == pytest.approx(0.0, abs=1e-10)
+        assert w2**2 - (1 + 3 * nu + lam) * w2 + (lam - 2) * (1 - nu**2) == pytest.approx(
+            0.0, abs=1e-10
+        )
     # h → 0: the bending terms (∝ h²/12a²) vanish
-    np.testing.assert_allclose(thin_shell_omega(n, nu, 1e-5), membrane_omega(n, nu), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(
+        thin_shell_omega(n, nu, 1e-5), membrane_omega(n, nu), rtol=1e-6, atol=1e-9
+    )
 
 
 def test_n1_rigid_translation_and_membrane_values():
@@ -69,7 +77,9 @@ def test_solid_sphere_lamb():
 
     ratio2 = 3.0  # (c_p/c_s)² = 2(1−ν)/(1−2ν) = 3 at ν = 1/4
     x = brentq(lambda x: math.sin(x) * (4 - ratio2 * x * x) - 4 * x * math.cos(x), 2.0, 3.0)
-    assert elastic_sphere_omega(0, 0.25, 0.0, n_roots=1)[0] == pytest.approx(x * math.sqrt(ratio2), rel=1e-9)
+    assert elastic_sphere_omega(0, 0.25, 0.0, n_roots=1)[0] == pytest.approx(
+        x * math.sqrt(ratio2), rel=1e-9
+    )
 
 
 def test_hollow_sphere_with_tiny_cavity_tends_to_solid():
@@ -95,7 +105,10 @@ def test_elastic_tends_to_thin_shell(n):
 
 def test_incompressible_limit_converges():
     inner = 57 / 89
-    roots = [elastic_sphere_omega(2, nu, inner, n_roots=2) for nu in (0.49, 0.499, INCOMPRESSIBLE_POISSON, 0.5)]
+    roots = [
+        elastic_sphere_omega(2, nu, inner, n_roots=2)
+        for nu in (0.49, 0.499, INCOMPRESSIBLE_POISSON, 0.5)
+    ]
     d1 = np.abs(roots[1] / roots[0] - 1)
     d2 = np.abs(roots[2] / roots[1] - 1)
     assert np.all(d2 < 0.2 * d1)  # linear in 0.5 − ν: each factor 10 closer shrinks the change ~10×

@@ -41,7 +41,9 @@ class ArgumentParser(argparse.ArgumentParser):
         raise UsageError(f"{command}: {message}" if command else message)
 
 
-def add_command(subparsers, name: str, *, help: str, description: str | None = None) -> argparse.ArgumentParser:
+def add_command(
+    subparsers, name: str, *, help: str, description: str | None = None
+) -> argparse.ArgumentParser:
     """Add a subcommand parser with ``--json`` and the house formatting."""
     parser = subparsers.add_parser(
         name,
@@ -56,7 +58,11 @@ def add_command(subparsers, name: str, *, help: str, description: str | None = N
 def add_json_flag(parser: argparse.ArgumentParser) -> None:
     """Add ``--json`` (machine-readable output on stdout) unless the parser already has it."""
     try:
-        parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout (progress stays on stderr)")
+        parser.add_argument(
+            "--json",
+            action="store_true",
+            help="print machine-readable JSON on stdout (progress stays on stderr)",
+        )
     except argparse.ArgumentError:
         pass  # the command defined its own --json
 

@@ -14,7 +14,9 @@ def run_summary(args, fix: dict) -> int:
     if args.summary is None:
         raise UsageError("fit: give recordings (FILES_OR_DIR) or --summary TABLE")
     if args.paths:
-        raise UsageError(f"fit: --summary {args.summary} fits a table of figures; leave out the recordings {' '.join(args.paths)}")
+        raise UsageError(
+            f"fit: --summary {args.summary} fits a table of figures; leave out the recordings {' '.join(args.paths)}"
+        )
     table = read_summary(args.summary)
     for note in table.notes:
         progress(f"note: {note}")
@@ -23,11 +25,26 @@ def run_summary(args, fix: dict) -> int:
         from ..studies.summary_selection import select_summary
 
         progress("no --model: comparing models by leave-one-figure-out prediction")
-        selection = select_summary(table, fix=fix, gas=args.gas, blocked_force=args.blocked_force or "paper", progress=not args.quiet)
+        selection = select_summary(
+            table,
+            fix=fix,
+            gas=args.gas,
+            blocked_force=args.blocked_force or "paper",
+            progress=not args.quiet,
+        )
         if selection.recommended is None:
-            raise ValueError(f"{table.source}: too few figures to compare models by held-out figures; give --model ({selection.table()})")
+            raise ValueError(
+                f"{table.source}: too few figures to compare models by held-out figures; give --model ({selection.table()})"
+            )
         result = selection.candidates[selection.recommended].fit
         progress(f"recommended: {selection.recommended}")
     else:
-        result = fit_summary(table, args.model, blocked_force=args.blocked_force or "paper", gas=args.gas, fix=fix, progress=not args.quiet)
+        result = fit_summary(
+            table,
+            args.model,
+            blocked_force=args.blocked_force or "paper",
+            gas=args.gas,
+            fix=fix,
+            progress=not args.quiet,
+        )
     return finish(args, result, selection)

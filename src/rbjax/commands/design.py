@@ -26,14 +26,35 @@ examples:
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "design", help="design a ball to the middle of the standard's tolerances", description=DESCRIPTION)
-    p.add_argument("--model", default="kelvin-voigt", metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening); default kelvin-voigt")
+    p = add_command(
+        subparsers,
+        "design",
+        help="design a ball to the middle of the standard's tolerances",
+        description=DESCRIPTION,
+    )
+    p.add_argument(
+        "--model",
+        default="kelvin-voigt",
+        metavar="NAME",
+        help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening); default kelvin-voigt",
+    )
     p.add_argument("--geometry", choices=("jis", "iso", "both"), default="jis", help="default jis")
     p.add_argument("--starts", type=int, default=8, metavar="N", help="starts (default 8)")
     p.add_argument("--steps", type=int, default=150, metavar="N", help="Adam steps (default 150)")
-    p.add_argument("--vary-wall", action="store_true", help="also vary the wall thickness (20-45 mm), the mass following it")
-    p.add_argument("--gas", choices=("adiabatic", "none"), default="adiabatic", help="gas force F_G (Eq. 4, corrected); default adiabatic")
-    p.add_argument("--out", default=None, metavar="DIR", help="write design.json and the margin plots into DIR")
+    p.add_argument(
+        "--vary-wall",
+        action="store_true",
+        help="also vary the wall thickness (20-45 mm), the mass following it",
+    )
+    p.add_argument(
+        "--gas",
+        choices=("adiabatic", "none"),
+        default="adiabatic",
+        help="gas force F_G (Eq. 4, corrected); default adiabatic",
+    )
+    p.add_argument(
+        "--out", default=None, metavar="DIR", help="write design.json and the margin plots into DIR"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=run)
 
@@ -42,7 +63,18 @@ def run(args) -> int:
     from ..studies.design import design
 
     geometries = ("jis", "iso") if args.geometry == "both" else (args.geometry,)
-    results = [design(args.model, g, n_starts=args.starts, steps=args.steps, vary_wall=args.vary_wall, gas=args.gas, progress=not args.quiet) for g in geometries]
+    results = [
+        design(
+            args.model,
+            g,
+            n_starts=args.starts,
+            steps=args.steps,
+            vary_wall=args.vary_wall,
+            gas=args.gas,
+            progress=not args.quiet,
+        )
+        for g in geometries
+    ]
     out = {"designs": [r.to_dict() for r in results]}
     if args.out is not None:
         for r in results:

@@ -40,7 +40,12 @@ restitution, L_FE per band, per drop height; see `rbjax.fit.summary_table`):
 
 def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
     """Options shared by ``fit`` and ``select`` for reading and conditioning the recordings."""
-    p.add_argument("paths", nargs=paths, metavar="FILES_OR_DIR", help="recordings (*.csv, *.wav, *.npy, *.mat, *.uff, *.unv, *.tdms) or directories of them")
+    p.add_argument(
+        "paths",
+        nargs=paths,
+        metavar="FILES_OR_DIR",
+        help="recordings (*.csv, *.wav, *.npy, *.mat, *.uff, *.unv, *.tdms) or directories of them",
+    )
     p.add_argument(
         "--lowpass-hz",
         default="auto",
@@ -49,9 +54,22 @@ def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
         "predictions too; 'none' for no filter; default 'auto' (as the recordings declare; 1250 Hz for "
         "the shipped emulated recordings)",
     )
-    p.add_argument("--all-drops", action="store_true", help="fit every drop as its own record (default: the frequency-domain average per height)")
-    p.add_argument("--gas", choices=("adiabatic", "none"), default="adiabatic", help="gas force F_G (Eq. 4, corrected); default adiabatic")
-    p.add_argument("--strict", action="store_true", help="refuse a clipped recording (default: leave it out, fit the others and say so in the report)")
+    p.add_argument(
+        "--all-drops",
+        action="store_true",
+        help="fit every drop as its own record (default: the frequency-domain average per height)",
+    )
+    p.add_argument(
+        "--gas",
+        choices=("adiabatic", "none"),
+        default="adiabatic",
+        help="gas force F_G (Eq. 4, corrected); default adiabatic",
+    )
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a clipped recording (default: leave it out, fit the others and say so in the report)",
+    )
 
 
 def parse_lowpass(value: str):
@@ -95,25 +113,65 @@ def load_fit_data(args):
     for e in data.excluded:
         progress(f"excluded {e['source']}: {e['reason']}")
     chain = f"{data.lowpass_Hz:g} Hz low-pass" if data.lowpass_Hz else "no low-pass"
-    progress(f"{len(recs)} recordings, {data.n_records} records at {', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})")
+    progress(
+        f"{len(recs)} recordings, {data.n_records} records at {', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})"
+    )
     return data
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "fit", help="fit E and a damping model to measured force histories", description=DESCRIPTION)
+    p = add_command(
+        subparsers,
+        "fit",
+        help="fit E and a damping model to measured force histories",
+        description=DESCRIPTION,
+    )
     add_data_options(p, paths="*")
-    p.add_argument("--summary", default=None, metavar="TABLE", help="fit to a table of summary figures per drop height (.csv or .toml) instead of recordings")
-    p.add_argument("--model", default=None, metavar="NAME", help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode or +series-kelvin-voigt); default: choose by cross-validation")
-    p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without")
-    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE", help="hold a parameter at a value (repeatable)")
-    p.add_argument("--optimizer", choices=("lm", "gauss-newton"), default="lm", help="default lm (optimistix Levenberg–Marquardt)")
-    p.add_argument("--method", choices=("auto", "samples", "ode"), default="auto",
-                   help="the prediction: samples (the force at the records' own samples by fixed steps; auto's choice) or ode (the diffrax ODE with its events, the reference)")
-    p.add_argument("--out", default=None, metavar="DIR", help="write fit.json and plots (histories, L_FE bands, correlations) into DIR")
+    p.add_argument(
+        "--summary",
+        default=None,
+        metavar="TABLE",
+        help="fit to a table of summary figures per drop height (.csv or .toml) instead of recordings",
+    )
+    p.add_argument(
+        "--model",
+        default=None,
+        metavar="NAME",
+        help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode or +series-kelvin-voigt); default: choose by cross-validation",
+    )
+    p.add_argument(
+        "--blocked-force",
+        choices=("paper", "momentum"),
+        default=None,
+        help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without",
+    )
+    p.add_argument(
+        "--fix",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold a parameter at a value (repeatable)",
+    )
+    p.add_argument(
+        "--optimizer",
+        choices=("lm", "gauss-newton"),
+        default="lm",
+        help="default lm (optimistix Levenberg–Marquardt)",
+    )
+    p.add_argument(
+        "--method",
+        choices=("auto", "samples", "ode"),
+        default="auto",
+        help="the prediction: samples (the force at the records' own samples by fixed steps; auto's choice) or ode (the diffrax ODE with its events, the reference)",
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="write fit.json and plots (histories, L_FE bands, correlations) into DIR",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=run)
-
-
 
 
 def _check_model_and_fix(model, fix):
@@ -150,8 +208,18 @@ def run(args) -> int:
         from ..studies.selection import BLOCKED_FORCES, select_model
 
         forces = BLOCKED_FORCES if args.blocked_force is None else (args.blocked_force,)
-        progress("no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)")
-        selection = select_model(data, blocked_forces=forces, gas=args.gas, fix=fix, optimizer=args.optimizer, method=args.method, progress=not args.quiet)
+        progress(
+            "no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)"
+        )
+        selection = select_model(
+            data,
+            blocked_forces=forces,
+            gas=args.gas,
+            fix=fix,
+            optimizer=args.optimizer,
+            method=args.method,
+            progress=not args.quiet,
+        )
         result = selection.recommended.fit
         progress(f"recommended: {selection.recommended.label}")
     else:

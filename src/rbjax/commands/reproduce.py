@@ -17,8 +17,15 @@ examples:
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "reproduce", help="reproduce the paper's predictions (figures, report.md, results.json)", description=DESCRIPTION)
-    p.add_argument("--out", default="rbjax-out", metavar="DIR", help="output folder (default: rbjax-out)")
+    p = add_command(
+        subparsers,
+        "reproduce",
+        help="reproduce the paper's predictions (figures, report.md, results.json)",
+        description=DESCRIPTION,
+    )
+    p.add_argument(
+        "--out", default="rbjax-out", metavar="DIR", help="output folder (default: rbjax-out)"
+    )
     p.set_defaults(func=run)
 
 
@@ -27,7 +34,15 @@ def summary_table(results: dict) -> str:
     header = ["quantity", "paper", "rbjax gas on", "rbjax gas off", "unit"]
     rows = []
     for r in results["comparison"]:
-        rows.append([r["quantity"], fmt(r["paper"], ".4g"), fmt(r["rbjax"]["adiabatic"], ".4g"), fmt(r["rbjax"]["none"], ".4g"), r["unit"]])
+        rows.append(
+            [
+                r["quantity"],
+                fmt(r["paper"], ".4g"),
+                fmt(r["rbjax"]["adiabatic"], ".4g"),
+                fmt(r["rbjax"]["none"], ".4g"),
+                r["unit"],
+            ]
+        )
     return format_table(header, rows)
 
 
@@ -39,8 +54,16 @@ def run(args) -> int:
     results = reproduce(args.out, progress=True)
     out = Path(args.out)
     if args.json:
-        emit_json({"out_dir": str(out), "files": [str(out / f) for f in (*results["figures"], "report.md", "results.json")], **results})
+        emit_json(
+            {
+                "out_dir": str(out),
+                "files": [str(out / f) for f in (*results["figures"], "report.md", "results.json")],
+                **results,
+            }
+        )
     else:
         print(summary_table(results))
-        print(f"\n{len(results['figures'])} figures, report.md and results.json written to {out}/ ({results['elapsed_s']:.1f} s)")
+        print(
+            f"\n{len(results['figures'])} figures, report.md and results.json written to {out}/ ({results['elapsed_s']:.1f} s)"
+        )
     return 0

@@ -25,23 +25,77 @@ def _reverberation(text: str):
     try:
         values = [float(x) for x in text.split(",")]
     except ValueError:
-        raise ValueError(f"--reverberation-s={text!r} is not a number or a comma-separated list of numbers") from None
+        raise ValueError(
+            f"--reverberation-s={text!r} is not a number or a comma-separated list of numbers"
+        ) from None
     return values[0] if len(values) == 1 else values
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "room", help="L_i,Fmax and L_iA,Fmax in the room below a floor struck by the ball", description=DESCRIPTION)
-    p.add_argument("--floor", required=True, metavar="NAME|FILE", help="floor preset name or .toml/.json floor file")
-    p.add_argument("--room-volume-m3", type=float, required=True, metavar="V", help="volume of the room below, m³ (> 0)")
-    p.add_argument("--reverberation-s", type=_reverberation, required=True, metavar="T", help="reverberation time, s: one value or one per band")
-    p.add_argument("--height-m", type=float, default=1.0, help="drop height, m (default 1.0, ISO 16283-2 Annex A)")
-    p.add_argument("--fraction", type=int, default=1, choices=(1, 3), help="1: octave bands (default), 3: one-third octaves")
+    p = add_command(
+        subparsers,
+        "room",
+        help="L_i,Fmax and L_iA,Fmax in the room below a floor struck by the ball",
+        description=DESCRIPTION,
+    )
+    p.add_argument(
+        "--floor",
+        required=True,
+        metavar="NAME|FILE",
+        help="floor preset name or .toml/.json floor file",
+    )
+    p.add_argument(
+        "--room-volume-m3",
+        type=float,
+        required=True,
+        metavar="V",
+        help="volume of the room below, m³ (> 0)",
+    )
+    p.add_argument(
+        "--reverberation-s",
+        type=_reverberation,
+        required=True,
+        metavar="T",
+        help="reverberation time, s: one value or one per band",
+    )
+    p.add_argument(
+        "--height-m",
+        type=float,
+        default=1.0,
+        help="drop height, m (default 1.0, ISO 16283-2 Annex A)",
+    )
+    p.add_argument(
+        "--fraction",
+        type=int,
+        default=1,
+        choices=(1, 3),
+        help="1: octave bands (default), 3: one-third octaves",
+    )
     p.add_argument("--length-x-m", type=float, default=4.0, help="slab side x, m (default 4)")
     p.add_argument("--length-y-m", type=float, default=5.0, help="slab side y, m (default 5)")
-    p.add_argument("--loss-factor", type=float, default=None, help="slab structural loss factor (default: in-situ f^-1/2)")
-    p.add_argument("--slab-material", default=None, help="material of the slab below a modal floor (rbjax.terms MATERIALS)")
-    p.add_argument("--slab-thickness-m", type=float, default=None, help="thickness of the slab below a modal floor, m")
-    p.add_argument("--plot", default=None, metavar="FILE", help="save the figure (band levels, Fast level against time)")
+    p.add_argument(
+        "--loss-factor",
+        type=float,
+        default=None,
+        help="slab structural loss factor (default: in-situ f^-1/2)",
+    )
+    p.add_argument(
+        "--slab-material",
+        default=None,
+        help="material of the slab below a modal floor (rbjax.terms MATERIALS)",
+    )
+    p.add_argument(
+        "--slab-thickness-m",
+        type=float,
+        default=None,
+        help="thickness of the slab below a modal floor, m",
+    )
+    p.add_argument(
+        "--plot",
+        default=None,
+        metavar="FILE",
+        help="save the figure (band levels, Fast level against time)",
+    )
     p.set_defaults(func=run)
 
 
@@ -51,26 +105,39 @@ def run(args) -> int:
     from ..terms.floors.presets import load_named_floor
 
     name, floor = load_named_floor(args.floor)
-    sides = dict(length_x_m=args.length_x_m, length_y_m=args.length_y_m, loss_factor=args.loss_factor)
+    sides = dict(
+        length_x_m=args.length_x_m, length_y_m=args.length_y_m, loss_factor=args.loss_factor
+    )
     if isinstance(floor, InfinitePlate):
         slab, modal = Slab.of_plate(floor, **sides), None
     elif isinstance(floor, AbstractModalFloor):
         if args.slab_material is None or args.slab_thickness_m is None:
-            raise RoomChainError("a modal floor needs the slab that radiates: give --slab-material and --slab-thickness-m")
+            raise RoomChainError(
+                "a modal floor needs the slab that radiates: give --slab-material and --slab-thickness-m"
+            )
         slab, modal = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides), floor
     else:
-        raise RoomChainError(f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; valid: a plate preset or file, or a modal floor file")
+        raise RoomChainError(
+            f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; valid: a plate preset or file, or a modal floor file"
+        )
     room = ReceivingRoom(args.room_volume_m3, args.reverberation_s)
     progress(f"room below {name}: ball from {args.height_m:g} m, V = {args.room_volume_m3:g} m³")
-    res = impact_sound(slab, room, floor=modal, height_m=args.height_m, fraction=args.fraction, name=name)
+    res = impact_sound(
+        slab, room, floor=modal, height_m=args.height_m, fraction=args.fraction, name=name
+    )
     if args.plot:
         res.plot(args.plot)
     if args.json:
         emit_json(res.to_dict())
         return 0
-    rows = [[b, f"{level:.1f}", f"{norm:.1f}", f"{t:.3f}"] for b, level, norm, t in zip(res.bands, res.level_dB, res.normalised_dB, res.peak_time_s)]
+    rows = [
+        [b, f"{level:.1f}", f"{norm:.1f}", f"{t:.3f}"]
+        for b, level, norm, t in zip(res.bands, res.level_dB, res.normalised_dB, res.peak_time_s)
+    ]
     print(format_table(["band Hz", "L_i,Fmax dB", "normalised dB", "t_max s"], rows))
-    print(f"L_iA,Fmax = {res.LiA_Fmax_dB} dB (normalised {res.LiA_Fmax_normalised_dB} dB; unrounded {res.LiA_Fmax_unrounded_dB:.2f} dB)")
+    print(
+        f"L_iA,Fmax = {res.LiA_Fmax_dB} dB (normalised {res.LiA_Fmax_normalised_dB} dB; unrounded {res.LiA_Fmax_unrounded_dB:.2f} dB)"
+    )
     for w in res.warnings:
         print(f"note: {w}")
     return 0

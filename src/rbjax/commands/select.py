@@ -26,11 +26,31 @@ examples:
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "select", help="choose the impact model by cross-validation over drop heights", description=DESCRIPTION)
+    p = add_command(
+        subparsers,
+        "select",
+        help="choose the impact model by cross-validation over drop heights",
+        description=DESCRIPTION,
+    )
     add_data_options(p)
-    p.add_argument("--candidates", default=None, metavar="NAMES", help="comma-separated model names (suffixes +stiffening, +ball-mode, +series-kelvin-voigt), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,hunt-crossley+series-kelvin-voigt)")
-    p.add_argument("--blocked-force", choices=("paper", "momentum", "both"), default="both", help="blocked-force definitions to compare (default both)")
-    p.add_argument("--hold-out", default=None, metavar="HEIGHTS", help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them")
+    p.add_argument(
+        "--candidates",
+        default=None,
+        metavar="NAMES",
+        help="comma-separated model names (suffixes +stiffening, +ball-mode, +series-kelvin-voigt), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,hunt-crossley+series-kelvin-voigt)",
+    )
+    p.add_argument(
+        "--blocked-force",
+        choices=("paper", "momentum", "both"),
+        default="both",
+        help="blocked-force definitions to compare (default both)",
+    )
+    p.add_argument(
+        "--hold-out",
+        default=None,
+        metavar="HEIGHTS",
+        help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them",
+    )
     p.add_argument("--out", default=None, metavar="DIR", help="write selection.json into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=run)
@@ -58,7 +78,9 @@ def _parse_heights(text):
     try:
         heights = [float(t) for t in text.split(",") if t.strip()]
     except ValueError:
-        raise ValueError(f"--hold-out {text!r}: expected comma-separated heights in m, e.g. 0.2,0.8") from None
+        raise ValueError(
+            f"--hold-out {text!r}: expected comma-separated heights in m, e.g. 0.2,0.8"
+        ) from None
     if not heights or any(not h > 0 for h in heights):
         raise ValueError(f"--hold-out {text!r}: heights must be positive (m)")
     return heights
@@ -76,15 +98,27 @@ def run(args) -> int:
 
         missing = [h for h in held if not np.any(np.isclose(data.heights_m, h, atol=5e-4))]
         if missing:
-            raise ValueError(f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: {', '.join(f'{h:g}' for h in data.heights_m)}")
-    selection = select_model(data, candidates, blocked_forces=forces, gas=args.gas, progress=not args.quiet)
+            raise ValueError(
+                f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: {', '.join(f'{h:g}' for h in data.heights_m)}"
+            )
+    selection = select_model(
+        data, candidates, blocked_forces=forces, gas=args.gas, progress=not args.quiet
+    )
     comparison = None
     if held is not None:
         import numpy as np
 
         keep = [h for h in data.heights_m if not np.any(np.isclose(held, h, atol=5e-4))]
         starts = {(c.model_name, c.blocked_force): c.fit for c in selection.candidates}
-        comparison = held_out_comparison(data, keep, candidates, blocked_forces=forces, starts=starts, gas=args.gas, progress=not args.quiet)
+        comparison = held_out_comparison(
+            data,
+            keep,
+            candidates,
+            blocked_forces=forces,
+            starts=starts,
+            gas=args.gas,
+            progress=not args.quiet,
+        )
     out = {"selection": selection.to_dict()}
     if comparison is not None:
         out["held_out"] = comparison.to_dict()

@@ -24,16 +24,68 @@ examples:
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "sensitivity", help="local derivatives and elasticities of the impact outputs", description=DESCRIPTION)
-    p.add_argument("--height-m", type=float, nargs="+", required=True, metavar="H", help="drop height(s) in m (> 0)")
-    p.add_argument("--wrt", nargs="+", default=None, metavar="NAME", help="parameters to differentiate against (default: all)")
-    p.add_argument("--gas", choices=("adiabatic", "none"), default=None, help="gas force F_G (Eq. 4, corrected); default adiabatic")
-    p.add_argument("--blocked-force", choices=("paper", "momentum"), default=None, help="floor force definition; default paper")
-    p.add_argument("--youngs-pa", type=float, default=None, metavar="E", help="Young's modulus of the rubber in Pa (default 1.6e6)")
-    p.add_argument("--poisson", type=float, default=None, metavar="NU", help="Poisson's ratio, -1 < ν <= 0.5 (default 0.5)")
-    p.add_argument("--params", default=None, metavar="FIT.json", help="ball and model (with damping) from a params/fit JSON file")
-    p.add_argument("--no-lfe", action="store_true", help="skip the L_FE bands (faster: no force history)")
-    p.add_argument("--plot", default=None, metavar="FILE.png", help="save a tornado chart of the elasticities at the first height")
+    p = add_command(
+        subparsers,
+        "sensitivity",
+        help="local derivatives and elasticities of the impact outputs",
+        description=DESCRIPTION,
+    )
+    p.add_argument(
+        "--height-m",
+        type=float,
+        nargs="+",
+        required=True,
+        metavar="H",
+        help="drop height(s) in m (> 0)",
+    )
+    p.add_argument(
+        "--wrt",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="parameters to differentiate against (default: all)",
+    )
+    p.add_argument(
+        "--gas",
+        choices=("adiabatic", "none"),
+        default=None,
+        help="gas force F_G (Eq. 4, corrected); default adiabatic",
+    )
+    p.add_argument(
+        "--blocked-force",
+        choices=("paper", "momentum"),
+        default=None,
+        help="floor force definition; default paper",
+    )
+    p.add_argument(
+        "--youngs-pa",
+        type=float,
+        default=None,
+        metavar="E",
+        help="Young's modulus of the rubber in Pa (default 1.6e6)",
+    )
+    p.add_argument(
+        "--poisson",
+        type=float,
+        default=None,
+        metavar="NU",
+        help="Poisson's ratio, -1 < ν <= 0.5 (default 0.5)",
+    )
+    p.add_argument(
+        "--params",
+        default=None,
+        metavar="FIT.json",
+        help="ball and model (with damping) from a params/fit JSON file",
+    )
+    p.add_argument(
+        "--no-lfe", action="store_true", help="skip the L_FE bands (faster: no force history)"
+    )
+    p.add_argument(
+        "--plot",
+        default=None,
+        metavar="FILE.png",
+        help="save a tornado chart of the elasticities at the first height",
+    )
     p.set_defaults(func=run)
 
 
@@ -43,7 +95,11 @@ def render_table(rows: list[dict]) -> str:
         outputs = list(row["values"])
         header = ["parameter", "value", *outputs]
         body = [
-            [p, fmt(row["parameters"][p], ".4g"), *(fmt(row["elasticity"][o][p], "+.3f") for o in outputs)]
+            [
+                p,
+                fmt(row["parameters"][p], ".4g"),
+                *(fmt(row["elasticity"][o][p], "+.3f") for o in outputs),
+            ]
             for p in row["parameters"]
         ]
         values = ["output value", "", *(fmt(row["values"][o], ".4g") for o in outputs)]
@@ -65,7 +121,9 @@ def run(args) -> int:
     wrt = None
     if args.wrt is not None:
         wrt = [canonical_name(w, model) for w in args.wrt]  # unknown names fail before any solve
-    progress(f"differentiating at {len(args.height_m)} drop height(s) w.r.t. {', '.join(wrt or parameter_names(model))}")
+    progress(
+        f"differentiating at {len(args.height_m)} drop height(s) w.r.t. {', '.join(wrt or parameter_names(model))}"
+    )
     result = local_sensitivity(
         args.height_m,
         ball,

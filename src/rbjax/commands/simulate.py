@@ -39,21 +39,60 @@ def register(subparsers) -> None:
     from ..terms.floors.presets import FLOOR_PRESETS
 
     description = DESCRIPTION.format(presets=", ".join(FLOOR_PRESETS))
-    p = add_command(subparsers, "simulate", help="predict the blocked force for drop heights", description=description)
-    p.add_argument("--height-m", type=float, nargs="+", required=True, metavar="H", help="drop height(s) in m (> 0)")
-    p.add_argument("--gas", choices=("adiabatic", "none"), default=None, help="gas force F_G (Eq. 4, corrected); default: from --params, else adiabatic")
+    p = add_command(
+        subparsers,
+        "simulate",
+        help="predict the blocked force for drop heights",
+        description=description,
+    )
+    p.add_argument(
+        "--height-m",
+        type=float,
+        nargs="+",
+        required=True,
+        metavar="H",
+        help="drop height(s) in m (> 0)",
+    )
+    p.add_argument(
+        "--gas",
+        choices=("adiabatic", "none"),
+        default=None,
+        help="gas force F_G (Eq. 4, corrected); default: from --params, else adiabatic",
+    )
     p.add_argument(
         "--blocked-force",
         choices=("paper", "momentum"),
         default=None,
         help="floor force: 'paper' = F_B+F_G, 'momentum' adds the flux (M/2R)δ̇² in compression; default: from --params, else paper",
     )
-    p.add_argument("--youngs-pa", type=float, default=None, metavar="E", help="Young's modulus of the rubber in Pa (default: from --params, else 1.6e6)")
-    p.add_argument("--poisson", type=float, default=None, metavar="NU", help="Poisson's ratio, -1 < ν <= 0.5 (default: from --params, else 0.5)")
-    p.add_argument("--params", default=None, metavar="FIT.json", help="ball and model from a params/fit JSON file (options above override it)")
+    p.add_argument(
+        "--youngs-pa",
+        type=float,
+        default=None,
+        metavar="E",
+        help="Young's modulus of the rubber in Pa (default: from --params, else 1.6e6)",
+    )
+    p.add_argument(
+        "--poisson",
+        type=float,
+        default=None,
+        metavar="NU",
+        help="Poisson's ratio, -1 < ν <= 0.5 (default: from --params, else 0.5)",
+    )
+    p.add_argument(
+        "--params",
+        default=None,
+        metavar="FIT.json",
+        help="ball and model from a params/fit JSON file (options above override it)",
+    )
     p.add_argument(
         "--method",
-        choices=("auto", "ode", "quadrature", "angle"),  # rbjax.solve.simulate.METHODS (not imported: --help stays fast)
+        choices=(
+            "auto",
+            "ode",
+            "quadrature",
+            "angle",
+        ),  # rbjax.solve.simulate.METHODS (not imported: --help stays fast)
         default="auto",
         help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on the rigid "
         "floor, fastest), 'angle' takes fixed steps in the phase angle (any damping, rigid floor), 'ode' runs "
@@ -104,9 +143,16 @@ def _rebuilt(model, **changes):
     """``model`` with some of its options (gas, blocked_force, floor) replaced (validated)."""
     from ..solve.simulate import make_model
 
-    options = dict(gas=model.gas, blocked_force=model.blocked_force, damping=model.damping, stiffening=model.stiffening,
-                   max_deflection_ratio=model.max_deflection_ratio, ball_mode=model.ball_mode, floor=model.floor,
-                   series=model.series)
+    options = dict(
+        gas=model.gas,
+        blocked_force=model.blocked_force,
+        damping=model.damping,
+        stiffening=model.stiffening,
+        max_deflection_ratio=model.max_deflection_ratio,
+        ball_mode=model.ball_mode,
+        floor=model.floor,
+        series=model.series,
+    )
     return make_model(**(options | changes))
 
 
@@ -114,7 +160,9 @@ def _simulate(heights, ball, model, method: str, floor=None):
     """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
     from ..solve import simulate
 
-    return simulate(heights, ball, model if floor is None else _rebuilt(model, floor=floor), method=method)
+    return simulate(
+        heights, ball, model if floor is None else _rebuilt(model, floor=floor), method=method
+    )
 
 
 def _octave_lfe(result):
@@ -124,16 +172,24 @@ def _octave_lfe(result):
     from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
 
     n = np.size(result.status)
-    total, octave, third = np.full(n, np.nan), np.full((n, len(OCTAVE_BANDS)), np.nan), np.full((n, len(THIRD_OCTAVE_BANDS)), np.nan)
+    total, octave, third = (
+        np.full(n, np.nan),
+        np.full((n, len(OCTAVE_BANDS)), np.nan),
+        np.full((n, len(THIRD_OCTAVE_BANDS)), np.nan),
+    )
     if np.any(np.asarray(result.status) == 0):  # no history to integrate when every solve failed
-        force = np.asarray(result.force_N).reshape(n, -1)  # (n, 44100): the paper's 44.1 kHz x 1 s record (§2.4)
+        force = np.asarray(result.force_N).reshape(
+            n, -1
+        )  # (n, 44100): the paper's 44.1 kHz x 1 s record (§2.4)
         total = np.asarray(lfe_total_dB(force, PAPER_RATE_Hz))
         octave = np.asarray(lfe_octave_dB(force, PAPER_RATE_Hz))
         third = np.asarray(lfe_third_octave_dB(force, PAPER_RATE_Hz))
     return total, octave, third
 
 
-def floor_outputs(heights_m, ball, model, octave_dB, method: str = "auto") -> tuple[np.ndarray, np.ndarray]:
+def floor_outputs(
+    heights_m, ball, model, octave_dB, method: str = "auto"
+) -> tuple[np.ndarray, np.ndarray]:
     """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
     the rigid floor, per height and band) for a model on a moving floor."""
     from ..solve.energy import energy_balance
@@ -141,11 +197,15 @@ def floor_outputs(heights_m, ball, model, octave_dB, method: str = "auto") -> tu
 
     heights = np.asarray(heights_m, dtype=float)
     blocked = _simulate(heights, ball, model, method, floor=Rigid())
-    energy = np.asarray(energy_balance(heights, ball, model).floor_energy_J, dtype=float).reshape(-1)
+    energy = np.asarray(energy_balance(heights, ball, model).floor_energy_J, dtype=float).reshape(
+        -1
+    )
     return energy, np.asarray(octave_dB) - _octave_lfe(blocked)[1]
 
 
-def simulate_rows(heights_m, ball, model, method: str = "auto", floor_name: str | None = None) -> list[dict]:
+def simulate_rows(
+    heights_m, ball, model, method: str = "auto", floor_name: str | None = None
+) -> list[dict]:
     """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
     ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran. On a floor
     that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
@@ -170,8 +230,12 @@ def simulate_rows(heights_m, ball, model, method: str = "auto", floor_name: str 
             "peak_force_N": float(result.peak_force_N[i]),
             "restitution": float(result.restitution[i]),
             "lfe_total_dB": float(total[i]) if ok else nan,
-            "lfe_octave_dB": {b: (float(octave[i, j]) if ok else nan) for j, b in enumerate(OCTAVE_BANDS)},
-            "lfe_third_octave_dB": {b: (float(third[i, j]) if ok else nan) for j, b in enumerate(THIRD_OCTAVE_BANDS)},
+            "lfe_octave_dB": {
+                b: (float(octave[i, j]) if ok else nan) for j, b in enumerate(OCTAVE_BANDS)
+            },
+            "lfe_third_octave_dB": {
+                b: (float(third[i, j]) if ok else nan) for j, b in enumerate(THIRD_OCTAVE_BANDS)
+            },
             "conformance": None,
             "status": str(names[i]),
             "method": result.method,
@@ -179,7 +243,9 @@ def simulate_rows(heights_m, ball, model, method: str = "auto", floor_name: str 
         if moving:
             row["floor"] = floor_name or model.floor.name
             row["floor_energy_J"] = float(floor_energy[i]) if ok else nan
-            row["lfe_ratio_dB"] = {b: (float(ratio[i, j]) if ok else nan) for j, b in enumerate(OCTAVE_BANDS)}
+            row["lfe_ratio_dB"] = {
+                b: (float(ratio[i, j]) if ok else nan) for j, b in enumerate(OCTAVE_BANDS)
+            }
         if ok:
             row["conformance"] = check_conformance(
                 octave[i],
@@ -205,7 +271,11 @@ def _failures(rows) -> list[str]:
     lines = []
     for r in rows:
         if _verdict(r["conformance"]) == "FAIL":
-            bad = [f"{i['name']} {i['value']:.4g} not in [{i['lower']:g}, {i['upper']:g}] {i['unit']}" for i in r["conformance"]["items"] if not i["passed"]]
+            bad = [
+                f"{i['name']} {i['value']:.4g} not in [{i['lower']:g}, {i['upper']:g}] {i['unit']}"
+                for i in r["conformance"]["items"]
+                if not i["passed"]
+            ]
             lines.append(f"  {r['height_m']:g} m: " + "; ".join(bad))
     return lines
 
@@ -222,14 +292,25 @@ def _floor_notes(rows: list[dict]) -> list[str]:
     ]
     for r in rows:
         bands = ", ".join(f"{b} {fmt(r['lfe_ratio_dB'][b], '+.2f')}" for b in OCTAVE_BANDS)
-        lines.append(f"  {r['height_m']:g} m: E_floor {fmt(r['floor_energy_J'], '.3g')} J; ΔL_FE {bands} dB")
+        lines.append(
+            f"  {r['height_m']:g} m: E_floor {fmt(r['floor_energy_J'], '.3g')} J; ΔL_FE {bands} dB"
+        )
     return lines
 
 
 def render_table(rows: list[dict]) -> str:
     from ..spectrum.bands import OCTAVE_BANDS
 
-    header = ["height m", "t_c ms", "F_peak N", "e", "L_FE dB", *(f"{b} Hz" for b in OCTAVE_BANDS), "conformance", "status"]
+    header = [
+        "height m",
+        "t_c ms",
+        "F_peak N",
+        "e",
+        "L_FE dB",
+        *(f"{b} Hz" for b in OCTAVE_BANDS),
+        "conformance",
+        "status",
+    ]
     body = []
     for r in rows:
         body.append(
@@ -260,7 +341,9 @@ def render_table(rows: list[dict]) -> str:
 def run(args) -> int:
     for i, h in enumerate(args.height_m):  # before any output, so bad input gives one line
         if not (math.isfinite(h) and h > 0.0):
-            raise ValueError(f"height_m={h!r} (--height-m value {i + 1}) is outside the valid range (0, inf) and finite")
+            raise ValueError(
+                f"height_m={h!r} (--height-m value {i + 1}) is outside the valid range (0, inf) and finite"
+            )
     ball, model = load_ball_and_model(args)
     floor_name = None
     if args.floor is not None:
@@ -268,7 +351,9 @@ def run(args) -> int:
 
         floor_name = load_named_floor(args.floor)[0]
     on = "" if model.floor.rigid else f", floor {floor_name}"
-    progress(f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}{on}")
+    progress(
+        f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}{on}"
+    )
     rows = simulate_rows(args.height_m, ball, model, method=args.method, floor_name=floor_name)
     if args.json:
         emit_json(rows)

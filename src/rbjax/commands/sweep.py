@@ -32,9 +32,19 @@ examples:
 
 
 def register(subparsers) -> None:
-    p = add_command(subparsers, "sweep", help="global sensitivity and conformance probability from a TOML config", description=DESCRIPTION)
+    p = add_command(
+        subparsers,
+        "sweep",
+        help="global sensitivity and conformance probability from a TOML config",
+        description=DESCRIPTION,
+    )
     p.add_argument("config", metavar="CONFIG.toml", help="the study to run")
-    p.add_argument("--out", default=None, metavar="FILE.json", help="write the summary (JSON) and the samples (FILE.samples.npz)")
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="FILE.json",
+        help="write the summary (JSON) and the samples (FILE.samples.npz)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument(
         "--distributed",
@@ -83,7 +93,9 @@ def run(args) -> int:
     result = run_sweep(config, progress=not args.no_progress)
     seconds = time.perf_counter() - start
     evaluations = result.n_evaluations if hasattr(result, "n_evaluations") else result.n_samples
-    progress(f"{evaluations} impact evaluations in {seconds:.1f} s ({evaluations / seconds:.0f} per s)")
+    progress(
+        f"{evaluations} impact evaluations in {seconds:.1f} s ({evaluations / seconds:.0f} per s)"
+    )
     if jax.process_index() != 0:
         return 0
     if args.out:

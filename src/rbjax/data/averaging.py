@@ -61,12 +61,13 @@ def average(
     if domain not in ("frequency", "time"):
         raise ValueError(f"domain={domain!r}: use 'frequency' or 'time'")
     rate = recs[0].rate_Hz
-    notes = [f"{domain}-domain average of {len(recs)} recordings: " + ", ".join(r.source for r in recs)]
+    notes = [
+        f"{domain}-domain average of {len(recs)} recordings: " + ", ".join(r.source for r in recs)
+    ]
     heights = [r.height_m for r in recs if r.height_m is not None]
     if heights and max(heights) - min(heights) > 0.02:
-        msg = (
-            "average(): drop heights differ by more than 2 cm: "
-            + ", ".join(f"{r.source}: {r.height_m} m" for r in recs)
+        msg = "average(): drop heights differ by more than 2 cm: " + ", ".join(
+            f"{r.source}: {r.height_m} m" for r in recs
         )
         warnings.warn(msg, DataWarning, stacklevel=2)
         notes.append(msg)
@@ -89,7 +90,10 @@ def average(
             acc += X * ph
         y = np.fft.irfft(acc / len(recs), N)[:m]
     else:
-        y = np.mean([fractional_shift(r.force_N[:m], -d, method=method) for r, d in zip(recs, shifts)], axis=0)
+        y = np.mean(
+            [fractional_shift(r.force_N[:m], -d, method=method) for r, d in zip(recs, shifts)],
+            axis=0,
+        )
 
     lps = {r.lowpass_Hz for r in recs}
     cals = {r.calibration_N_per_FS for r in recs}

@@ -54,27 +54,39 @@ def pick_channel(channels: list[Channel], channel: int | str | None, source: str
     """
     listing = ", ".join(f"{k}: {c.name!r}" for k, c in enumerate(channels))
     if not channels:
-        raise DataError(f"{source}: no numeric channel of at least {MIN_SAMPLES} samples in this file")
+        raise DataError(
+            f"{source}: no numeric channel of at least {MIN_SAMPLES} samples in this file"
+        )
     if channel is None:
         if len(channels) == 1:
             return channels[0]
-        raise DataError(f"{source}: {len(channels)} channels ({listing}): pass channel= (a name or a number)")
+        raise DataError(
+            f"{source}: {len(channels)} channels ({listing}): pass channel= (a name or a number)"
+        )
     if isinstance(channel, (int, np.integer)) and not isinstance(channel, bool):
         if 0 <= int(channel) < len(channels):
             return channels[int(channel)]
-        raise DataError(f"{source}: channel={channel} out of range 0..{len(channels) - 1} ({listing})")
+        raise DataError(
+            f"{source}: channel={channel} out of range 0..{len(channels) - 1} ({listing})"
+        )
     name = str(channel)
-    hits = [c for c in channels if c.name == name] or [c for c in channels if c.name.rsplit("/", 1)[-1] == name]
+    hits = [c for c in channels if c.name == name] or [
+        c for c in channels if c.name.rsplit("/", 1)[-1] == name
+    ]
     if len(hits) == 1:
         return hits[0]
     why = "names more than one" if hits else "is not among the"
-    raise DataError(f"{source}: channel={name!r} {why} channels ({listing}); pass a full name or a number")
+    raise DataError(
+        f"{source}: channel={name!r} {why} channels ({listing}); pass a full name or a number"
+    )
 
 
 def check_calibration(calibration_N_per_FS, source: str) -> float:
     cal = float(calibration_N_per_FS)
     if not (math.isfinite(cal) and cal != 0):
-        raise DataError(f"{source}: calibration_N_per_FS={calibration_N_per_FS!r} must be finite and non-zero")
+        raise DataError(
+            f"{source}: calibration_N_per_FS={calibration_N_per_FS!r} must be finite and non-zero"
+        )
     return cal
 
 
@@ -96,7 +108,9 @@ def integer_codes(samples: np.ndarray) -> tuple[np.ndarray, float, int, int]:
     return codes, float(full), -full, full - step
 
 
-def integer_newtons(samples: np.ndarray, calibration_N_per_FS, source: str, what: str) -> np.ndarray:
+def integer_newtons(
+    samples: np.ndarray, calibration_N_per_FS, source: str, what: str
+) -> np.ndarray:
     """Integer samples in newtons: codes / full scale × calibration; a code at either end of
     the range is clipping (ClippedRecordError); no calibration: DataError saying what to pass."""
     if calibration_N_per_FS is None:
@@ -166,7 +180,9 @@ def channel_recording(
     if ch.time_s is not None:
         t = np.asarray(ch.time_s, dtype=np.float64).reshape(-1)
         if t.size != force.size:
-            raise DataError(f"{source}: the time vector has {t.size} samples, channel {ch.name!r} {force.size}")
+            raise DataError(
+                f"{source}: the time vector has {t.size} samples, channel {ch.name!r} {force.size}"
+            )
         rate, _, more = _infer_rate(t, ch.time_quantum_s, source)
         notes += more
     if rate is not None and abs(rate - round(rate)) <= 1e-9 * rate:
@@ -175,8 +191,16 @@ def channel_recording(
         raise DataError(f"{source}: rate_Hz={rate_Hz!r} disagrees with the file ({rate:.8g} Hz)")
     if rate is None:
         if rate_Hz is None:
-            raise DataError(f"{source}: the file gives no sampling rate for channel {ch.name!r}: pass rate_Hz=")
+            raise DataError(
+                f"{source}: the file gives no sampling rate for channel {ch.name!r}: pass rate_Hz="
+            )
         rate = float(rate_Hz)
     return _file_recording(
-        source, force, rate, height_m, calibration_N_per_FS=calibration_N_per_FS, lowpass_Hz=lowpass_Hz, notes=notes
+        source,
+        force,
+        rate,
+        height_m,
+        calibration_N_per_FS=calibration_N_per_FS,
+        lowpass_Hz=lowpass_Hz,
+        notes=notes,
     )

@@ -328,4 +328,6 @@ def condition(
         f"({onset_fraction:g} of peak)"
     )
     log += [("lowpass_Hz", lp_out), ("window_start_s", i0 / rate), ("window_s", m / rate)]
-    return recording.replace(force_N=y, onset_s=onset_s, lowpass_Hz=lp_out, notes=tuple(notes), log=tuple(log))
+    return recording.replace(
+        force_N=y, onset_s=onset_s, lowpass_Hz=lp_out, notes=tuple(notes), log=tuple(log)
+    )

@@ -64,7 +64,9 @@ def _solve_crossing(x: np.ndarray, j: int, level: float, sign: float = 1.0) -> f
     return 0.5 * (lo + hi)
 
 
-def _rising_crossing(x: np.ndarray, ip: int, level: float, source: str, start: int | None = None) -> float:
+def _rising_crossing(
+    x: np.ndarray, ip: int, level: float, source: str, start: int | None = None
+) -> float:
     """Sub-sample index where x rises through ``level`` on the edge that leads to ``ip``."""
     j = ip if start is None else min(start, ip)
     if x[j] >= level:
@@ -79,5 +81,3 @@ def _rising_crossing(x: np.ndarray, ip: int, level: float, source: str, start: i
             "no pre-trigger, onset unknown"
         )
     return (j - 1) + _solve_crossing(x, j, level)
-
-

@@ -72,7 +72,9 @@ def _quiet_mask(n: int, impacts, rate: float) -> np.ndarray:
 
 def _hum_columns(t: np.ndarray, f: float) -> np.ndarray:
     w = 2 * np.pi * f * t
-    return np.column_stack([g(k * w) for k in range(1, HUM_HARMONICS + 1) for g in (np.cos, np.sin)])
+    return np.column_stack(
+        [g(k * w) for k in range(1, HUM_HARMONICS + 1) for g in (np.cos, np.sin)]
+    )
 
 
 def _fit(base: np.ndarray, y: np.ndarray, extra: np.ndarray | None = None):
@@ -100,12 +102,14 @@ def _best_hum(base, y, t, mains):
     """
     coef, _ = _fit(base, y)
     full = (base, y, t)
-    k = max(1, int(t.size / max(t[-1] - t[0], 1e-9) // SEARCH_RATE_HZ))  # the search on every k-th sample
+    k = max(
+        1, int(t.size / max(t[-1] - t[0], 1e-9) // SEARCH_RATE_HZ)
+    )  # the search on every k-th sample
     base, y, t = base[::k], y[::k], t[::k]
     r = y - base @ coef
 
     def power(f):
-        return -abs(np.dot(r, np.exp(-2j * np.pi * f * t))) ** 2
+        return -(abs(np.dot(r, np.exp(-2j * np.pi * f * t))) ** 2)
 
     best = None
     for f0 in mains:
@@ -113,19 +117,34 @@ def _best_hum(base, y, t, mains):
         fg = float(grid[int(np.argmin([power(f) for f in grid]))])
         step = float(grid[1] - grid[0])
         lo, hi = max(grid[0], fg - step), min(grid[-1], fg + step)
-        f = float(scipy.optimize.minimize_scalar(power, bounds=(lo, hi), method="bounded", options={"xatol": 1e-4}).x)
+        f = float(
+            scipy.optimize.minimize_scalar(
+                power, bounds=(lo, hi), method="bounded", options={"xatol": 1e-4}
+            ).x
+        )
         # the gap left by the impacts and the harmonics bias the periodogram's peak a little:
         # refine on the residual of the whole model
-        f = float(scipy.optimize.minimize_scalar(lambda f: _fit(base, y, _hum_columns(t, f))[1],
-                                                 bounds=(f - step, f + step), method="bounded", options={"xatol": 1e-5}).x)
+        f = float(
+            scipy.optimize.minimize_scalar(
+                lambda f: _fit(base, y, _hum_columns(t, f))[1],
+                bounds=(f - step, f + step),
+                method="bounded",
+                options={"xatol": 1e-5},
+            ).x
+        )
         hcoef, rms = _fit(full[0], full[1], _hum_columns(full[2], f))
         if best is None or rms < best[2]:
             best = (f, hcoef, rms)
     return best
 
 
-def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None = None,
-          min_separation_s: float = 0.1) -> Recording:
+def clean(
+    recording: Recording,
+    *,
+    mains_Hz=MAINS_HZ,
+    threshold_N: float | None = None,
+    min_separation_s: float = 0.1,
+) -> Recording:
     """Mend the faults of a raw record that the fit must not see; log each one.
 
     1. **Polarity.** A record whose largest excursion from its baseline is negative (more
@@ -154,8 +173,10 @@ def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None 
     low, high = -float(np.min(detrended - level)), float(np.max(detrended - level))
     if low >= thr and low > 2.0 * high:
         x, detrended = -x, -detrended
-        msg = (f"{recording.source}: the force is negative ({-low:.4g} N at most, +{high:.4g} N the other way): "
-               "recorded with inverted sign; flipped")
+        msg = (
+            f"{recording.source}: the force is negative ({-low:.4g} N at most, +{high:.4g} N the other way): "
+            "recorded with inverted sign; flipped"
+        )
         warnings.warn(msg, DataWarning, stacklevel=2)
         notes.append(msg)
         log.append(("polarity", "inverted: sign flipped"))
@@ -182,10 +203,14 @@ def clean(recording: Recording, *, mains_Hz=MAINS_HZ, threshold_N: float | None 
                 x = x - _hum_columns(t, f) @ hcoef[2:]
                 coef, rms = hcoef[:2], hrms
                 hum = {"frequency_Hz": f, "amplitude_N": amplitude}
-                notes.append(f"mains hum removed: {f:.3f} Hz, {amplitude:.3g} N (with harmonics 2 to {HUM_HARMONICS})")
+                notes.append(
+                    f"mains hum removed: {f:.3f} Hz, {amplitude:.3g} N (with harmonics 2 to {HUM_HARMONICS})"
+                )
         if abs(coef[1]) * (n / rate) > DRIFT_FACTOR * rms:
             drift = float(coef[1])
             x = x - drift * (t - t_anchor)
-            notes.append(f"baseline drift of {drift:+.4g} N/s removed (zero at the first impact, {t_anchor:.4f} s)")
+            notes.append(
+                f"baseline drift of {drift:+.4g} N/s removed (zero at the first impact, {t_anchor:.4f} s)"
+            )
     log += [("drift_N_per_s", drift), ("hum", hum)]
     return recording.replace(force_N=x, notes=tuple(notes), log=tuple(log))

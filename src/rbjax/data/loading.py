@@ -66,24 +66,45 @@ def read_file(
     p = Path(path)
     suf = p.suffix.lower()
     if suf not in SUFFIXES:
-        raise DataError(f"{p.name}: unknown file type {p.suffix!r}: none of the known formats ({_KNOWN})")
+        raise DataError(
+            f"{p.name}: unknown file type {p.suffix!r}: none of the known formats ({_KNOWN})"
+        )
     if suf in _ONE_CHANNEL:
         if channel not in (None, 0):
-            raise DataError(f"{p.name}: a {suf} file has one force channel: channel={channel!r} does not apply")
+            raise DataError(
+                f"{p.name}: a {suf} file has one force channel: channel={channel!r} does not apply"
+            )
         if calibration_N_per_FS is not None:
-            raise DataError(f"{p.name}: a {suf} file holds newtons: calibration_N_per_FS does not apply")
+            raise DataError(
+                f"{p.name}: a {suf} file holds newtons: calibration_N_per_FS does not apply"
+            )
         if suf == ".csv":
             return read_csv(p, rate_Hz=rate_Hz, height_m=height_m, lowpass_Hz=lowpass_Hz)
         if rate_Hz is None:
-            raise DataError(f"{p.name}: a .npy file has no time base: pass rate_Hz= or a manifest rate_Hz")
+            raise DataError(
+                f"{p.name}: a .npy file has no time base: pass rate_Hz= or a manifest rate_Hz"
+            )
         return read_npy(p, rate_Hz=rate_Hz, height_m=height_m, lowpass_Hz=lowpass_Hz)
     if suf == ".wav":
-        rec = read_wav(p, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, channel=channel, lowpass_Hz=lowpass_Hz)
+        rec = read_wav(
+            p,
+            calibration_N_per_FS=calibration_N_per_FS,
+            height_m=height_m,
+            channel=channel,
+            lowpass_Hz=lowpass_Hz,
+        )
         if rate_Hz is not None and abs(float(rate_Hz) - rec.rate_Hz) > 1e-4 * rec.rate_Hz:
-            raise DataError(f"{p.name}: rate_Hz={rate_Hz!r} disagrees with the WAV header ({rec.rate_Hz:g} Hz)")
+            raise DataError(
+                f"{p.name}: rate_Hz={rate_Hz!r} disagrees with the WAV header ({rec.rate_Hz:g} Hz)"
+            )
         return rec
     return _CHANNEL_READERS[suf](
-        p, channel=channel, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, lowpass_Hz=lowpass_Hz
+        p,
+        channel=channel,
+        rate_Hz=rate_Hz,
+        calibration_N_per_FS=calibration_N_per_FS,
+        height_m=height_m,
+        lowpass_Hz=lowpass_Hz,
     )
 
 
@@ -117,8 +138,13 @@ def _read_manifest(manifest) -> dict[str, dict]:
                 entry["channel"] = int(v) if v.isdigit() else v
                 continue
             try:
-                entry[{"calibration_n_per_fs": "calibration_N_per_FS", "rate_hz": "rate_Hz",
-                       "lowpass_hz": "lowpass_Hz"}.get(h, h)] = float(v)
+                entry[
+                    {
+                        "calibration_n_per_fs": "calibration_N_per_FS",
+                        "rate_hz": "rate_Hz",
+                        "lowpass_hz": "lowpass_Hz",
+                    }.get(h, h)
+                ] = float(v)
             except ValueError:
                 raise DataError(f"manifest {src}: line {k}: {h}={v!r} is not a number") from None
         out[Path(r[header.index("file")].strip()).name] = entry
@@ -126,11 +152,29 @@ def _read_manifest(manifest) -> dict[str, dict]:
 
 
 @overload
-def load(paths_or_dir, *, height_m=..., manifest=..., rate_Hz=..., calibration_N_per_FS=..., lowpass_Hz=...,
-         channel=..., strict: Literal[True] = ...) -> list[Recording]: ...
+def load(
+    paths_or_dir,
+    *,
+    height_m=...,
+    manifest=...,
+    rate_Hz=...,
+    calibration_N_per_FS=...,
+    lowpass_Hz=...,
+    channel=...,
+    strict: Literal[True] = ...,
+) -> list[Recording]: ...
 @overload
-def load(paths_or_dir, *, height_m=..., manifest=..., rate_Hz=..., calibration_N_per_FS=..., lowpass_Hz=...,
-         channel=..., strict: bool) -> list[Recording | Excluded]: ...
+def load(
+    paths_or_dir,
+    *,
+    height_m=...,
+    manifest=...,
+    rate_Hz=...,
+    calibration_N_per_FS=...,
+    lowpass_Hz=...,
+    channel=...,
+    strict: bool,
+) -> list[Recording | Excluded]: ...
 def load(
     paths_or_dir,
     *,

@@ -17,15 +17,22 @@ def describe_conditioning(log: dict) -> str:
     if log.get("rate_Hz") is not None:
         parts.append(f"{log['rate_Hz']:g} Hz")
     if "polarity" in log:
-        parts.append("sign " + ("flipped (recorded inverted)" if log["polarity"] != "as recorded" else "as recorded"))
+        parts.append(
+            "sign "
+            + ("flipped (recorded inverted)" if log["polarity"] != "as recorded" else "as recorded")
+        )
     if log.get("offset_N") is not None:
         parts.append(f"offset {log['offset_N']:+.3g} N removed")
     if log.get("drift_N_per_s") is not None:
         parts.append(f"drift {log['drift_N_per_s']:+.3g} N/s removed")
     if log.get("hum"):
-        parts.append(f"hum {log['hum']['frequency_Hz']:.2f} Hz ({log['hum']['amplitude_N']:.3g} N) removed")
+        parts.append(
+            f"hum {log['hum']['frequency_Hz']:.2f} Hz ({log['hum']['amplitude_N']:.3g} N) removed"
+        )
     if log.get("impact_s") is not None:
         parts.append(f"impact at {log['impact_s']:.4f} s kept")
     for other in log.get("further_impacts") or ():
-        parts.append(f"further impact at {other['time_s']:.4f} s ({other['peak_N']:.4g} N: a rebound?) cut")
+        parts.append(
+            f"further impact at {other['time_s']:.4f} s ({other['peak_N']:.4g} N: a rebound?) cut"
+        )
     return "; ".join(parts)

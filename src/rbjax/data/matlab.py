@@ -23,7 +23,17 @@ from .sources import _as_source
 
 __all__ = ["read_mat"]
 
-_RATE_NAMES = {"fs", "rate", "rate_hz", "sr", "sample_rate", "samplerate", "sampling_rate", "sample_rate_hz", "sampling_rate_hz"}
+_RATE_NAMES = {
+    "fs",
+    "rate",
+    "rate_hz",
+    "sr",
+    "sample_rate",
+    "samplerate",
+    "sampling_rate",
+    "sample_rate_hz",
+    "sampling_rate_hz",
+}
 _STEP_NAMES = {"dt", "dt_s"}
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -74,7 +84,9 @@ def _variables_v73(path, source: str) -> dict[str, np.ndarray]:
 
             f.visititems(visit)
     except OSError as e:
-        raise DataError(f"{source}: cannot read it as a MATLAB v7.3 (HDF5) .mat file ({e})") from None
+        raise DataError(
+            f"{source}: cannot read it as a MATLAB v7.3 (HDF5) .mat file ({e})"
+        ) from None
     return out
 
 
@@ -99,7 +111,9 @@ def _channels(variables: dict[str, np.ndarray], source: str) -> list[Channel]:
         elif kind == "time":
             time = a.reshape(-1) * scale
         elif kind == "time?":
-            raise DataError(f"{source}: time vector {name!r}: unknown unit {scale!r} (s, ms understood)")
+            raise DataError(
+                f"{source}: time vector {name!r}: unknown unit {scale!r} (s, ms understood)"
+            )
         elif kind == "force" and leaf.lower() not in _FORCE_NAMES:  # force_N, F_kN: in newtons
             channels.append((name, a.reshape(-1) * scale, "N"))
         else:  # force_V: in volts; ch1: no unit
@@ -139,5 +153,10 @@ def read_mat(
     variables = _variables_v73(path, source) if _is_hdf5(path) else _variables_v5(path, source)
     ch = pick_channel(_channels(variables, source), channel, source)
     return channel_recording(
-        ch, source, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, lowpass_Hz=lowpass_Hz
+        ch,
+        source,
+        rate_Hz=rate_Hz,
+        calibration_N_per_FS=calibration_N_per_FS,
+        height_m=height_m,
+        lowpass_Hz=lowpass_Hz,
     )

@@ -30,6 +30,7 @@ __all__ = ["read_csv", "read_npy"]
 # CSV
 # --------------------------------------------------------------------------------------
 
+
 def read_csv(
     path,
     *,
@@ -66,7 +67,11 @@ def read_csv(
         text = Path(path).read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as e:
         raise DataError(f"{source}: not a text CSV file ({e})") from None
-    lines = [(k + 1, ln) for k, ln in enumerate(text.splitlines()) if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [
+        (k + 1, ln)
+        for k, ln in enumerate(text.splitlines())
+        if ln.strip() and not ln.lstrip().startswith("#")
+    ]
     if not lines:
         raise DataError(f"{source}: empty file")
     first = lines[0][1]
@@ -98,7 +103,9 @@ def read_csv(
         t_cols = [k for k, (kind, _) in enumerate(kinds) if kind == "time"]
         f_cols = [k for k, (kind, _) in enumerate(kinds) if kind == "force"]
         if len(t_cols) > 1 or len(f_cols) > 1:
-            raise DataError(f"{source}: ambiguous columns {header}: more than one time or force column")
+            raise DataError(
+                f"{source}: ambiguous columns {header}: more than one time or force column"
+            )
         if not f_cols:
             if len(header) == 1 and not t_cols:
                 raise DataError(
@@ -153,7 +160,9 @@ def read_csv(
         bad = ~np.isfinite(t)
         if bad.any():
             k = int(np.argmax(bad))
-            raise DataError(f"{source}: line {data_lines[k]}: time {t_txt[k].strip()!r} is not finite")
+            raise DataError(
+                f"{source}: line {data_lines[k]}: time {t_txt[k].strip()!r} is not finite"
+            )
     _check_force(force, source)
 
     notes = []
@@ -164,7 +173,9 @@ def read_csv(
         rate_t, t0, more = _infer_rate(t, quantum, source)
         notes += more
         if t0 != 0 and abs(t0) > 0.5 / rate_t:
-            notes.append(f"time column starts at {t0:.9g} s; times here count from the first sample")
+            notes.append(
+                f"time column starts at {t0:.9g} s; times here count from the first sample"
+            )
         if rate_Hz is not None:
             if abs(float(rate_Hz) - rate_t) > 1e-4 * rate_t:
                 raise DataError(
@@ -232,5 +243,3 @@ def read_npy(
         force_N=a,
         lowpass_Hz=lowpass_Hz,
     )
-
-

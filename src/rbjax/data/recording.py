@@ -64,14 +64,18 @@ class Recording:
         object.__setattr__(self, "rate_Hz", rate)
         f = _frozen_array(self.force_N)
         if f.ndim != 1 or f.size == 0:
-            raise DataError(f"{self.source}: force_N must be a non-empty 1-D array; got shape {f.shape}")
+            raise DataError(
+                f"{self.source}: force_N must be a non-empty 1-D array; got shape {f.shape}"
+            )
         if not np.all(np.isfinite(f)):
             raise DataError(f"{self.source}: force_N contains NaN or inf")
         object.__setattr__(self, "force_N", f)
         if self.height_m is not None:
             h = float(self.height_m)
             if not (math.isfinite(h) and h > 0):
-                raise DataError(f"{self.source}: height_m={self.height_m!r} must be positive and finite")
+                raise DataError(
+                    f"{self.source}: height_m={self.height_m!r} must be positive and finite"
+                )
             object.__setattr__(self, "height_m", h)
         for name in ("onset_s", "calibration_N_per_FS", "lowpass_Hz"):
             v = getattr(self, name)
@@ -133,7 +137,9 @@ class Recording:
         # falling edge: first sample after the peak below the level
         below = np.flatnonzero(x[ip:] < level)
         if below.size == 0:
-            raise DataError(f"{self.source}: the force does not fall below {level:.4g} N after the peak")
+            raise DataError(
+                f"{self.source}: the force does not fall below {level:.4g} N after the peak"
+            )
         j = ip + int(below[0])  # x[j-1] >= level > x[j]
         u = _solve_crossing(x, j, -level, sign=-1.0)
         return start / self.rate_Hz, (j - 1 + u) / self.rate_Hz

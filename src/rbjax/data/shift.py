@@ -43,7 +43,9 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
     if d == 0:
         return x.copy()
     if method == "fourier":
-        N = next_fast_len(n + int(math.ceil(abs(d))) + 64, real=True)  # zero padding: no wrap-around
+        N = next_fast_len(
+            n + int(math.ceil(abs(d))) + 64, real=True
+        )  # zero padding: no wrap-around
         k = np.arange(N // 2 + 1)
         ph = np.exp(-2j * np.pi * k * d / N)
         if N % 2 == 0:  # the Nyquist bin must stay real: keep its cosine part

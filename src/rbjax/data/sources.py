@@ -24,5 +24,3 @@ def height_from_name(name: str | os.PathLike) -> float | None:
 
 def _as_source(path) -> str:
     return Path(path).name if isinstance(path, (str, os.PathLike)) else str(path)
-
-

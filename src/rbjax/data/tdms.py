@@ -82,5 +82,10 @@ def read_tdms(
         raise DataError(f"{source}: cannot read it as a TDMS file ({e})") from None
     ch = pick_channel(_channels(f), channel, source)
     return channel_recording(
-        ch, source, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m, lowpass_Hz=lowpass_Hz
+        ch,
+        source,
+        rate_Hz=rate_Hz,
+        calibration_N_per_FS=calibration_N_per_FS,
+        height_m=height_m,
+        lowpass_Hz=lowpass_Hz,
     )

@@ -43,15 +43,21 @@ def _channel(ds: dict, source: str, notes: list[str]) -> Channel:
     if ds.get("abscissa_spacing") == 1:
         dx = float(ds["abscissa_inc"])
         if not dx > 0:
-            raise DataError(f"{source}: dataset 58 {name!r}: abscissa increment {dx!r} s is not a time step")
+            raise DataError(
+                f"{source}: dataset 58 {name!r}: abscissa increment {dx!r} s is not a time step"
+            )
         rate = 1.0 / dx
         if abs(rate - round(rate)) <= _INCREMENT_RESOLUTION * rate:
             if rate != round(rate):
-                notes.append(f"abscissa increment {dx:.6g} s (6 digits in the file) read as {round(rate)} Hz")
+                notes.append(
+                    f"abscissa increment {dx:.6g} s (6 digits in the file) read as {round(rate)} Hz"
+                )
             rate = float(round(rate))
         return Channel(name, data, unit, rate)
     x = np.asarray(ds["x"], dtype=np.float64)
-    return Channel(name, data, unit, time_s=x, time_quantum_s=_INCREMENT_RESOLUTION * float(np.abs(x).max()))
+    return Channel(
+        name, data, unit, time_s=x, time_quantum_s=_INCREMENT_RESOLUTION * float(np.abs(x).max())
+    )
 
 
 def read_uff(
@@ -100,6 +106,11 @@ def read_uff(
     channels = [_channel(ds, source, notes) for ds in found]
     ch = pick_channel(channels, channel, source)
     return channel_recording(
-        ch, source, rate_Hz=rate_Hz, calibration_N_per_FS=calibration_N_per_FS, height_m=height_m,
-        lowpass_Hz=lowpass_Hz, notes=sorted(set(notes)),
+        ch,
+        source,
+        rate_Hz=rate_Hz,
+        calibration_N_per_FS=calibration_N_per_FS,
+        height_m=height_m,
+        lowpass_Hz=lowpass_Hz,
+        notes=sorted(set(notes)),
     )

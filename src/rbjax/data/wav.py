@@ -76,7 +76,9 @@ def read_wav(
         except ValueError as e:
             m = _UNKNOWN_FORMAT_RE.search(str(e))
             if m:
-                raise DataError(f"{source}: WAV format {m.group(1)} is not supported (PCM or IEEE float)") from None
+                raise DataError(
+                    f"{source}: WAV format {m.group(1)} is not supported (PCM or IEEE float)"
+                ) from None
             raise DataError(f"{source}: cannot read it as WAV ({e})") from None
     notes = []
     for w in caught:
@@ -90,7 +92,9 @@ def read_wav(
     if ch > 1 and channel is None:
         raise DataError(f"{source}: {ch} channels: pass channel= (0 to {ch - 1})")
     if isinstance(channel, str) and not channel.isdigit():
-        raise DataError(f"{source}: channel={channel!r}: WAV channels have no names; pass a number 0 to {ch - 1}")
+        raise DataError(
+            f"{source}: channel={channel!r}: WAV channels have no names; pass a number 0 to {ch - 1}"
+        )
     c = 0 if channel is None else int(channel)
     if not 0 <= c < ch:
         raise DataError(f"{source}: channel={channel} out of range (file has {ch})")
@@ -104,5 +108,11 @@ def read_wav(
             force = force * check_calibration(calibration_N_per_FS, source)
         _check_force(force, source)
     return _file_recording(
-        source, force, rate, height_m, calibration_N_per_FS=calibration_N_per_FS, lowpass_Hz=lowpass_Hz, notes=notes
+        source,
+        force,
+        rate,
+        height_m,
+        calibration_N_per_FS=calibration_N_per_FS,
+        lowpass_Hz=lowpass_Hz,
+        notes=notes,
     )

@@ -129,24 +129,61 @@ def fit(
     """
     require_x64()
     poisson_prior, max_steps = _check_arguments(
-        blocked_force=blocked_force, gas=gas, optimizer=optimizer, scale=scale, ball=ball, decimate=decimate, hold_poisson=hold_poisson,
-        poisson_prior=poisson_prior, extra_weights=extra_weights, max_steps=max_steps,
+        blocked_force=blocked_force,
+        gas=gas,
+        optimizer=optimizer,
+        scale=scale,
+        ball=ball,
+        decimate=decimate,
+        hold_poisson=hold_poisson,
+        poisson_prior=poisson_prior,
+        extra_weights=extra_weights,
+        max_steps=max_steps,
     )
     setup = set_up(
-        data, model, blocked_force=blocked_force, gas=gas, ball=ball, fix=fix, poisson_prior=poisson_prior, fit_heights=fit_heights,
-        height_error=height_error, scale=scale, decimate=decimate, extra_weights=extra_weights, solver=solver, superset=superset, method=method,
+        data,
+        model,
+        blocked_force=blocked_force,
+        gas=gas,
+        ball=ball,
+        fix=fix,
+        poisson_prior=poisson_prior,
+        fit_heights=fit_heights,
+        height_error=height_error,
+        scale=scale,
+        decimate=decimate,
+        extra_weights=extra_weights,
+        solver=solver,
+        superset=superset,
+        method=method,
     )
     plan = start_plan(setup, model, start)
     if setup.why_ode:
         say(f"{setup.label}: on the diffrax ODE ({setup.why_ode})", enabled=progress)
     starts = evaluate_starts(setup, plan)
     freedom = free_parameters(setup, starts, hold_poisson)
-    optimum = _optimise(setup, starts, freedom, optimizer=optimizer, max_steps=max_steps, progress=progress)
+    optimum = _optimise(
+        setup, starts, freedom, optimizer=optimizer, max_steps=max_steps, progress=progress
+    )
     optimum = _align_held_out(setup, optimum)
-    return _result(setup, freedom, optimum, estimates(setup, freedom, optimum.theta, optimum.out), optimizer)
+    return _result(
+        setup, freedom, optimum, estimates(setup, freedom, optimum.theta, optimum.out), optimizer
+    )
 
 
-def _check_arguments(*, blocked_force, gas, optimizer, scale, ball, decimate, hold_poisson, poisson_prior, extra_weights, max_steps):
+def _check_arguments(
+    *,
+    blocked_force,
+    gas,
+    optimizer,
+    scale,
+    ball,
+    decimate,
+    hold_poisson,
+    poisson_prior,
+    extra_weights,
+    max_steps,
+):
     """The arguments of :func:`fit` that need neither the model nor the data, checked:
     (the ν prior as floats, the optimiser's step budget)."""
     check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
@@ -162,7 +199,9 @@ def _check_arguments(*, blocked_force, gas, optimizer, scale, ball, decimate, ho
     if poisson_prior is not None:
         mean, std = (float(x) for x in poisson_prior)
         if not (-1.0 < mean < 0.5 and std > 0):
-            raise ValueError(f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0")
+            raise ValueError(
+                f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0"
+            )
         poisson_prior = (mean, std)
     for k, weight in (extra_weights or {}).items():
         if k not in EXTRA_TERMS:
@@ -170,8 +209,14 @@ def _check_arguments(*, blocked_force, gas, optimizer, scale, ball, decimate, ho
         check_range(f"extra_weights[{k!r}]", weight, lower=0.0, lower_open=False)
     if max_steps is None:
         max_steps = STEPS_PER_ROUND * MAX_ROUNDS
-    elif not (isinstance(max_steps, (int, np.integer)) and not isinstance(max_steps, bool) and max_steps >= 0):
-        raise ValueError(f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)")
+    elif not (
+        isinstance(max_steps, (int, np.integer))
+        and not isinstance(max_steps, bool)
+        and max_steps >= 0
+    ):
+        raise ValueError(
+            f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)"
+        )
     return poisson_prior, max_steps
 
 
@@ -191,7 +236,9 @@ class _Optimum:
     prior: tuple[float, float, float]
 
 
-def _optimise(setup: FitSetup, starts: Starts, freedom: Freedom, *, optimizer, max_steps, progress) -> _Optimum:
+def _optimise(
+    setup: FitSetup, starts: Starts, freedom: Freedom, *, optimizer, max_steps, progress
+) -> _Optimum:
     """Every start optimised (ν in each as the identifiability check left it): rounds of LM
     in the whitened frame of each round's start; the best converged start is kept."""
     problem, lay, fit_mask = setup.problem, setup.layout, setup.fit_mask
@@ -202,19 +249,40 @@ def _optimise(setup: FitSetup, starts: Starts, freedom: Freedom, *, optimizer, m
     for th in thetas:
         th[inu] = freedom.nu
     lanes = optimise(
-        problem, thetas, starts.outs, freedom.free, freedom.free_idx, setup.constants, fit_mask,
+        problem,
+        thetas,
+        starts.outs,
+        freedom.free,
+        freedom.free_idx,
+        setup.constants,
+        fit_mask,
         weights_of=lambda r: problem.weights(fit_mask, setup.extra, prior_row(setup, freedom, r)),
         reevaluate=nu_moved or setup.poisson_prior is not None,
-        optimizer=optimizer, max_steps=max_steps, progress=progress, label=setup.label,
+        optimizer=optimizer,
+        max_steps=max_steps,
+        progress=progress,
+        label=setup.label,
         shown=[n for n in freedom.physical_free],
     )
     best = pick_best(lanes)
     n_ok = sum(lane.converged for lane in lanes)
     message = best.message
     if len(lanes) > 1:
-        origin = ", ".join(f"{k}={v:g}" for k, v in starts.points[lanes.index(best)].items()) or "the start values"
+        origin = (
+            ", ".join(f"{k}={v:g}" for k, v in starts.points[lanes.index(best)].items())
+            or "the start values"
+        )
         message += f"; {n_ok} of {len(lanes)} starts converged, the best from {origin}"
-    return _Optimum(best.theta, best.out, best.steps, best.converged, message, len(lanes), n_ok, prior_row(setup, freedom, best.out["r"]))
+    return _Optimum(
+        best.theta,
+        best.out,
+        best.steps,
+        best.converged,
+        message,
+        len(lanes),
+        n_ok,
+        prior_row(setup, freedom, best.out["r"]),
+    )
 
 
 def _align_held_out(setup: FitSetup, optimum: _Optimum) -> _Optimum:
@@ -223,17 +291,28 @@ def _align_held_out(setup: FitSetup, optimum: _Optimum) -> _Optimum:
     if np.all(setup.fit_mask):
         return optimum
     problem, lay = setup.problem, setup.layout
-    theta = realign(problem, optimum.theta, optimum.out["features"], ~setup.fit_mask, rescale_E=False, fit_mask=setup.fit_mask)
+    theta = realign(
+        problem,
+        optimum.theta,
+        optimum.out["features"],
+        ~setup.fit_mask,
+        rescale_E=False,
+        fit_mask=setup.fit_mask,
+    )
     weights = problem.weights(setup.fit_mask, setup.extra, optimum.prior)
     out = problem.run(theta, np.zeros(len(lay.names), dtype=bool), weights, setup.constants)
     return dataclasses.replace(optimum, theta=theta, out=out)
 
 
-def _result(setup: FitSetup, freedom: Freedom, optimum: _Optimum, est: Estimates, optimizer: str) -> FitResult:
+def _result(
+    setup: FitSetup, freedom: Freedom, optimum: _Optimum, est: Estimates, optimizer: str
+) -> FitResult:
     """The :class:`FitResult`: the fitted ball and model read in physical terms, the notes, the
     per-height table and the information criteria (a common N_eff for every candidate)."""
     problem, lay, theta, out = setup.problem, setup.layout, optimum.theta, optimum.out
-    notes = ([f"Predicted on the diffrax ODE: {setup.why_ode}."] if setup.why_ode else []) + freedom.notes
+    notes = (
+        [f"Predicted on the diffrax ODE: {setup.why_ode}."] if setup.why_ode else []
+    ) + freedom.notes
     ident = " ".join(notes) + " " + est.conditioning
     if freedom.ident_msg:
         ident += " " + freedom.ident_msg
@@ -248,7 +327,9 @@ def _result(setup: FitSetup, freedom: Freedom, optimum: _Optimum, est: Estimates
     _, fitted_ball, fitted_model = replace(values, 1.0, setup.ball, setup.candidate)
     physical_free = est.correlations[0]
     structures = (ball_mode_structure(fitted_ball, fitted_model), series_structure(fitted_model))
-    reading = " ".join(x for x in (*structures, at_bounds({n: values[n] for n in physical_free})) if x)
+    reading = " ".join(
+        x for x in (*structures, at_bounds({n: values[n] for n in physical_free})) if x
+    )
     if reading:
         ident += " " + reading
     data = setup.data

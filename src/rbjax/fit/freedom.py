@@ -38,13 +38,20 @@ def free_parameters(setup: FitSetup, starts: Starts, hold_poisson: float) -> Fre
     through E/√(1−ν²) (:func:`rbjax.fit.uncertainty.identifiability`), so ν is held at
     ``hold_poisson`` (or at the prior mean, with a prior) when their columns are parallel;
     then the free parameters."""
-    problem, lay, fit_mask, poisson_prior = setup.problem, setup.layout, setup.fit_mask, setup.poisson_prior
+    problem, lay, fit_mask, poisson_prior = (
+        setup.problem,
+        setup.layout,
+        setup.fit_mask,
+        setup.poisson_prior,
+    )
     theta, out = starts.thetas[0], starts.outs[0]
     physical_free = [n for n in setup.fittable if n not in setup.fixed]
     ie, inu = lay.index("youngs_Pa"), lay.index("poisson")
     nu = theta[inu]
     shift_cols = list(np.arange(len(lay.names))[lay.shift_slice][fit_mask])
-    cols = [lay.index(n) for n in setup.fittable if n in physical_free or n in ("youngs_Pa", "poisson")] + shift_cols
+    cols = [
+        lay.index(n) for n in setup.fittable if n in physical_free or n in ("youngs_Pa", "poisson")
+    ] + shift_cols
     jac_hist = problem.history_jacobian(out["jac_theta"], fit_mask)
     ident_msg, nu_flagged, cos_e_nu = unc.identifiability(jac_hist, ie, inu, cols)
     prior_held = False
@@ -59,7 +66,11 @@ def free_parameters(setup: FitSetup, starts: Starts, hold_poisson: float) -> Fre
                 f"E and ν are not separately identifiable: their Jacobian columns are parallel "
                 f"(|cos| = {cos_e_nu:.8f}); the data determine only E/√(1−ν²) (Reissner stiffness, "
                 f"Eqs. 1–3; the gas force does not involve E or ν). ν is held at {hold_poisson:g}"
-                + (" (the paper's value, §4; the bound of the model's range)" if hold_poisson == 0.5 else "")
+                + (
+                    " (the paper's value, §4; the bound of the model's range)"
+                    if hold_poisson == 0.5
+                    else ""
+                )
                 + " and effective_modulus_Pa = E/√(1−ν²) is the fitted quantity."
             )
         else:
@@ -99,5 +110,7 @@ def prior_row(setup: FitSetup, freedom: Freedom, r) -> tuple[float, float, float
     if poisson_prior is None or "poisson" not in freedom.physical_free:
         return (0.0, 1.0, 0.0)
     hist = setup.problem.history_rows(r, setup.fit_mask)
-    unit = math.sqrt(unc.integrated_autocorrelation(hist) * float(np.sum(hist**2)) / max(hist.size, 1))
+    unit = math.sqrt(
+        unc.integrated_autocorrelation(hist) * float(np.sum(hist**2)) / max(hist.size, 1)
+    )
     return (poisson_prior[0], poisson_prior[1], unit)

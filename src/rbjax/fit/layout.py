@@ -34,7 +34,14 @@ from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 #: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``, and then
 #: ``+series-kelvin-voigt`` for its overdamped, massless limit, a spring and a damper in series
 #: with the shell (``rbjax.SeriesKelvinVoigt``: C, τ fitted).
-MODEL_NAMES = ("paper", "kelvin-voigt", "hunt-crossley", "zener", "hunt-crossley+ball-mode", "hunt-crossley+series-kelvin-voigt")
+MODEL_NAMES = (
+    "paper",
+    "kelvin-voigt",
+    "hunt-crossley",
+    "zener",
+    "hunt-crossley+ball-mode",
+    "hunt-crossley+series-kelvin-voigt",
+)
 STIFFENING_SUFFIX = "+stiffening"
 BALL_MODE_SUFFIX = "+ball-mode"
 SERIES_SUFFIX = "+series-kelvin-voigt"
@@ -72,14 +79,23 @@ def fit_declaration(name: str, ball, model):
     if name not in FIT_RANGES:
         return spec
     lower, upper = FIT_RANGES[name]
-    return dataclasses.replace(spec, lower=lower, upper=upper, lower_open=True, upper_open=True, transform="interval",
-                               description=f"{spec.description} (fitted in ({lower:g}, {upper:g}))")
+    return dataclasses.replace(
+        spec,
+        lower=lower,
+        upper=upper,
+        lower_open=True,
+        upper_open=True,
+        transform="interval",
+        description=f"{spec.description} (fitted in ({lower:g}, {upper:g}))",
+    )
 
 
 def all_model_names() -> tuple[str, ...]:
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
     with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
-    return with_stiffening + tuple(m + suffix for suffix in (BALL_MODE_SUFFIX, SERIES_SUFFIX) for m in with_stiffening)
+    return with_stiffening + tuple(
+        m + suffix for suffix in (BALL_MODE_SUFFIX, SERIES_SUFFIX) for m in with_stiffening
+    )
 
 
 class ModelTerms(NamedTuple):
@@ -95,7 +111,9 @@ def parse_model_terms(name: str) -> ModelTerms:
     """(damping law classes, stiffening?, ball mode?, series element?) of a model name such as
     ``zener+stiffening+ball-mode`` (the suffixes in this order, as ``Model.name`` writes them)."""
     if not isinstance(name, str):
-        raise ValueError(f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}")
+        raise ValueError(
+            f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}"
+        )
 
     def strip(rest, suffix):
         return (rest[: -len(suffix)], True) if rest.endswith(suffix) else (rest, False)
@@ -104,7 +122,9 @@ def parse_model_terms(name: str) -> ModelTerms:
     rest, mode = strip(rest, BALL_MODE_SUFFIX)
     base, stiff = strip(rest, STIFFENING_SUFFIX)
     if base != "paper" and base not in DAMPING_MODELS:
-        raise ValueError(f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}")
+        raise ValueError(
+            f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}"
+        )
     return ModelTerms((() if base == "paper" else (DAMPING_MODELS[base],)), stiff, mode, series)
 
 
@@ -115,7 +135,9 @@ def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool
     return terms.laws, terms.stiffening
 
 
-def model_from_name(name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None) -> Model:
+def model_from_name(
+    name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None
+) -> Model:
     """The ``Model`` a model name stands for, its parameters from ``values`` (name → value;
     the ball mode's and the series element's defaults are their ``start``'s for a 50 kN/m shell)."""
     terms = parse_model_terms(name)
@@ -129,8 +151,14 @@ def model_from_name(name: str, *, gas: str = "adiabatic", blocked_force: str = "
         default = cls.start(5e4, 2.5, 0.8, 0.02, 1.0)
         return cls(**{k: values.get(k, default[k]) for k in cls.PARAMETERS})
 
-    return Model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening,
-                 ball_mode=term(BallMode, terms.ball_mode), series=term(SeriesKelvinVoigt, terms.series))
+    return Model(
+        gas=gas,
+        blocked_force=blocked_force,
+        damping=damping,
+        stiffening=stiffening,
+        ball_mode=term(BallMode, terms.ball_mode),
+        series=term(SeriesKelvinVoigt, terms.series),
+    )
 
 
 def fitted_parameter_names(model: Model) -> tuple[str, ...]:
@@ -146,7 +174,9 @@ class FitLayout:
     def __init__(self, ball: Ball, model: Model, n_records: int, height_error: bool):
         table = parameter_table(1.0, ball, model)
         self.all_names = tuple(r.name for r in table)  # height first, as in to_vector
-        self.physical = tuple(n for n in self.all_names if n != "height_m" and n not in CONSTANT_PARAMETERS)
+        self.physical = tuple(
+            n for n in self.all_names if n != "height_m" and n not in CONSTANT_PARAMETERS
+        )
         self.constants = tuple(n for n in self.all_names if n in CONSTANT_PARAMETERS)
         self.n_records = n_records
         self.height_error = height_error
@@ -154,7 +184,9 @@ class FitLayout:
         if height_error:
             self.names += [f"dh[{k}]" for k in range(n_records)]
         self.specs = tuple(fit_declaration(n, ball, model) for n in self.physical)
-        self.specs += (ONSET_SHIFT,) * n_records + ((HEIGHT_ERROR,) * n_records if height_error else ())
+        self.specs += (ONSET_SHIFT,) * n_records + (
+            (HEIGHT_ERROR,) * n_records if height_error else ()
+        )
         self.units = {n: s.unit for n, s in zip(self.physical, self.specs)}
         p = len(self.physical)
         self.shift_slice = slice(p, p + n_records)
@@ -166,7 +198,9 @@ class FitLayout:
         try:
             return self.names.index(name)
         except ValueError:
-            raise ValueError(f"parameter {name!r} is not in this fit; valid: {', '.join(self.physical)}") from None
+            raise ValueError(
+                f"parameter {name!r} is not in this fit; valid: {', '.join(self.physical)}"
+            ) from None
 
     def theta(self, ball: Ball, model: Model, shifts) -> np.ndarray:
         """θ from a ball, a model (of this layout's structure) and the onset shifts (dh = 0)."""

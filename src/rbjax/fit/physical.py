@@ -21,7 +21,15 @@ def ball_mode_structure(ball, model) -> str:
     mass = float(ball.mass_kg) / float(mode.mode_mass_ratio)
     omega = 2.0 * math.pi * float(mode.mode_frequency_Hz)
     eta = float(mode.mode_loss_factor)
-    kind = "a ringing mode" if eta < 1.0 else ("an overdamped degree of freedom, not a ringing mode" if eta > 2.0 else "a heavily damped mode")
+    kind = (
+        "a ringing mode"
+        if eta < 1.0
+        else (
+            "an overdamped degree of freedom, not a ringing mode"
+            if eta > 2.0
+            else "a heavily damped mode"
+        )
+    )
     return (
         f"The ball mode as fitted: a {1e3 * mass:.3g} g mass at the contact (M/μ) on a spring of "
         f"{omega**2 * mass:.3g} N/m and a damper of {eta * omega * mass:.3g} N s/m "
@@ -35,7 +43,10 @@ def series_structure(model) -> str:
     element = model.series
     if element is None or float(element.series_compliance_m_per_N) == 0.0:
         return ""
-    compliance, tau = float(element.series_compliance_m_per_N), float(element.series_time_constant_s)
+    compliance, tau = (
+        float(element.series_compliance_m_per_N),
+        float(element.series_time_constant_s),
+    )
     return (
         f"The series element as fitted: a spring of {1.0 / compliance:.3g} N/m and a damper of "
         f"{tau / compliance:.3g} N s/m in series with the shell (τ = {1e3 * tau:.3g} ms): the ball "
@@ -52,7 +63,11 @@ def at_bounds(values: dict) -> str:
         lower, upper = FIT_RANGES[name]
         for bound, side in ((lower, "lower"), (upper, "upper")):
             if abs(value - bound) <= BOUND_TOLERANCE * (upper - lower):
-                hits.append(f"{name} = {value:.4g} (the {side} bound of its fit range ({lower:g}, {upper:g}))")
+                hits.append(
+                    f"{name} = {value:.4g} (the {side} bound of its fit range ({lower:g}, {upper:g}))"
+                )
     if not hits:
         return ""
-    return "On a bound: " + "; ".join(hits) + ": the data ask for more than the term describes there."
+    return (
+        "On a bound: " + "; ".join(hits) + ": the data ask for more than the term describes there."
+    )

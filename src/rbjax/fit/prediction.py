@@ -16,7 +16,14 @@ from .records import prepare_data
 from .result import Prediction
 
 
-def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, solver: Solver | None = None, superset: Model | None = None) -> Prediction:
+def predict(
+    data,
+    ball: Ball = JIS_RUBBER_BALL,
+    model: Model | None = None,
+    *,
+    solver: Solver | None = None,
+    superset: Model | None = None,
+) -> Prediction:
     """Compare a given (unfitted) model with the records; nothing is fitted.
 
     The model's floor force goes through the records' measuring chain; each record's onset
@@ -29,7 +36,9 @@ def predict(data, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, *, s
     model = Model() if model is None else model
     problem, _, out = aligned(data, ball, model, solver, superset)
     d = problem.data
-    rows = per_height_rows(problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool))
+    rows = per_height_rows(
+        problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool)
+    )
     return Prediction(tuple(rows), d.time_s, d.force_N, out["force"], d.height_m)
 
 
@@ -59,20 +68,32 @@ def model_histories(
         raise ValueError(f"params: missing {missing} for model {model!r}")
     data = prepare_data(data)
     _, ball, candidate = replace({n: float(params[n]) for n in names}, 1.0, ball, candidate)
-    problem = Problem(data, ball, candidate, fit_solver(solver), height_error=False, decimate=1, scale="noise",
-                      path=fit_path("auto", candidate, solver)[0])
+    problem = Problem(
+        data,
+        ball,
+        candidate,
+        fit_solver(solver),
+        height_error=False,
+        decimate=1,
+        scale="noise",
+        path=fit_path("auto", candidate, solver)[0],
+    )
     lay = problem.layout
     shifts = np.broadcast_to(np.asarray(onset_shift_s, dtype=float), (data.n_records,))
     theta = lay.theta(ball, candidate, shifts)
     weights = problem.weights(np.ones(data.n_records, dtype=bool))
     weights["record"] = np.ones(data.n_records)
-    out = problem.run(theta, np.zeros(len(lay.names), dtype=bool), weights, lay.constant_values(ball, candidate))
+    out = problem.run(
+        theta, np.zeros(len(lay.names), dtype=bool), weights, lay.constant_values(ball, candidate)
+    )
     n = data.n_records * data.n_samples
     jac = out["jac_theta"][:n].reshape(data.n_records, data.n_samples, -1)
     return out["force"], jac, tuple(lay.names)
 
 
-def parameter_names_of(model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic") -> tuple[str, ...]:
+def parameter_names_of(
+    model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic"
+) -> tuple[str, ...]:
     """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
     "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``."""
     return fitted_parameter_names(candidate_model(model, blocked_force, gas)[1])

@@ -63,10 +63,15 @@ def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
     radius), at the model's values and with each ``FIT_RANGES`` parameter at the bound where it
     is fastest (the upper, or the lower for those in ``FASTEST_AT_LOWER``)."""
     names = set(parameter_names(1.0, ball, model))
-    corner = {n: (lo if n in FASTEST_AT_LOWER else hi) for n, (lo, hi) in FIT_RANGES.items() if n in names}
+    corner = {
+        n: (lo if n in FASTEST_AT_LOWER else hi) for n, (lo, hi) in FIT_RANGES.items() if n in names
+    }
     # one compiled Jacobian for both points and for every fit of the same structure in the process
     points = [(ball, model), replace(corner, 1.0, ball, model)[1:]]
-    fastest = max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(_first_contact_jacobian(b, m)))))) for b, m in points)
+    fastest = max(
+        float(np.max(np.abs(np.linalg.eigvals(np.asarray(_first_contact_jacobian(b, m))))))
+        for b, m in points
+    )
     return substeps_for_rate(fastest, rate_Hz)
 
 
@@ -80,27 +85,60 @@ def _first_contact_jacobian(ball: Ball, model: Model):
 class Problem:
     """The data, the layout and the compiled program of one fit (runtime masks aside)."""
 
-    def __init__(self, data: FitData, ball: Ball, structure_model: Model, solver: Solver, *, height_error: bool, decimate: int, scale: str,
-                 path: str = "samples", feature_rows: bool = False):
+    def __init__(
+        self,
+        data: FitData,
+        ball: Ball,
+        structure_model: Model,
+        solver: Solver,
+        *,
+        height_error: bool,
+        decimate: int,
+        scale: str,
+        path: str = "samples",
+        feature_rows: bool = False,
+    ):
         self.data = data
         self.ball = ball
         self.structure_model = structure_model
         self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
         lay = self.layout
         filtered = data.lowpass_Hz is not None
-        sos = butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz) if data.lowpass_Hz is not None else np.zeros((1, 6))
+        sos = (
+            butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz)
+            if data.lowpass_Hz is not None
+            else np.zeros((1, 6))
+        )
         import jax
 
         treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
         self.structure = Structure(
-            treedef=treedef, physical_positions=lay.physical_positions, constant_positions=lay.constant_positions,
-            specs=lay.specs, n_records=data.n_records, n_samples=data.n_samples, rate_Hz=float(data.rate_Hz),
-            filtered=filtered, height_error=height_error, decimate=int(decimate), poisson_index=lay.index("poisson"),
-            solver=solver, path=path, feature_rows=feature_rows, substeps=fit_substeps(ball, structure_model, float(data.rate_Hz)) if path == "samples" else 0,
+            treedef=treedef,
+            physical_positions=lay.physical_positions,
+            constant_positions=lay.constant_positions,
+            specs=lay.specs,
+            n_records=data.n_records,
+            n_samples=data.n_samples,
+            rate_Hz=float(data.rate_Hz),
+            filtered=filtered,
+            height_error=height_error,
+            decimate=int(decimate),
+            poisson_index=lay.index("poisson"),
+            solver=solver,
+            path=path,
+            feature_rows=feature_rows,
+            substeps=fit_substeps(ball, structure_model, float(data.rate_Hz))
+            if path == "samples"
+            else 0,
         )
         self.measured = record_features(data.force_N, data.rate_Hz)
         feats = np.stack(
-            [self.measured["onset_s"], self.measured["onset_s"] + self.measured["contact_time_s"], self.measured["peak_force_N"]], axis=1
+            [
+                self.measured["onset_s"],
+                self.measured["onset_s"] + self.measured["contact_time_s"],
+                self.measured["peak_force_N"],
+            ],
+            axis=1,
         )
         self.arrays = {
             "heights": np.asarray(data.height_m, dtype=float),
@@ -108,12 +146,25 @@ class Problem:
             "measured": np.asarray(data.force_N, dtype=float),
             "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
         }
-        self.record_weights = 1.0 / (np.maximum(data.noise_rms_N, 1e-12) if scale == "noise" else self.measured["peak_force_N"])
+        self.record_weights = 1.0 / (
+            np.maximum(data.noise_rms_N, 1e-12)
+            if scale == "noise"
+            else self.measured["peak_force_N"]
+        )
         self.decimate = int(decimate)
         # noise correlation from the pre-contact samples (up to 1 ms before each onset)
-        quiet = [data.force_N[k, : max(int((data.onset_s[k] - 1e-3) * data.rate_Hz), 0)] for k in range(data.n_records)]
+        quiet = [
+            data.force_N[k, : max(int((data.onset_s[k] - 1e-3) * data.rate_Hz), 0)]
+            for k in range(data.n_records)
+        ]
         n_quiet = min(len(q) for q in quiet)
-        self.tau_noise = unc.integrated_autocorrelation(np.stack([q[:n_quiet] for q in quiet])[:, :: self.decimate]) if n_quiet >= 16 else 1.0
+        self.tau_noise = (
+            unc.integrated_autocorrelation(
+                np.stack([q[:n_quiet] for q in quiet])[:, :: self.decimate]
+            )
+            if n_quiet >= 16
+            else 1.0
+        )
 
     @property
     def n_hist_per_record(self) -> int:
@@ -122,7 +173,9 @@ class Problem:
     def weights(self, fit_mask, extra=None, prior=(0.0, 1.0, 0.0)):
         extra = extra or {}
         if any(float(v) > 0 for v in extra.values()) and not self.structure.feature_rows:
-            raise ValueError("extra weights need a Problem built with feature_rows=True (their Jacobian rows)")
+            raise ValueError(
+                "extra weights need a Problem built with feature_rows=True (their Jacobian rows)"
+            )
         return {
             "fit_mask": np.asarray(fit_mask, dtype=bool),
             "record": self.record_weights,
@@ -132,7 +185,9 @@ class Problem:
             "prior": np.asarray(prior, dtype=float),
         }
 
-    def run_batch(self, thetas, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None):
+    def run_batch(
+        self, thetas, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None
+    ):
         """The compiled program on B lanes (``thetas`` (B, n); ``weights`` a list of B weight
         dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, or none of them: an
         evaluation at θ, one Jacobian and no optimiser step): one output dict per lane.
@@ -156,17 +211,34 @@ class Problem:
             part = slice(lo, lo + per_call)
             stacked = {k: np.stack([np.asarray(x[k]) for x in lanes[part]]) for k in lanes[0]}
             out = run_program(
-                self.structure, optimizer, STEPS_PER_ROUND, phi_c=phi_c[part], w=w[part], free=free, held=thetas[part], constants=constants,
-                data=self.arrays, weights=stacked, atol=atol[part], evaluate_only=evaluate_only,
+                self.structure,
+                optimizer,
+                STEPS_PER_ROUND,
+                phi_c=phi_c[part],
+                w=w[part],
+                free=free,
+                held=thetas[part],
+                constants=constants,
+                data=self.arrays,
+                weights=stacked,
+                atol=atol[part],
+                evaluate_only=evaluate_only,
             )
             outs += [{k: v[i] for k, v in out.items()} for i in range(len(thetas[part]))]
         return outs
 
-    def run(self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None):
+    def run(
+        self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None
+    ):
         """The compiled program on one lane (see :meth:`run_batch`)."""
         return self.run_batch(
-            np.asarray(theta)[None], free, [weights], constants, optimizer=optimizer,
-            phi_c=None if phi_c is None else np.asarray(phi_c)[None], w=None if w is None else np.asarray(w)[None],
+            np.asarray(theta)[None],
+            free,
+            [weights],
+            constants,
+            optimizer=optimizer,
+            phi_c=None if phi_c is None else np.asarray(phi_c)[None],
+            w=None if w is None else np.asarray(w)[None],
             atol=None if atol is None else [atol],
         )[0]
 
@@ -216,19 +288,23 @@ def per_height_rows(problem: Problem, force, feats, fit_mask) -> list[dict]:
         k = np.isclose(d.height_m, h)
         m = {q: np.mean(meas[q][k], axis=0) for q in pred}
         f = {q: np.mean(pred[q][k], axis=0) for q in pred}
-        rows.append({
-            "height_m": float(h),
-            "n_drops": int(d.n_drops[k].sum()),
-            "in_fit": bool(fit_mask[k].all()),
-            "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
-            "measured": {q: _plain(v) for q, v in m.items()},
-            "fitted": {q: _plain(v) for q, v in f.items()},
-            "error": {
-                "contact_time_pct": float(100 * (f["contact_time_s"] / m["contact_time_s"] - 1)),
-                "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
-                "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
-            },
-        })
+        rows.append(
+            {
+                "height_m": float(h),
+                "n_drops": int(d.n_drops[k].sum()),
+                "in_fit": bool(fit_mask[k].all()),
+                "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
+                "measured": {q: _plain(v) for q, v in m.items()},
+                "fitted": {q: _plain(v) for q, v in f.items()},
+                "error": {
+                    "contact_time_pct": float(
+                        100 * (f["contact_time_s"] / m["contact_time_s"] - 1)
+                    ),
+                    "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
+                    "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
+                },
+            }
+        )
     return rows
 
 
@@ -244,14 +320,20 @@ def embed(model: Model, structure: Model | None, ball: Ball) -> Model:
     if structure is None:
         return model
     if structure.gas != model.gas:
-        raise ValueError(f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}")
+        raise ValueError(
+            f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}"
+        )
     have = set(parameter_names(1.0, ball, structure))
     mine = [n for n in parameter_names(1.0, ball, model) if n != "height_m"]
     missing = [n for n in mine if n not in have]
     if missing or not {type(d) for d in model.damping} <= {type(d) for d in structure.damping}:
         raise ValueError(f"superset lacks the terms of model {model.name!r} (parameters {missing})")
 
-    values = {r.name: r.value for r in parameter_table(1.0, ball, model) if r.name in have and r.name != "height_m"}
+    values = {
+        r.name: r.value
+        for r in parameter_table(1.0, ball, model)
+        if r.name in have and r.name != "height_m"
+    }
     return replace(values, 1.0, ball, structure)[2]
 
 
@@ -259,7 +341,16 @@ def aligned(data, ball: Ball, model: Model, solver, superset=None):
     """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
     data = prepare_data(data)
     model = embed(model, superset, ball)
-    problem = Problem(data, ball, model, fit_solver(solver), height_error=False, decimate=1, scale="noise", path=fit_path("auto", model, solver)[0])
+    problem = Problem(
+        data,
+        ball,
+        model,
+        fit_solver(solver),
+        height_error=False,
+        decimate=1,
+        scale="noise",
+        path=fit_path("auto", model, solver)[0],
+    )
     lay = problem.layout
     delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
     theta = lay.theta(ball, model, data.onset_s - delay)
@@ -267,6 +358,13 @@ def aligned(data, ball: Ball, model: Model, solver, superset=None):
     mask = np.zeros(data.n_records, dtype=bool)
     free = np.zeros(len(lay.names), dtype=bool)
     out = problem.run(theta, free, problem.weights(mask), constants)
-    theta = realign(problem, theta, out["features"], np.ones(data.n_records, bool), rescale_E=False, fit_mask=mask)
+    theta = realign(
+        problem,
+        theta,
+        out["features"],
+        np.ones(data.n_records, bool),
+        rescale_E=False,
+        fit_mask=mask,
+    )
     out = problem.run(theta, free, problem.weights(np.ones(data.n_records, bool)), constants)
     return problem, theta, out

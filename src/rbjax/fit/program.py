@@ -103,10 +103,14 @@ def predict(s: Structure, theta, constants, data):
     else:
         ball, model, shifts, dh = _unpack(s, theta, constants)
         times = jnp.arange(s.n_samples) / s.rate_Hz
-        force = jax.vmap(lambda h, sh: sample_force(h, times - sh, s.rate_Hz, ball, model, s.solver))(data["heights"] + dh, shifts)
+        force = jax.vmap(
+            lambda h, sh: sample_force(h, times - sh, s.rate_Hz, ball, model, s.solver)
+        )(data["heights"] + dh, shifts)
     if s.filtered:
         force = sosfilt_jax(data["sos"], force)
-    feats = _features(force if s.feature_rows else jax.lax.stop_gradient(force), s.rate_Hz, int(round(s.rate_Hz)))
+    feats = _features(
+        force if s.feature_rows else jax.lax.stop_gradient(force), s.rate_Hz, int(round(s.rate_Hz))
+    )
     return force, feats
 
 
@@ -120,7 +124,9 @@ def residuals(s: Structure, theta, constants, data, weights):
     tc = (feats[:, 1] - feats[:, 0]) / (meas[:, 1] - meas[:, 0]) - 1.0
     rows.append(jnp.where(inside, weights["contact_time"] * tc, 0.0))
     rows.append(jnp.where(inside, weights["peak_force"] * (feats[:, 2] / meas[:, 2] - 1.0), 0.0))
-    rows.append(jnp.where(inside[:, None], weights["lfe"] * (feats[:, 3:] - meas[:, 3:]), 0.0).reshape(-1))
+    rows.append(
+        jnp.where(inside[:, None], weights["lfe"] * (feats[:, 3:] - meas[:, 3:]), 0.0).reshape(-1)
+    )
     mean, std, unit = weights["prior"][0], weights["prior"][1], weights["prior"][2]
     rows.append(jnp.atleast_1d(unit * (theta[s.poisson_index] - mean) / std))
     return jnp.concatenate(rows), (force, feats)
@@ -164,12 +170,16 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
         # jaxpr (replaying costs no Python, retracing diffrax costs seconds each time).
         args = (phi_c, w, free, held, constants, data, weights)
         u0 = jnp.zeros_like(phi_c)
-        closed, out_shape = jax.make_jaxpr(functools.partial(_value_and_jac, s), return_shape=True)(u0, *args)
+        closed, out_shape = jax.make_jaxpr(functools.partial(_value_and_jac, s), return_shape=True)(
+            u0, *args
+        )
         replay = jax.extend.core.jaxpr_as_fun(closed)
         out_tree = jax.tree_util.tree_structure(out_shape)
 
         def value_and_jac(u):
-            return jax.tree_util.tree_unflatten(out_tree, replay(*jax.tree_util.tree_leaves((u, args))))
+            return jax.tree_util.tree_unflatten(
+                out_tree, replay(*jax.tree_util.tree_leaves((u, args)))
+            )
 
         @jax.custom_jvp
         def fn(u):
@@ -192,17 +202,37 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
                 optx.ClassicalTrustRegion(high_cutoff=0.5, low_cutoff=1e-4),
             )
         else:  # held parameters give zero Jacobian columns: a least-squares (SVD) step
-            solver = optx.GaussNewton(rtol=1e-12, atol=atol, norm=optx.rms_norm, linear_solver=lx.SVD())
+            solver = optx.GaussNewton(
+                rtol=1e-12, atol=atol, norm=optx.rms_norm, linear_solver=lx.SVD()
+            )
 
         def optimise(_):
-            sol: optx.Solution = optx.least_squares(lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False)
+            sol: optx.Solution = optx.least_squares(
+                lambda u, _: fn(u), solver, u0, None, has_aux=True, max_steps=max_steps, throw=False
+            )
             r, jac, force, feats = sol.aux
-            return {"u": sol.value, "result": sol.result._value, "steps": sol.stats["num_steps"], "r": r, "jac_theta": jac, "force": force, "features": feats}
+            return {
+                "u": sol.value,
+                "result": sol.result._value,
+                "steps": sol.stats["num_steps"],
+                "r": r,
+                "jac_theta": jac,
+                "force": force,
+                "features": feats,
+            }
 
         def evaluate(_):
             _, _, (r, jac, force, feats) = value_and_jac(u0)
             ok = jnp.asarray(optx.RESULTS.successful._value, dtype=jnp.int32)  # type: ignore[attr-defined]
-            return {"u": u0, "result": ok, "steps": jnp.zeros((), dtype=jnp.int64), "r": r, "jac_theta": jac, "force": force, "features": feats}
+            return {
+                "u": u0,
+                "result": ok,
+                "steps": jnp.zeros((), dtype=jnp.int64),
+                "r": r,
+                "jac_theta": jac,
+                "force": force,
+                "features": feats,
+            }
 
         # the flag is the same for every lane, so under vmap this stays a branch (one runs)
         return jax.lax.cond(evaluate_only, evaluate, optimise, None)
@@ -212,7 +242,21 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
     return jax.jit(jax.vmap(run, in_axes=(0, 0, None, 0, None, None, 0, 0, None)))
 
 
-def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free, held, constants, data, weights, atol, evaluate_only=False):
+def run_program(
+    s: Structure,
+    optimizer: str,
+    max_steps: int,
+    *,
+    phi_c,
+    w,
+    free,
+    held,
+    constants,
+    data,
+    weights,
+    atol,
+    evaluate_only=False,
+):
     """Call the compiled program on a batch of B lanes (``phi_c``, ``w``, ``held``, ``atol``
     and every weight with a leading axis B); NumPy in, NumPy out, each output with its leading
     axis B (``successful`` and ``max_steps_reached`` flags added per lane). ``evaluate_only``:
@@ -220,10 +264,23 @@ def run_program(s: Structure, optimizer: str, max_steps: int, *, phi_c, w, free,
     import numpy as np
 
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
-    args = (f64(phi_c), f64(w), jnp.asarray(free, dtype=bool), f64(held), f64(constants),
-            jax.tree_util.tree_map(f64, data), {k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v)) for k, v in weights.items()},
-            f64(atol), jnp.asarray(evaluate_only, dtype=bool))
-    fn = load_or_export(("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args)
+    args = (
+        f64(phi_c),
+        f64(w),
+        jnp.asarray(free, dtype=bool),
+        f64(held),
+        f64(constants),
+        jax.tree_util.tree_map(f64, data),
+        {
+            k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v))
+            for k, v in weights.items()
+        },
+        f64(atol),
+        jnp.asarray(evaluate_only, dtype=bool),
+    )
+    fn = load_or_export(
+        ("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args
+    )
     out = fn(*args)
     out = {k: np.asarray(v) for k, v in out.items()}
     code = out.pop("result")

@@ -56,7 +56,16 @@ def store_dir() -> Path | None:
 def program_key(description, args) -> str:
     """The file name of a program: a digest of its description and its arguments' types."""
     types = jax.tree_util.tree_map(lambda x: (tuple(x.shape), str(x.dtype)), args)
-    text = repr((description, jax.tree_util.tree_structure(args), jax.tree_util.tree_leaves(types), jax.__version__, jax.default_backend(), source_digest()))
+    text = repr(
+        (
+            description,
+            jax.tree_util.tree_structure(args),
+            jax.tree_util.tree_leaves(types),
+            jax.__version__,
+            jax.default_backend(),
+            source_digest(),
+        )
+    )
     return hashlib.sha256(text.encode()).hexdigest()
 
 

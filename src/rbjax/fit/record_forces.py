@@ -38,7 +38,9 @@ def record_forces(s, theta, constants, heights_m):
 
     def one(physical, height, shift):
         ball, model = ball_and_model(s, physical, constants)
-        force, d_shift, _ = record_samples(height, shift, ball, model, s.rate_Hz, s.n_samples, s.substeps)
+        force, d_shift, _ = record_samples(
+            height, shift, ball, model, s.rate_Hz, s.n_samples, s.substeps
+        )
         return force, d_shift
 
     def split(th):

@@ -74,7 +74,10 @@ class FitData:
         """What conditioning did to each recording, and the ones left out (text, a line each)."""
         from ..data import describe_conditioning
 
-        lines = [f"  {c['source']} ({c['height_m']:g} m): {describe_conditioning(c)}" for c in self.conditioning]
+        lines = [
+            f"  {c['source']} ({c['height_m']:g} m): {describe_conditioning(c)}"
+            for c in self.conditioning
+        ]
         lines += [f"  {e['source']}: EXCLUDED: {e['reason']}" for e in self.excluded]
         return "\n".join(["conditioning:"] + lines)
 
@@ -152,19 +155,26 @@ def prepare_data(
     recs = [r for r in recs if not isinstance(r, data.Excluded)]
     if not recs:
         left_out = "; ".join(f"{e['source']}: {e['reason']}" for e in excluded)
-        raise data.DataError("no recordings to fit" + (f": every one was excluded ({left_out})" if excluded else ""))
+        raise data.DataError(
+            "no recordings to fit" + (f": every one was excluded ({left_out})" if excluded else "")
+        )
     _check_positive("window_s", window_s)
     _check_positive("pre_onset_s", pre_onset_s)
     for r in recs:
         if r.height_m is None:
-            raise data.DataError(f"{r.source}: unknown drop height; name the file hNNN_... or pass height_m")
+            raise data.DataError(
+                f"{r.source}: unknown drop height; name the file hNNN_... or pass height_m"
+            )
     cutoffs = {r.lowpass_Hz for r in recs}
     if len(cutoffs) > 1:
         listing = ", ".join(f"{r.source}: {r.lowpass_Hz}" for r in recs)
         raise data.DataError(f"recordings declare different measuring-chain low-passes ({listing})")
     cutoff = cutoffs.pop()
     cleaned = [data.clean(r) for r in recs]
-    conditioned = [(data.condition(r, window_s=window_s, pre_onset_s=pre_onset_s), r.noise_rms_N) for r in cleaned]
+    conditioned = [
+        (data.condition(r, window_s=window_s, pre_onset_s=pre_onset_s), r.noise_rms_N)
+        for r in cleaned
+    ]
     log = tuple(
         {"source": rec.source, "height_m": rec.height_m, "rate_Hz": rec.rate_Hz, **rec.conditioning}
         for rec, _ in conditioned
@@ -201,7 +211,9 @@ def prepare_data(
 
 def _check_positive(name, value):
     if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise ValueError(f"{name}={value!r} must be a positive finite number (valid range: (0, inf))")
+        raise ValueError(
+            f"{name}={value!r} must be a positive finite number (valid range: (0, inf))"
+        )
 
 
 # ----------------------------------------------------------------------------------------------
@@ -260,7 +272,9 @@ def record_features(force_N, rate_Hz: float) -> dict:
     zero-padded to 1 s); returns NumPy arrays ``contact_time_s``, ``peak_force_N``,
     ``onset_s`` and ``lfe_octave_dB`` (..., 6).
     """
-    f = np.asarray(_features_jit(float(rate_Hz), _n_pad(rate_Hz))(jnp.asarray(force_N, dtype=jnp.float64)))
+    f = np.asarray(
+        _features_jit(float(rate_Hz), _n_pad(rate_Hz))(jnp.asarray(force_N, dtype=jnp.float64))
+    )
     return {
         "onset_s": f[..., 0],
         "contact_time_s": f[..., 1] - f[..., 0],

@@ -23,7 +23,13 @@ class ParameterEstimate:
     fixed: bool = False
 
     def to_dict(self) -> dict:
-        return {"value": self.value, "std": self.std, "ci95": list(self.ci95), "unit": self.unit, "fixed": self.fixed}
+        return {
+            "value": self.value,
+            "std": self.std,
+            "ci95": list(self.ci95),
+            "unit": self.unit,
+            "fixed": self.fixed,
+        }
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -109,16 +115,32 @@ class FitResult:
         """A short human-readable report (parameters, identifiability, per-height table)."""
         from ..text import fmt, format_table
 
-        lines = [f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): {self.message}"]
+        lines = [
+            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): {self.message}"
+        ]
         lines += _parameter_lines(self)
         bands = OCTAVE_BANDS
-        header = ["h (m)", "fit", "rms (N)", "t_c meas (ms)", "t_c fit (ms)", "peak meas (N)", "peak fit (N)"] + [f"ΔL {b}" for b in bands]
+        header = [
+            "h (m)",
+            "fit",
+            "rms (N)",
+            "t_c meas (ms)",
+            "t_c fit (ms)",
+            "peak meas (N)",
+            "peak fit (N)",
+        ] + [f"ΔL {b}" for b in bands]
         rows = []
         for r in self.per_height:
             rows.append(
-                [f"{r['height_m']:.2f}", "yes" if r["in_fit"] else "no", fmt(r["residual_rms_N"], ".2f"),
-                 fmt(1e3 * r["measured"]["contact_time_s"], ".2f"), fmt(1e3 * r["fitted"]["contact_time_s"], ".2f"),
-                 fmt(r["measured"]["peak_force_N"], ".0f"), fmt(r["fitted"]["peak_force_N"], ".0f")]
+                [
+                    f"{r['height_m']:.2f}",
+                    "yes" if r["in_fit"] else "no",
+                    fmt(r["residual_rms_N"], ".2f"),
+                    fmt(1e3 * r["measured"]["contact_time_s"], ".2f"),
+                    fmt(1e3 * r["fitted"]["contact_time_s"], ".2f"),
+                    fmt(r["measured"]["peak_force_N"], ".0f"),
+                    fmt(r["fitted"]["peak_force_N"], ".0f"),
+                ]
                 + [fmt(x, "+.2f") for x in r["error"]["lfe_octave_dB"]]
             )
         lines.append(format_table(header, rows))
@@ -171,7 +193,9 @@ def _parameter_lines(fit) -> list[str]:
         if p.fixed:
             lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
         else:
-            lines.append(f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})")
+            lines.append(
+                f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})"
+            )
     return lines + ["identifiability: " + fit.identifiability]
 
 
@@ -179,7 +203,11 @@ def _plain(x):
     if isinstance(x, dict):
         return {k: _plain(v) for k, v in x.items()}
     if isinstance(x, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in np.asarray(x).tolist()] if isinstance(x, np.ndarray) else [_plain(v) for v in x]
+        return (
+            [_plain(v) for v in np.asarray(x).tolist()]
+            if isinstance(x, np.ndarray)
+            else [_plain(v) for v in x]
+        )
     if isinstance(x, (np.floating, float)):
         return float(x)
     if isinstance(x, (np.integer,)):

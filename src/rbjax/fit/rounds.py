@@ -45,7 +45,23 @@ class Lane:
         return 0.5 * float(r @ r) if np.all(np.isfinite(r)) else math.inf
 
 
-def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask, *, weights_of, reevaluate, optimizer, max_steps, progress, label, shown) -> list[Lane]:
+def optimise(
+    problem: Problem,
+    thetas,
+    outs,
+    free,
+    free_idx,
+    constants,
+    fit_mask,
+    *,
+    weights_of,
+    reevaluate,
+    optimizer,
+    max_steps,
+    progress,
+    label,
+    shown,
+) -> list[Lane]:
     """Rounds of the compiled optimiser for every start (one call per round), each round in the
     whitened frame of that start's current point, until each start's remaining Gauss–Newton
     step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps are spent, or its prediction
@@ -54,7 +70,9 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
     lay = problem.layout
     n = len(lay.names)
     if reevaluate:  # the residuals' weights depend on the residuals (the ν prior's row)
-        outs = problem.run_batch(thetas, np.zeros(n, bool), [weights_of(o["r"]) for o in outs], constants)
+        outs = problem.run_batch(
+            thetas, np.zeros(n, bool), [weights_of(o["r"]) for o in outs], constants
+        )
     lanes = [Lane(th, o) for th, o in zip(thetas, outs)]
     for rounds in range(MAX_ROUNDS + 1):
         active, phi_c, w, atol, weights = [], [], [], [], []
@@ -70,9 +88,15 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
             inside = ~pressed_on_bound(lay, phi, free_idx, jac_phi, r)
             values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
             start = f" start {i}" if len(lanes) > 1 else ""
-            say(f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}", enabled=progress)
+            say(
+                f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}",
+                enabled=progress,
+            )
             if not np.all(np.isfinite(r)):
-                lane.done, lane.message = True, "the model's prediction is not finite at these parameters (a failed solve)"
+                lane.done, lane.message = (
+                    True,
+                    "the model's prediction is not finite at these parameters (a failed solve)",
+                )
                 continue
             remaining = unc.step_in_sigma(r, jac_phi[:, inside], tau)
             if remaining < unc.STEP_TOLERANCE_SIGMA:
@@ -86,7 +110,10 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
                 continue
             if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
                 lane.done = True
-                lane.message = lane.message or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+                lane.message = (
+                    lane.message
+                    or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+                )
                 continue
             wi = np.zeros((n, n))
             moving = free_idx[inside]  # a parameter on a bound is held there for the round
@@ -95,10 +122,22 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
             phi_c.append(phi)
             w.append(wi)
             weights.append(weights_of(r))
-            atol.append(unc.STEP_TOLERANCE_SIGMA * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1)))
+            atol.append(
+                unc.STEP_TOLERANCE_SIGMA
+                * math.sqrt(tau * float(r @ r) / max(r.size - free_idx.size, 1))
+            )
         if not active:
             break
-        results = problem.run_batch([lane.theta for lane in active], free, weights, constants, optimizer=optimizer, phi_c=np.stack(phi_c), w=np.stack(w), atol=atol)
+        results = problem.run_batch(
+            [lane.theta for lane in active],
+            free,
+            weights,
+            constants,
+            optimizer=optimizer,
+            phi_c=np.stack(phi_c),
+            w=np.stack(w),
+            atol=atol,
+        )
         for lane, phi, wi, res in zip(active, phi_c, w, results):
             lane.steps += int(res["steps"])
             new_theta = np.where(free, lay.from_phi(phi + wi @ res["u"])[0], lane.theta)
@@ -107,7 +146,9 @@ def optimise(problem: Problem, thetas, outs, free, free_idx, constants, fit_mask
                 continue
             lane.theta, lane.out = new_theta, res
             if not res["successful"]:
-                lane.message = f"not converged after {lane.steps} optimiser steps" + (" (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)")
+                lane.message = f"not converged after {lane.steps} optimiser steps" + (
+                    " (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)"
+                )
     return lanes
 
 
@@ -122,7 +163,11 @@ def pressed_on_bound(lay, phi, free_idx, jac_phi, r) -> np.ndarray:
         if spec.transform == "interval":
             theta = float(spec.from_unconstrained(phi[i]))
             width = spec.upper - spec.lower
-            side[j] = 1.0 if spec.upper - theta <= BOUND_TOLERANCE * width else (-1.0 if theta - spec.lower <= BOUND_TOLERANCE * width else 0.0)
+            side[j] = (
+                1.0
+                if spec.upper - theta <= BOUND_TOLERANCE * width
+                else (-1.0 if theta - spec.lower <= BOUND_TOLERANCE * width else 0.0)
+            )
     if not side.any():
         return np.zeros(len(free_idx), dtype=bool)
     step = np.linalg.lstsq(jac_phi, -r, rcond=None)[0]  # φ grows with θ on an interval
@@ -133,5 +178,3 @@ def pick_best(lanes: list[Lane]) -> Lane:
     """The converged start of least cost; the least-cost start if none converged."""
     converged = [lane for lane in lanes if lane.converged]
     return min(converged or lanes, key=lambda lane: lane.cost)
-
-

@@ -26,7 +26,9 @@ def validate_fix(names, fix):
     out = {}
     for k, v in (fix or {}).items():
         if k not in names:
-            raise ValueError(f"fix: unknown parameter {k!r} for this model; valid: {', '.join(sorted(names))}")
+            raise ValueError(
+                f"fix: unknown parameter {k!r} for this model; valid: {', '.join(sorted(names))}"
+            )
         try:
             value = float(v)
         except (TypeError, ValueError):
@@ -37,7 +39,9 @@ def validate_fix(names, fix):
     for k, v in out.items():
         if k in NON_NEGATIVE_FIX:
             if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"fix: {k}={v!r} must be non-negative and finite (valid range: [0, inf))")
+                raise ValueError(
+                    f"fix: {k}={v!r} must be non-negative and finite (valid range: [0, inf))"
+                )
         elif k != "poisson" and not (math.isfinite(v) and v > 0):
             raise ValueError(f"fix: {k}={v!r} must be positive and finite (valid range: (0, inf))")
     return out
@@ -51,7 +55,9 @@ def _height_mask(data: FitData, heights) -> np.ndarray:
     for h in wanted:
         hit = np.isclose(data.height_m, h, atol=5e-4)
         if not hit.any():
-            raise ValueError(f"fit_heights: no record at height {h:g} m; heights in the data: {', '.join(f'{x:g}' for x in data.heights_m)}")
+            raise ValueError(
+                f"fit_heights: no record at height {h:g} m; heights in the data: {', '.join(f'{x:g}' for x in data.heights_m)}"
+            )
         mask |= hit
     return mask
 
@@ -95,8 +101,24 @@ class FitSetup:
         return f"fit {self.model_name}/{self.candidate.blocked_force}"
 
 
-def set_up(data, model, *, blocked_force, gas, ball: Ball, fix, poisson_prior, fit_heights, height_error, scale, decimate,
-           extra_weights: Mapping[str, float] | None, solver, superset, method) -> FitSetup:
+def set_up(
+    data,
+    model,
+    *,
+    blocked_force,
+    gas,
+    ball: Ball,
+    fix,
+    poisson_prior,
+    fit_heights,
+    height_error,
+    scale,
+    decimate,
+    extra_weights: Mapping[str, float] | None,
+    solver,
+    superset,
+    method,
+) -> FitSetup:
     """The model and the parameters it holds (checked), the records, and the problem built on
     them (see :func:`rbjax.fit.engine.fit` for the arguments)."""
     model_name, candidate = candidate_model(model, blocked_force, gas)
@@ -109,10 +131,28 @@ def set_up(data, model, *, blocked_force, gas, ball: Ball, fix, poisson_prior, f
     fit_mask = _height_mask(data, fit_heights)
     structure = embed(candidate, superset, ball)
     path, why_ode = fit_path(method, structure, solver)
-    problem = Problem(data, ball, structure, fit_solver(solver), height_error=height_error, decimate=decimate, scale=scale, path=path,
-                      feature_rows=any(w > 0 for w in (extra_weights or {}).values()))
+    problem = Problem(
+        data,
+        ball,
+        structure,
+        fit_solver(solver),
+        height_error=height_error,
+        decimate=decimate,
+        scale=scale,
+        path=path,
+        feature_rows=any(w > 0 for w in (extra_weights or {}).values()),
+    )
     return FitSetup(
-        model_name=model_name, candidate=candidate, fittable=fittable, fixed=fixed, ball=ball, data=data, fit_mask=fit_mask,
-        problem=problem, constants=problem.layout.constant_values(ball, structure), why_ode=why_ode, extra=dict(extra_weights or {}),
+        model_name=model_name,
+        candidate=candidate,
+        fittable=fittable,
+        fixed=fixed,
+        ball=ball,
+        data=data,
+        fit_mask=fit_mask,
+        problem=problem,
+        constants=problem.layout.constant_values(ball, structure),
+        why_ode=why_ode,
+        extra=dict(extra_weights or {}),
         poisson_prior=poisson_prior,
     )

@@ -39,12 +39,19 @@ def start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float
     tc = float(meas["contact_time_s"][lowest])
     mass = as_float(ball.mass_kg)
     k_spring = mass * (math.pi / tc) ** 2
-    e_young = k_spring * as_float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * as_float(ball.wall_m) ** 2)
+    e_young = (
+        k_spring
+        * as_float(ball.radius_m)
+        * math.sqrt(3 * (1 - nu**2))
+        / (4 * as_float(ball.wall_m) ** 2)
+    )
     v0 = np.sqrt(2 * G_N_PER_KG * d.height_m)
     impulse = d.force_N.sum(axis=1) / d.rate_Hz
     e = float(np.clip(np.median((impulse / (mass * v0) - 1.0)[k_idx]), 0.05, 0.99))
     values = {"youngs_Pa": e_young, "poisson": nu}
-    k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
+    k_shell = float(
+        reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999)))
+    )
     values.update(model.term_starts(k_shell, mass, e, tc, float(np.median(v0[k_idx]))))
     if model.stiffening is not None:
         values["beta"] = 0.05
@@ -80,35 +87,62 @@ def start_plan(setup: FitSetup, model, start) -> StartPlan:
     """The start θ: start values from the records (or a given ``Model``'s values), then the
     caller's ``start`` map, then the held values; or a previous :class:`FitResult`'s θ (a warm
     start, the held values kept). ``model``, ``start``: as given to :func:`rbjax.fit.engine.fit`."""
-    problem, lay, data, fixed, poisson_prior = setup.problem, setup.layout, setup.data, setup.fixed, setup.poisson_prior
+    problem, lay, data, fixed, poisson_prior = (
+        setup.problem,
+        setup.layout,
+        setup.data,
+        setup.fixed,
+        setup.poisson_prior,
+    )
     warm = start if isinstance(start, FitResult) else None
     start_map = {} if isinstance(start, FitResult) else dict(start or {})
     for k in start_map:
         if k not in setup.fittable:
-            raise ValueError(f"start: unknown parameter {k!r} for model {setup.model_name!r}; valid: {', '.join(setup.fittable)}")
+            raise ValueError(
+                f"start: unknown parameter {k!r} for model {setup.model_name!r}; valid: {', '.join(setup.fittable)}"
+            )
     if poisson_prior is not None and "poisson" not in start_map:
         # E/√(1−ν²) is all the histories determine, so the optimum has ν at the prior mean:
         # start there rather than crawl along the curved E–ν valley.
         start_map["poisson"] = poisson_prior[0]
     nu0 = fixed.get("poisson", start_map.get("poisson", 0.45))
-    values = {} if isinstance(model, Model) else start_values(problem, setup.candidate, setup.ball, setup.fit_mask, nu0)
+    values = (
+        {}
+        if isinstance(model, Model)
+        else start_values(problem, setup.candidate, setup.ball, setup.fit_mask, nu0)
+    )
     if isinstance(model, Model):
-        values["poisson"] = nu0 if ("poisson" in fixed or "poisson" in start_map) else as_float(setup.ball.poisson)
+        values["poisson"] = (
+            nu0 if ("poisson" in fixed or "poisson" in start_map) else as_float(setup.ball.poisson)
+        )
     values.update(start_map)
     values.update({k: v for k, v in fixed.items() if k in setup.fittable})
-    delay = (2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0) + 0.016 * float(np.nanmedian(problem.measured["contact_time_s"]))
+    delay = (2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0) + 0.016 * float(
+        np.nanmedian(problem.measured["contact_time_s"])
+    )
     theta = lay.theta(setup.ball, setup.structure, data.onset_s - delay)
     for k, v in values.items():
         theta[lay.index(k)] = v
-    auto_start = warm is None and not isinstance(model, Model) and "youngs_Pa" not in start_map and "youngs_Pa" not in fixed
+    auto_start = (
+        warm is None
+        and not isinstance(model, Model)
+        and "youngs_Pa" not in start_map
+        and "youngs_Pa" not in fixed
+    )
     if warm is not None:
         if warm.model_name != setup.model_name or warm.theta.size != theta.size:
-            raise ValueError(f"start: a FitResult of model {setup.model_name!r} cannot start this {setup.model_name!r} fit")
+            raise ValueError(
+                f"start: a FitResult of model {setup.model_name!r} cannot start this {setup.model_name!r} fit"
+            )
         theta = warm.theta.copy()
         for k, v in fixed.items():
             if k in setup.fittable:
                 theta[lay.index(k)] = v
-    points = [{}] if (warm is not None or isinstance(model, Model)) else alternative_starts(setup.candidate, set(fixed) | set(start_map))
+    points = (
+        [{}]
+        if (warm is not None or isinstance(model, Model))
+        else alternative_starts(setup.candidate, set(fixed) | set(start_map))
+    )
     return StartPlan(theta, points, aligned=warm is not None, rescale_E=auto_start)
 
 
@@ -135,6 +169,16 @@ def evaluate_starts(setup: FitSetup, plan: StartPlan) -> Starts:
         thetas.append(th)
     if not plan.aligned:
         outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask), constants)
-        thetas = [realign(problem, th, o["features"], np.ones(setup.data.n_records, bool), rescale_E=plan.rescale_E, fit_mask=fit_mask) for th, o in zip(thetas, outs)]
+        thetas = [
+            realign(
+                problem,
+                th,
+                o["features"],
+                np.ones(setup.data.n_records, bool),
+                rescale_E=plan.rescale_E,
+                fit_mask=fit_mask,
+            )
+            for th, o in zip(thetas, outs)
+        ]
     outs = problem.run_batch(thetas, free_none, problem.weights(fit_mask, setup.extra), constants)
     return Starts(plan.points, thetas, outs)

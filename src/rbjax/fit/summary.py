@@ -58,7 +58,9 @@ def _entry_mask(table: SummaryTable, held_out) -> np.ndarray:
     for h, f in held_out or ():
         hits = np.flatnonzero(np.isclose(table.heights_m, float(h), atol=5e-4))
         if f not in figures or hits.size == 0 or not mask[hits[0], figures.index(f)]:
-            raise ValueError(f"held_out: ({h!r}, {f!r}) is not a figure of {table.source}; it has {', '.join(figures)} at {', '.join(f'{x:g}' for x in table.heights_m)} m")
+            raise ValueError(
+                f"held_out: ({h!r}, {f!r}) is not a figure of {table.source}; it has {', '.join(figures)} at {', '.join(f'{x:g}' for x in table.heights_m)} m"
+            )
         mask[hits[0], figures.index(f)] = False
     return mask
 
@@ -80,12 +82,21 @@ def start_values(table: SummaryTable, model, ball: Ball, nu: float) -> dict:
     elif "peak_force_N" in values and np.any(np.isfinite(values["peak_force_N"])):
         i = int(np.flatnonzero(np.isfinite(values["peak_force_N"]))[0])
         k = (float(values["peak_force_N"][i]) / v0[i]) ** 2 / mass
-    e_young = as_float(ball.youngs_Pa) if k is None else k * as_float(ball.radius_m) * math.sqrt(3 * (1 - nu**2)) / (4 * as_float(ball.wall_m) ** 2)
+    e_young = (
+        as_float(ball.youngs_Pa)
+        if k is None
+        else k
+        * as_float(ball.radius_m)
+        * math.sqrt(3 * (1 - nu**2))
+        / (4 * as_float(ball.wall_m) ** 2)
+    )
     tc = math.pi * math.sqrt(mass / k) if k else 0.02
     e = float(np.nanmedian(values["restitution"])) if "restitution" in values else 0.85
     e = min(max(e, 0.05), 0.99)
     out = {"youngs_Pa": e_young, "poisson": nu}
-    k_shell = float(reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999))))
+    k_shell = float(
+        reissner_stiffness_N_per_m(ball.replace(youngs_Pa=e_young, poisson=min(nu, 0.4999)))
+    )
     speed = float(np.median(v0))
     out.update(model.term_starts(k_shell, mass, e, tc, speed))
     if model.stiffening is not None:
@@ -106,8 +117,20 @@ def _solve(program: FigureProgram, phi0, measured, sd, mask):
         return np.asarray(phi0, float), residual(phi0), True, "nothing free"
     r0 = residual(phi0)
     if not np.all(np.isfinite(r0)):
-        raise RuntimeError(f"the model's figures at the start values are not finite ({program.names} = {phi0}); give start values")
-    sol = least_squares(residual, phi0, jac=jacobian, method="trf", x_scale="jac", ftol=TOLERANCE, xtol=TOLERANCE, gtol=TOLERANCE, max_nfev=200)
+        raise RuntimeError(
+            f"the model's figures at the start values are not finite ({program.names} = {phi0}); give start values"
+        )
+    sol = least_squares(
+        residual,
+        phi0,
+        jac=jacobian,
+        method="trf",
+        x_scale="jac",
+        ftol=TOLERANCE,
+        xtol=TOLERANCE,
+        gtol=TOLERANCE,
+        max_nfev=200,
+    )
     ok = bool(sol.success) and np.all(np.isfinite(sol.fun))
     return sol.x, sol.fun, ok, str(sol.message)
 
@@ -152,10 +175,16 @@ def fit_summary(
     fixed = validate_fix(set(fittable) | set(CONSTANT_PARAMETERS[:3]), fix)
     ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
     nu = fixed.get("poisson", hold_poisson)
-    values = start_values(table, candidate, ball, nu) if not hasattr(model, "damping") else {"youngs_Pa": as_float(ball.youngs_Pa), "poisson": nu}
+    values = (
+        start_values(table, candidate, ball, nu)
+        if not hasattr(model, "damping")
+        else {"youngs_Pa": as_float(ball.youngs_Pa), "poisson": nu}
+    )
     for k, v in (start or {}).items():
         if k not in fittable:
-            raise ValueError(f"start: unknown parameter {k!r} for model {model_name!r}; valid: {', '.join(fittable)}")
+            raise ValueError(
+                f"start: unknown parameter {k!r} for model {model_name!r}; valid: {', '.join(fittable)}"
+            )
         values[k] = float(v)
     values.update({k: v for k, v in fixed.items() if k in fittable})
     values = {k: v for k, v in values.items() if k in fittable}
@@ -171,7 +200,8 @@ def fit_summary(
         )
     notes = list(table.notes)
     notes.append(
-        f"ν held at {nu:g}" + (" as given" if "poisson" in fixed else (" (the paper's value, §4)" if nu == 0.5 else ""))
+        f"ν held at {nu:g}"
+        + (" as given" if "poisson" in fixed else (" (the paper's value, §4)" if nu == 0.5 else ""))
         + ": the figures, like histories, determine only E/√(1−ν²) (Reissner stiffness, Eqs. 1–3; the gas force does not involve E or ν)."
     )
     specs_all = {n: fit_declaration(n, ball, candidate) for n in fittable}
@@ -190,9 +220,13 @@ def fit_summary(
         value, jac = program.value_and_jacobian(phi)
         if not np.all(np.isfinite(value[mask])):
             if program.num_samples and not widened:
-                widened = True  # a contact outlasted the L_FE window: rebuild it from the fitted model
+                widened = (
+                    True  # a contact outlasted the L_FE window: rebuild it from the fitted model
+                )
                 continue
-            raise RuntimeError(f"summary fit of {model_name!r}: the fitted model's figures are not finite (a failed solve) at {values}")
+            raise RuntimeError(
+                f"summary fit of {model_name!r}: the fitted model's figures are not finite (a failed solve) at {values}"
+            )
         jw = (jac / sd[..., None])[mask]
         drop = _undetermined(jw, free, specs, phi)
         if not drop:
@@ -202,16 +236,22 @@ def fit_summary(
             free.remove(n)
     _, fitted_ball, fitted_model = replace(values, 1.0, ball, candidate)
     for n, why in held.items():
-        notes.append(f"{n} is not pinned down by these figures ({why}); held at {values[n]:.4g} {specs_all[n].unit}.")
+        notes.append(
+            f"{n} is not pinned down by these figures ({why}); held at {values[n]:.4g} {specs_all[n].unit}."
+        )
 
     chi2 = float(r @ r)
     dof = n_fit - len(free)
     birge = max(1.0, chi2 / dof) if dof > 0 else 1.0
     cov_phi = np.linalg.pinv(jw.T @ jw, hermitian=True) * birge if free else np.zeros((0, 0))
     if birge > 1.0:
-        notes.append(f"χ²/(N − p) = {chi2 / dof:.3g} > 1: the model misses the figures by more than their uncertainties; the covariance is scaled by it.")
+        notes.append(
+            f"χ²/(N − p) = {chi2 / dof:.3g} > 1: the model misses the figures by more than their uncertainties; the covariance is scaled by it."
+        )
     elif dof == 0 and free:
-        notes.append("As many free parameters as figures: the fit passes through them, and the uncertainties are those of the figures alone.")
+        notes.append(
+            "As many free parameters as figures: the fit passes through them, and the uncertainties are those of the figures alone."
+        )
     std_phi = np.sqrt(np.clip(np.diag(cov_phi), 0.0, None))
     parameters = {}
     for n in fittable:
@@ -221,12 +261,20 @@ def fit_summary(
             j = free.index(n)
             p = phi[j]
             lo, hi = (float(spec.from_unconstrained(p + s * 1.96 * std_phi[j])) for s in (-1, 1))
-            parameters[n] = ParameterEstimate(v, float(abs(spec.slope(p)) * std_phi[j]), (lo, hi), spec.unit)
+            parameters[n] = ParameterEstimate(
+                v, float(abs(spec.slope(p)) * std_phi[j]), (lo, hi), spec.unit
+            )
         else:
             parameters[n] = ParameterEstimate(v, 0.0, (v, v), spec.unit, fixed=True)
     factor = 1.0 / math.sqrt(1.0 - nu**2)
     e = parameters["youngs_Pa"]
-    parameters["effective_modulus_Pa"] = ParameterEstimate(e.value * factor, e.std * factor, (e.ci95[0] * factor, e.ci95[1] * factor), "Pa", fixed=e.fixed)
+    parameters["effective_modulus_Pa"] = ParameterEstimate(
+        e.value * factor,
+        e.std * factor,
+        (e.ci95[0] * factor, e.ci95[1] * factor),
+        "Pa",
+        fixed=e.fixed,
+    )
     d = np.sqrt(np.maximum(np.diag(cov_phi), 1e-300))
     corr = np.clip(cov_phi / np.outer(d, d), -1.0, 1.0) if free else np.zeros((0, 0))
     if len(free) > 1:
@@ -234,20 +282,51 @@ def fit_summary(
         a, b = (int(x) for x in np.unravel_index(np.argmax(c), c.shape))
         notes.append(f"Largest correlation {corr[a, b]:+.3f} ({free[a]}–{free[b]}).")
     # prediction uncertainty of every figure (delta method in φ)
-    pred_sd = np.sqrt(np.maximum(np.einsum("hfp,pq,hfq->hf", jac, cov_phi, jac), 0.0)) if free else np.zeros_like(value)
+    pred_sd = (
+        np.sqrt(np.maximum(np.einsum("hfp,pq,hfq->hf", jac, cov_phi, jac), 0.0))
+        if free
+        else np.zeros_like(value)
+    )
     rows = []
     for i, h in enumerate(table.heights_m):
         for j, f in enumerate(figures):
             if np.isfinite(measured[i, j]):
-                rows.append({"height_m": float(h), "figure": f, "measured": float(measured[i, j]), "sd": float(sd[i, j]), "fitted": float(value[i, j]),
-                             "fitted_sd": float(pred_sd[i, j]), "normalised_error": float((value[i, j] - measured[i, j]) / sd[i, j]), "in_fit": bool(mask[i, j])})
+                rows.append(
+                    {
+                        "height_m": float(h),
+                        "figure": f,
+                        "measured": float(measured[i, j]),
+                        "sd": float(sd[i, j]),
+                        "fitted": float(value[i, j]),
+                        "fitted_sd": float(pred_sd[i, j]),
+                        "normalised_error": float((value[i, j] - measured[i, j]) / sd[i, j]),
+                        "in_fit": bool(mask[i, j]),
+                    }
+                )
     elapsed = time.perf_counter() - t0
-    say(f"fit_summary {model_name}: χ² = {chi2:.3g} on {n_fit} figures, {len(free)} free ({elapsed:.1f} s)", enabled=progress)
+    say(
+        f"fit_summary {model_name}: χ² = {chi2:.3g} on {n_fit} figures, {len(free)} free ({elapsed:.1f} s)",
+        enabled=progress,
+    )
     return SummaryFitResult(
-        model_name=model_name, blocked_force=candidate.blocked_force, gas=candidate.gas, ball=fitted_ball, model=fitted_model,
-        parameters=parameters, correlations=(tuple(free), corr), identifiability=" ".join(notes), rows=tuple(rows),
-        chi2=chi2, n_figures=n_fit, n_free=len(free), converged=ok, message=message, source=table.source,
-        heights_m=table.heights_m.copy(), figures=figures, time_s=elapsed,
+        model_name=model_name,
+        blocked_force=candidate.blocked_force,
+        gas=candidate.gas,
+        ball=fitted_ball,
+        model=fitted_model,
+        parameters=parameters,
+        correlations=(tuple(free), corr),
+        identifiability=" ".join(notes),
+        rows=tuple(rows),
+        chi2=chi2,
+        n_figures=n_fit,
+        n_free=len(free),
+        converged=ok,
+        message=message,
+        source=table.source,
+        heights_m=table.heights_m.copy(),
+        figures=figures,
+        time_s=elapsed,
     )
 
 
@@ -262,7 +341,12 @@ def _undetermined(jw, free, specs, phi) -> dict[str, str]:
     norms = np.linalg.norm(jw, axis=0)
     out = {}
     for j, (n, s) in enumerate(zip(free, specs)):
-        if s.lower == 0.0 and not s.lower_open and float(s.from_unconstrained(phi[j])) < 1e-9 * max(1.0, abs(float(s.from_unconstrained(phi[j] + 1.0)))):
+        if (
+            s.lower == 0.0
+            and not s.lower_open
+            and float(s.from_unconstrained(phi[j]))
+            < 1e-9 * max(1.0, abs(float(s.from_unconstrained(phi[j] + 1.0))))
+        ):
             out[n] = "it ran to its bound 0: the figures ask for none of it"
     if out:
         return out
@@ -271,5 +355,9 @@ def _undetermined(jw, free, specs, phi) -> dict[str, str]:
     _, r, piv = scipy.linalg.qr(jw / np.maximum(norms, 1e-300), pivoting=True, mode="economic")
     d = np.abs(np.diag(r))
     if d[-1] * CONDITION_LIMIT < d[0]:
-        return {free[piv[-1]]: f"its Jacobian column depends on the others: condition number {d[0] / max(d[-1], 1e-300):.2g}"}
+        return {
+            free[
+                piv[-1]
+            ]: f"its Jacobian column depends on the others: condition number {d[0] / max(d[-1], 1e-300):.2g}"
+        }
     return {}

@@ -45,27 +45,49 @@ def window_samples(contact_time_s) -> int:
     return min(N_RECORD, WINDOW_QUANTUM * math.ceil(n / WINDOW_QUANTUM))
 
 
-def figures_of(heights_m, ball, model: Model, figures: tuple[str, ...], num_samples: int, substeps: int = 1):
+def figures_of(
+    heights_m, ball, model: Model, figures: tuple[str, ...], num_samples: int, substeps: int = 1
+):
     """(len(heights), len(figures)) array of the figures of ``(ball, model)`` (traceable)."""
     coupled = model.coupling is not None
     solver = Solver(adjoint="forward") if coupled else None
     columns: dict = {}
     if any(f in SCALAR_FIGURES for f in figures):
         res = simulate(heights_m, ball, model, solver=solver)
-        columns.update(contact_time_s=res.contact_time_s, peak_force_N=res.peak_force_N, restitution=res.restitution)
+        columns.update(
+            contact_time_s=res.contact_time_s,
+            peak_force_N=res.peak_force_N,
+            restitution=res.restitution,
+        )
     octave = [f for f in figures if f in OCTAVE_FIGURES]
     third = [f for f in figures if f in THIRD_OCTAVE_FIGURES]
     if octave or third:
         from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 
         if sampled_history_unsupported(model) is None:
-            force = sampled_solve(heights_m, ball, model, PAPER_RATE_Hz, num_samples, substeps).force_N
+            force = sampled_solve(
+                heights_m, ball, model, PAPER_RATE_Hz, num_samples, substeps
+            ).force_N
         else:
-            force = trajectory(heights_m, jnp.arange(num_samples) / PAPER_RATE_Hz, ball, model, solver).force_N
+            force = trajectory(
+                heights_m, jnp.arange(num_samples) / PAPER_RATE_Hz, ball, model, solver
+            ).force_N
         if octave:
-            columns.update(zip(OCTAVE_FIGURES, jnp.moveaxis(lfe_octave_dB(force, PAPER_RATE_Hz, n_record=N_RECORD), -1, 0)))
+            columns.update(
+                zip(
+                    OCTAVE_FIGURES,
+                    jnp.moveaxis(lfe_octave_dB(force, PAPER_RATE_Hz, n_record=N_RECORD), -1, 0),
+                )
+            )
         if third:
-            columns.update(zip(THIRD_OCTAVE_FIGURES, jnp.moveaxis(lfe_third_octave_dB(force, PAPER_RATE_Hz, n_record=N_RECORD), -1, 0)))
+            columns.update(
+                zip(
+                    THIRD_OCTAVE_FIGURES,
+                    jnp.moveaxis(
+                        lfe_third_octave_dB(force, PAPER_RATE_Hz, n_record=N_RECORD), -1, 0
+                    ),
+                )
+            )
     return jnp.stack([columns[f] for f in figures], axis=-1)
 
 
@@ -103,8 +125,17 @@ class FigureProgram:
         self._last: tuple | None = None
 
     def _args(self, phi):
-        return (jnp.asarray(phi, dtype=jnp.float64), jnp.asarray(self.heights_m), self.ball, self.model,
-                self.names, self.specs, self.figures, self.num_samples, self.substeps)
+        return (
+            jnp.asarray(phi, dtype=jnp.float64),
+            jnp.asarray(self.heights_m),
+            self.ball,
+            self.model,
+            self.names,
+            self.specs,
+            self.figures,
+            self.num_samples,
+            self.substeps,
+        )
 
     def value(self, phi) -> np.ndarray:
         return self.value_and_jacobian(phi)[0]

@@ -13,7 +13,11 @@ from ..terms.model import Model
 from .result import _model_fields, _parameter_lines
 
 #: How each figure is shown: (label, unit, scale from SI to the unit shown).
-DISPLAY = {"contact_time_s": ("contact time", "ms", 1e3), "peak_force_N": ("peak force", "N", 1.0), "restitution": ("restitution", "1", 1.0)}
+DISPLAY = {
+    "contact_time_s": ("contact time", "ms", 1e3),
+    "peak_force_N": ("peak force", "N", 1.0),
+    "restitution": ("restitution", "1", 1.0),
+}
 
 
 def display(figure: str) -> tuple[str, str, float]:
@@ -84,15 +88,43 @@ class SummaryFitResult:
     def summary(self) -> str:
         from ..text import fmt, format_table
 
-        lines = [f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted to {self.n_figures} figures of {self.source}: "
-                 f"χ² = {self.chi2:.3g}, {self.n_free} free; {self.message}"]
+        lines = [
+            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted to {self.n_figures} figures of {self.source}: "
+            f"χ² = {self.chi2:.3g}, {self.n_free} free; {self.message}"
+        ]
         lines += _parameter_lines(self)
         rows = []
         for r in self.rows:
             label, unit, k = display(r["figure"])
-            rows.append([f"{r['height_m']:.2f}", label, unit, fmt(k * r["measured"], ".4g"), fmt(k * r["sd"], ".2g"),
-                         fmt(k * r["fitted"], ".4g"), fmt(k * r["fitted_sd"], ".2g"), fmt(r["normalised_error"], "+.2f"), "fit" if r["in_fit"] else "held out"])
-        lines.append(format_table(["h (m)", "figure", "unit", "measured", "± sd", "fitted", "± sd", "(fit−meas)/sd", ""], rows))
+            rows.append(
+                [
+                    f"{r['height_m']:.2f}",
+                    label,
+                    unit,
+                    fmt(k * r["measured"], ".4g"),
+                    fmt(k * r["sd"], ".2g"),
+                    fmt(k * r["fitted"], ".4g"),
+                    fmt(k * r["fitted_sd"], ".2g"),
+                    fmt(r["normalised_error"], "+.2f"),
+                    "fit" if r["in_fit"] else "held out",
+                ]
+            )
+        lines.append(
+            format_table(
+                [
+                    "h (m)",
+                    "figure",
+                    "unit",
+                    "measured",
+                    "± sd",
+                    "fitted",
+                    "± sd",
+                    "(fit−meas)/sd",
+                    "",
+                ],
+                rows,
+            )
+        )
         return "\n".join(lines)
 
     def plot(self, out_dir) -> list[Path]:
@@ -111,11 +143,28 @@ class SummaryFitResult:
             label, unit, k = display(f)
             rows = [r for r in self.rows if r["figure"] == f]
             h = np.array([r["height_m"] for r in rows])
-            for key, sdkey, style, name in (("measured", "sd", "ko", "measured"), ("fitted", "fitted_sd", "C0s", f"{self.model_name}")):
-                ax.errorbar(h, [k * r[key] for r in rows], yerr=[2 * k * r[sdkey] for r in rows], fmt=style, capsize=3, label=name, mfc="none" if key == "fitted" else None)
+            for key, sdkey, style, name in (
+                ("measured", "sd", "ko", "measured"),
+                ("fitted", "fitted_sd", "C0s", f"{self.model_name}"),
+            ):
+                ax.errorbar(
+                    h,
+                    [k * r[key] for r in rows],
+                    yerr=[2 * k * r[sdkey] for r in rows],
+                    fmt=style,
+                    capsize=3,
+                    label=name,
+                    mfc="none" if key == "fitted" else None,
+                )
             for r in rows:
                 if not r["in_fit"]:
-                    ax.annotate("held out", (r["height_m"], k * r["measured"]), textcoords="offset points", xytext=(4, 6), fontsize=7)
+                    ax.annotate(
+                        "held out",
+                        (r["height_m"], k * r["measured"]),
+                        textcoords="offset points",
+                        xytext=(4, 6),
+                        fontsize=7,
+                    )
             ax.set_xlabel("drop height (m)")
             ax.set_ylabel(f"{label} ({unit})")
         axes[0][0].legend(fontsize=8)

@@ -53,7 +53,12 @@ def default_sd(figure: str, value: float) -> float:
 
 
 #: The defaults of :func:`default_sd`, as the notes state them.
-DEFAULT_SD = {"contact_time_s": "0.1 ms", "peak_force_N": "1 % of the value", "restitution": "0.01", "lfe_*_dB": "0.2 dB"}
+DEFAULT_SD = {
+    "contact_time_s": "0.1 ms",
+    "peak_force_N": "1 % of the value",
+    "restitution": "0.01",
+    "lfe_*_dB": "0.2 dB",
+}
 
 
 class SummaryTableError(DataError):
@@ -81,7 +86,12 @@ class SummaryTable:
 
     def entries(self) -> list[tuple[int, str]]:
         """(height index, figure) of every measured figure, height by height."""
-        return [(i, f) for i in range(self.heights_m.size) for f in self.figures if np.isfinite(self.values[f][i])]
+        return [
+            (i, f)
+            for i in range(self.heights_m.size)
+            for f in self.figures
+            if np.isfinite(self.values[f][i])
+        ]
 
     @property
     def n_figures(self) -> int:
@@ -90,15 +100,23 @@ class SummaryTable:
     def subset(self, keep) -> SummaryTable:
         """The table with only the (height index, figure) entries in ``keep`` (the others empty)."""
         keep = set(keep)
-        values = {f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)]) for f, arr in self.values.items()}
-        sd = {f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)]) for f, arr in self.sd.items()}
+        values = {
+            f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)])
+            for f, arr in self.values.items()
+        }
+        sd = {
+            f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)])
+            for f, arr in self.sd.items()
+        }
         return dataclasses.replace(self, values=values, sd=sd)
 
     def to_dict(self) -> dict:
         return {
             "source": self.source,
             "heights_m": self.heights_m.tolist(),
-            "figures": {f: {"value": _nulls(self.values[f]), "sd": _nulls(self.sd[f])} for f in self.figures},
+            "figures": {
+                f: {"value": _nulls(self.values[f]), "sd": _nulls(self.sd[f])} for f in self.figures
+            },
             "notes": list(self.notes),
         }
 
@@ -107,13 +125,17 @@ def _nulls(arr) -> list:
     return [None if not np.isfinite(x) else float(x) for x in arr]
 
 
-def summary_table(rows: list[Mapping], source: str = "<table>", row_labels: list[str] | None = None) -> SummaryTable:
+def summary_table(
+    rows: list[Mapping], source: str = "<table>", row_labels: list[str] | None = None
+) -> SummaryTable:
     """A :class:`SummaryTable` from rows (mappings of column → number or None), checked."""
     labels = row_labels or [f"row {k + 1}" for k in range(len(rows))]
     where = lambda k, col: f"{source}, {labels[k]}, column {col!r}"  # noqa: E731
     valid = (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES)
     if not rows:
-        raise SummaryTableError(f"{source}: no rows; give one row per drop height with {HEIGHT_COLUMN} and any of {', '.join(FIGURES[:4])} …")
+        raise SummaryTableError(
+            f"{source}: no rows; give one row per drop height with {HEIGHT_COLUMN} and any of {', '.join(FIGURES[:4])} …"
+        )
     heights: list[float] = []
     values: dict[str, list[float]] = {f: [] for f in FIGURES}
     sds: dict[str, list[float]] = {f: [] for f in FIGURES}
@@ -121,20 +143,28 @@ def summary_table(rows: list[Mapping], source: str = "<table>", row_labels: list
     for k, row in enumerate(rows):
         for col in row:
             if col not in valid:
-                raise SummaryTableError(f"{where(k, col)}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}")
+                raise SummaryTableError(
+                    f"{where(k, col)}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
+                )
         cells = {col: _number(row[col], where(k, col)) for col in row}
         h = cells.get(HEIGHT_COLUMN)
         if h is None or not h > 0:
-            raise SummaryTableError(f"{where(k, HEIGHT_COLUMN)}: a drop height > 0 m is required (got {row.get(HEIGHT_COLUMN)!r}; valid range (0, inf))")
+            raise SummaryTableError(
+                f"{where(k, HEIGHT_COLUMN)}: a drop height > 0 m is required (got {row.get(HEIGHT_COLUMN)!r}; valid range (0, inf))"
+            )
         if any(math.isclose(h, other, abs_tol=5e-4) for other in heights):
-            raise SummaryTableError(f"{where(k, HEIGHT_COLUMN)}: height {h:g} m occurs twice; give one row per drop height")
+            raise SummaryTableError(
+                f"{where(k, HEIGHT_COLUMN)}: height {h:g} m occurs twice; give one row per drop height"
+            )
         heights.append(h)
         measured = 0
         for f in FIGURES:
             v, s = cells.get(f), cells.get(f + SD_SUFFIX)
             if v is None:
                 if s is not None:
-                    raise SummaryTableError(f"{where(k, f + SD_SUFFIX)}: an uncertainty without a value in column {f!r}")
+                    raise SummaryTableError(
+                        f"{where(k, f + SD_SUFFIX)}: an uncertainty without a value in column {f!r}"
+                    )
                 values[f].append(np.nan)
                 sds[f].append(np.nan)
                 continue
@@ -143,22 +173,35 @@ def summary_table(rows: list[Mapping], source: str = "<table>", row_labels: list
                 s = default_sd(f, v)
                 defaulted.add(f)
             if not s > 0:
-                raise SummaryTableError(f"{where(k, f + SD_SUFFIX)}: uncertainty {s!r} must be positive (valid range (0, inf))")
+                raise SummaryTableError(
+                    f"{where(k, f + SD_SUFFIX)}: uncertainty {s!r} must be positive (valid range (0, inf))"
+                )
             if f in SCALAR_FIGURES and not v > 0:
-                raise SummaryTableError(f"{where(k, f)}: {v!r} must be positive (valid range (0, inf))")
+                raise SummaryTableError(
+                    f"{where(k, f)}: {v!r} must be positive (valid range (0, inf))"
+                )
             if f == "restitution" and not v <= 1:
-                raise SummaryTableError(f"{where(k, f)}: {v!r} must be at most 1 (valid range (0, 1])")
+                raise SummaryTableError(
+                    f"{where(k, f)}: {v!r} must be at most 1 (valid range (0, 1])"
+                )
             values[f].append(v)
             sds[f].append(s)
         if measured == 0:
-            raise SummaryTableError(f"{source}, {labels[k]}: height {h:g} m has no figure; give at least one of {', '.join(FIGURES[:4])} …")
+            raise SummaryTableError(
+                f"{source}, {labels[k]}: height {h:g} m has no figure; give at least one of {', '.join(FIGURES[:4])} …"
+            )
     order = np.argsort(heights)
     keep = [f for f in FIGURES if np.any(np.isfinite(values[f]))]
     notes = []
     if defaulted:
         names = ", ".join(f for f in FIGURES if f in defaulted)
-        notes.append(f"No uncertainty given for {names}: the default used is " + "; ".join(
-            f"{k} {v}" for k, v in DEFAULT_SD.items() if any(_matches(k, f) for f in defaulted)) + " (the paper's noise level, §4.1).")
+        notes.append(
+            f"No uncertainty given for {names}: the default used is "
+            + "; ".join(
+                f"{k} {v}" for k, v in DEFAULT_SD.items() if any(_matches(k, f) for f in defaulted)
+            )
+            + " (the paper's noise level, §4.1)."
+        )
     return SummaryTable(
         heights_m=np.asarray(heights, dtype=float)[order],
         values={f: np.asarray(values[f], dtype=float)[order] for f in keep},
@@ -199,12 +242,18 @@ def read_summary(path) -> SummaryTable:
             raise SummaryTableError(f"{path}: not valid TOML: {err}") from None
         unknown = sorted(set(doc) - {"height", "source", "note"})
         if unknown or not isinstance(doc.get("height"), list):
-            raise SummaryTableError(f"{path}: expected [[height]] tables (and optional 'source', 'note'); found keys {sorted(doc)}")
+            raise SummaryTableError(
+                f"{path}: expected [[height]] tables (and optional 'source', 'note'); found keys {sorted(doc)}"
+            )
         rows = doc["height"]
         return summary_table(rows, str(path), [f"[[height]] {k + 1}" for k in range(len(rows))])
     if path.suffix.lower() != ".csv":
         raise SummaryTableError(f"{path}: unknown format {path.suffix!r}; valid: .csv, .toml")
-    lines = [(n, line) for n, line in enumerate(path.read_text().splitlines(), start=1) if line.strip() and not line.lstrip().startswith("#")]
+    lines = [
+        (n, line)
+        for n, line in enumerate(path.read_text().splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not lines:
         raise SummaryTableError(f"{path}: no header row")
     reader = list(csv.reader([line for _, line in lines]))
@@ -212,12 +261,18 @@ def read_summary(path) -> SummaryTable:
     rows, labels = [], []
     for (n, _), cells in zip(lines[1:], reader[1:]):
         if len(cells) > len(header):
-            raise SummaryTableError(f"{path}, line {n}: {len(cells)} cells but {len(header)} columns in the header")
+            raise SummaryTableError(
+                f"{path}, line {n}: {len(cells)} cells but {len(header)} columns in the header"
+            )
         rows.append(dict(zip(header, cells)))
         labels.append(f"line {n}")
     if HEIGHT_COLUMN not in header:
-        raise SummaryTableError(f"{path}, line {lines[0][0]}, column {HEIGHT_COLUMN!r}: missing; the header needs {HEIGHT_COLUMN} and figure columns")
+        raise SummaryTableError(
+            f"{path}, line {lines[0][0]}, column {HEIGHT_COLUMN!r}: missing; the header needs {HEIGHT_COLUMN} and figure columns"
+        )
     for col in header:
         if col and col not in (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES):
-            raise SummaryTableError(f"{path}, line {lines[0][0]}, column {col!r}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}")
+            raise SummaryTableError(
+                f"{path}, line {lines[0][0]}, column {col!r}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
+            )
     return summary_table(rows, str(path), labels)

@@ -75,7 +75,6 @@ def conditioning_note(jac_phi, free_names, physical_free, corr) -> str:
     return f"Fitted parameters: scaled-Jacobian condition number {cond:.2g}{worst}."
 
 
-
 def identifiability(jac_hist, i_e: int, i_nu: int, columns) -> tuple[str, bool, float]:
     """(note, E–ν flagged?, |cos(∂r/∂E, ∂r/∂ν)|) from the history Jacobian (columns of θ).
 
@@ -96,7 +95,9 @@ def identifiability(jac_hist, i_e: int, i_nu: int, columns) -> tuple[str, bool, 
     return note, flagged, cos
 
 
-def covariance(jac_phi, r, tau: float, prior_index=None, prior_precision: float = 0.0) -> np.ndarray:
+def covariance(
+    jac_phi, r, tau: float, prior_index=None, prior_precision: float = 0.0
+) -> np.ndarray:
     """Scaled-inverse Gauss–Newton covariance of φ, τσ̂²(JᵀJ)⁻¹ (plus a prior's precision)."""
     p = jac_phi.shape[1]
     sigma2 = float(r @ r) / max(r.size - p, 1)
@@ -104,10 +105,14 @@ def covariance(jac_phi, r, tau: float, prior_index=None, prior_precision: float 
     if prior_index is not None:
         info[prior_index, prior_index] += prior_precision
     scale = np.sqrt(np.maximum(np.diag(info), 1e-300))
-    return np.linalg.pinv(info / np.outer(scale, scale), rcond=1e-13, hermitian=True) / np.outer(scale, scale)
+    return np.linalg.pinv(info / np.outer(scale, scale), rcond=1e-13, hermitian=True) / np.outer(
+        scale, scale
+    )
 
 
-def fold_in_poisson_prior(free_names, physical_free, physical, cov_phi, nu: float, prior, dnu_dphi: float):
+def fold_in_poisson_prior(
+    free_names, physical_free, physical, cov_phi, nu: float, prior, dnu_dphi: float
+):
     """Add ν ~ N(mean, std²) to a covariance fitted with ν held at the mean (in φ = (log E, logit ν, …)).
 
     With ν held, the fitted log E is log E_eff + ½log(1 − ν²) at ν fixed; letting ν vary

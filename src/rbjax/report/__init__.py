@@ -5,4 +5,11 @@ with them in :mod:`~rbjax.report.paper`."""
 from .paper import DEFAULT_HEIGHTS_M, GAS, PAPER, STANDARD_HEIGHT_M, printed_eq4_limit_m
 from .reproduce import reproduce
 
-__all__ = ["DEFAULT_HEIGHTS_M", "GAS", "PAPER", "STANDARD_HEIGHT_M", "printed_eq4_limit_m", "reproduce"]
+__all__ = [
+    "DEFAULT_HEIGHTS_M",
+    "GAS",
+    "PAPER",
+    "STANDARD_HEIGHT_M",
+    "printed_eq4_limit_m",
+    "reproduce",
+]

@@ -35,7 +35,10 @@ def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
 
     from ..studies.summary_selection import select_summary
 
-    say(f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's figures (§4.1)", enabled=progress)
+    say(
+        f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's figures (§4.1)",
+        enabled=progress,
+    )
     selection = select_summary(EXAMPLE_TABLE, models, held_out=[PREDICTED])
     rows = {}
     for name, cand in selection.candidates.items():
@@ -43,46 +46,92 @@ def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
         rows[name] = {
             "youngs_Pa": cand.fit.parameters["youngs_Pa"].value,
             "parameters": {k: v.value for k, v in cand.fit.parameters.items() if not v.fixed},
-            "predicted_peak_1.6m_N": r["fitted"], "predicted_sd_N": r["fitted_sd"],
-            "relative_error": r["fitted"] / r["measured"] - 1.0, "chi2": cand.fit.chi2,
-            "held_out_rms_sigma": cand.held_out_rms, "contact_time_s": {f"{x['height_m']:g}": x["fitted"] for x in cand.fit.rows if x["figure"] == "contact_time_s"},
+            "predicted_peak_1.6m_N": r["fitted"],
+            "predicted_sd_N": r["fitted_sd"],
+            "relative_error": r["fitted"] / r["measured"] - 1.0,
+            "chi2": cand.fit.chi2,
+            "held_out_rms_sigma": cand.held_out_rms,
+            "contact_time_s": {
+                f"{x['height_m']:g}": x["fitted"]
+                for x in cand.fit.rows
+                if x["figure"] == "contact_time_s"
+            },
         }
     best = selection.recommended
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
     table = selection.candidates[best].fit
-    for ax, figure, k, unit in ((axes[0], "contact_time_s", 1e3, "ms"), (axes[1], "peak_force_N", 1.0, "N")):
+    for ax, figure, k, unit in (
+        (axes[0], "contact_time_s", 1e3, "ms"),
+        (axes[1], "peak_force_N", 1.0, "N"),
+    ):
         meas = [x for x in table.rows if x["figure"] == figure]
-        ax.errorbar([x["height_m"] for x in meas], [k * x["measured"] for x in meas], yerr=[2 * k * x["sd"] for x in meas], fmt="ko", capsize=3, label="paper, measured (§4.1)")
+        ax.errorbar(
+            [x["height_m"] for x in meas],
+            [k * x["measured"] for x in meas],
+            yerr=[2 * k * x["sd"] for x in meas],
+            fmt="ko",
+            capsize=3,
+            label="paper, measured (§4.1)",
+        )
         for j, (name, cand) in enumerate(selection.candidates.items()):
             fitted = [x for x in cand.fit.rows if x["figure"] == figure]
-            ax.plot([x["height_m"] for x in fitted], [k * x["fitted"] for x in fitted], f"C{j}s--", mfc="none", label=name + (" (recommended)" if name == best else ""))
+            ax.plot(
+                [x["height_m"] for x in fitted],
+                [k * x["fitted"] for x in fitted],
+                f"C{j}s--",
+                mfc="none",
+                label=name + (" (recommended)" if name == best else ""),
+            )
         ax.set_xlabel("drop height (m)")
         ax.set_ylabel(f"{figure.split('_')[0]} {figure.split('_')[1]} ({unit})")
-    axes[1].annotate("160 cm: held out, predicted", (1.6, 1800.0), textcoords="offset points", xytext=(-150, 10), fontsize=8)
+    axes[1].annotate(
+        "160 cm: held out, predicted",
+        (1.6, 1800.0),
+        textcoords="offset points",
+        xytext=(-150, 10),
+        fontsize=8,
+    )
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     out = Path(out_dir)
     fig.savefig(out / "measured_ball.png", dpi=120)
     plt.close(fig)
     return {
-        "table": str(EXAMPLE_TABLE.name), "fitted_on": "contact times at 0.1, 1.0, 1.6 m and the peak force at 0.1 m",
-        "predicted": "peak force at 1.6 m (measured about 1800 N, §4.1)", "models": rows, "recommended": best,
-        "selection": selection.to_dict(), "bar_met": bool(best is not None and abs(rows[best]["relative_error"]) <= BAR_RELATIVE),
+        "table": str(EXAMPLE_TABLE.name),
+        "fitted_on": "contact times at 0.1, 1.0, 1.6 m and the peak force at 0.1 m",
+        "predicted": "peak force at 1.6 m (measured about 1800 N, §4.1)",
+        "models": rows,
+        "recommended": best,
+        "selection": selection.to_dict(),
+        "bar_met": bool(best is not None and abs(rows[best]["relative_error"]) <= BAR_RELATIVE),
         "figure": "measured_ball.png",
     }
 
 
 def report_section(result: dict) -> list[str]:
     """report.md: the measured ball's fitted models beside its figures."""
-    lines = ["", "## The paper's measured ball, fitted to its figures", "",
-             f"Fitted on the {result['fitted_on']} (§4.1, bundled as `examples/paper-measured-ball/summary.csv`); each model predicts the "
-             f"{result['predicted']}. Models compared by leave-one-figure-out prediction; recommended: **{result['recommended']}**.", "",
-             "| model | E (MPa) | t_c 10 / 100 / 160 cm (ms) | held-out rms (σ) | predicted 160 cm peak | vs 1800 N |", "|---|---|---|---|---|---|"]
+    lines = [
+        "",
+        "## The paper's measured ball, fitted to its figures",
+        "",
+        f"Fitted on the {result['fitted_on']} (§4.1, bundled as `examples/paper-measured-ball/summary.csv`); each model predicts the "
+        f"{result['predicted']}. Models compared by leave-one-figure-out prediction; recommended: **{result['recommended']}**.",
+        "",
+        "| model | E (MPa) | t_c 10 / 100 / 160 cm (ms) | held-out rms (σ) | predicted 160 cm peak | vs 1800 N |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, r in result["models"].items():
         tc = " / ".join(f"{1e3 * v:.2f}" for v in r["contact_time_s"].values())
-        lines.append(f"| {name} | {r['youngs_Pa'] / 1e6:.3f} | {tc} | {r['held_out_rms_sigma']:.2f} | {r['predicted_peak_1.6m_N']:.0f} ± {r['predicted_sd_N']:.0f} N | {100 * r['relative_error']:+.1f} % |")
+        lines.append(
+            f"| {name} | {r['youngs_Pa'] / 1e6:.3f} | {tc} | {r['held_out_rms_sigma']:.2f} | {r['predicted_peak_1.6m_N']:.0f} ± {r['predicted_sd_N']:.0f} N | {100 * r['relative_error']:+.1f} % |"
+        )
     verdict = "met" if result["bar_met"] else "missed"
-    lines += ["", f"The bar (the recommended model within 5 % of 1800 N) is **{verdict}**: none of these models makes the peak grow as slowly "
-              "with height as the measured ball while its contact shortens as measured (the measured pulse is not the model's shape: §4.1, ringing and a steep rise)."
-              if not result["bar_met"] else "", f"![measured ball]({result['figure']})"]
+    lines += [
+        "",
+        f"The bar (the recommended model within 5 % of 1800 N) is **{verdict}**: none of these models makes the peak grow as slowly "
+        "with height as the measured ball while its contact shortens as measured (the measured pulse is not the model's shape: §4.1, ringing and a steep rise)."
+        if not result["bar_met"]
+        else "",
+        f"![measured ball]({result['figure']})",
+    ]
     return lines

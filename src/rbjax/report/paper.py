@@ -33,7 +33,14 @@ PAPER = {
     "predicted_contact_time_s": {"1.0": 20.8e-3},  # §4.1: "the prediction (20.8 ms)"
     "peak_force_N": {"0.1": 500.0, "1.6": 1800.0},  # §4.1: "roughly 500 N" / "about 1800 N"
     "measured_contact_time_s": {"0.1": 21.3e-3, "1.0": 19.6e-3, "1.6": 19.3e-3},  # §4.1
-    "increase_per_doubling_dB": {"31.5": 3.0, "63": 5.0, "125": 3.0, "250": 3.0, "500": 3.0, "1000": 3.0},  # §4.2
+    "increase_per_doubling_dB": {
+        "31.5": 3.0,
+        "63": 5.0,
+        "125": 3.0,
+        "250": 3.0,
+        "500": 3.0,
+        "1000": 3.0,
+    },  # §4.2
     "contact_resonance_Hz": {"0.1": 66.0, "1.6": 73.0},  # §4.2, Fig. 12
 }
 
@@ -70,23 +77,74 @@ def _comparison(runs, heights) -> list[dict]:
                 "height_m": h,
                 "unit": unit,
                 "paper": paper * scale,
-                "rbjax": {g: (None if v is None or not np.isfinite(v) else v * scale) for g, v in values.items()},
+                "rbjax": {
+                    g: (None if v is None or not np.isfinite(v) else v * scale)
+                    for g, v in values.items()
+                },
                 "relative_difference": {g: _rel(v, paper) for g, v in values.items()},
-                "difference": {g: (None if v is None or not np.isfinite(v) else (v - paper) * scale) for g, v in values.items()},
+                "difference": {
+                    g: (None if v is None or not np.isfinite(v) else (v - paper) * scale)
+                    for g, v in values.items()
+                },
             }
         )
 
     for h, v in PAPER["predicted_contact_time_s"].items():
-        add(f"contact_time_{h}m", f"predicted contact time at {float(h) * 100:.0f} cm", "paper's prediction (§4.1)", float(h), v, _at(runs, heights, "contact_time_s", float(h)), "ms", 1e3, "contact time vs paper's prediction")
+        add(
+            f"contact_time_{h}m",
+            f"predicted contact time at {float(h) * 100:.0f} cm",
+            "paper's prediction (§4.1)",
+            float(h),
+            v,
+            _at(runs, heights, "contact_time_s", float(h)),
+            "ms",
+            1e3,
+            "contact time vs paper's prediction",
+        )
     for h, v in PAPER["peak_force_N"].items():
-        add(f"peak_force_{h}m", f"peak force at {float(h) * 100:.0f} cm", "paper, prediction ≈ measurement (§4.1, Fig. 5)", float(h), v, _at(runs, heights, "peak_force_N", float(h)), "N", series="peak force vs paper")
+        add(
+            f"peak_force_{h}m",
+            f"peak force at {float(h) * 100:.0f} cm",
+            "paper, prediction ≈ measurement (§4.1, Fig. 5)",
+            float(h),
+            v,
+            _at(runs, heights, "peak_force_N", float(h)),
+            "N",
+            series="peak force vs paper",
+        )
     for h, v in PAPER["measured_contact_time_s"].items():
-        add(f"measured_contact_time_{h}m", f"measured contact time at {float(h) * 100:.0f} cm", "measurement (§4.1)", float(h), v, _at(runs, heights, "contact_time_s", float(h)), "ms", 1e3, "contact time vs measurement")
+        add(
+            f"measured_contact_time_{h}m",
+            f"measured contact time at {float(h) * 100:.0f} cm",
+            "measurement (§4.1)",
+            float(h),
+            v,
+            _at(runs, heights, "contact_time_s", float(h)),
+            "ms",
+            1e3,
+            "contact time vs measurement",
+        )
     for j, band in enumerate(OCTAVE_BANDS):
         values = {g: float(run["increase_per_doubling_dB"][j]) for g, run in runs.items()}
-        add(f"increase_per_doubling_{band}Hz", f"L_FE increase per doubling, {band} Hz", "paper's prediction (§4.2, Fig. 11)", None, PAPER["increase_per_doubling_dB"][band], values, "dB")
+        add(
+            f"increase_per_doubling_{band}Hz",
+            f"L_FE increase per doubling, {band} Hz",
+            "paper's prediction (§4.2, Fig. 11)",
+            None,
+            PAPER["increase_per_doubling_dB"][band],
+            values,
+            "dB",
+        )
     for h, v in PAPER["contact_resonance_Hz"].items():
-        add(f"contact_resonance_{h}m", f"contact resonance at {float(h) * 100:.0f} cm", "paper's prediction (§4.2, Fig. 12)", float(h), v, _at(runs, heights, "contact_resonance_Hz", float(h)), "Hz")
+        add(
+            f"contact_resonance_{h}m",
+            f"contact resonance at {float(h) * 100:.0f} cm",
+            "paper's prediction (§4.2, Fig. 12)",
+            float(h),
+            v,
+            _at(runs, heights, "contact_resonance_Hz", float(h)),
+            "Hz",
+        )
     return rows
 
 
@@ -184,14 +242,21 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
                 f"The paper's '{'roughly' if h == '0.1' else 'about'} {r['paper']:.0f} N' is closer to rbjax with {closer(r)}: the "
                 f"corrected Eq. 4 grows steeply with δ (the cavity volume term), while the paper's own gas force must have been "
                 f"much smaller, as its Fig. 3 and its remark that F_G 'might be negligible' suggest"
-                + (f"; the printed Eq. 4 has no real value beyond δ = {printed_limit * 1e3:.1f} mm, below this δ_max." if d > printed_limit else ".")
+                + (
+                    f"; the printed Eq. 4 has no real value beyond δ = {printed_limit * 1e3:.1f} mm, below this δ_max."
+                    if d > printed_limit
+                    else "."
+                )
             )
         text[key] = head + tail
     meas = [rows[k] for k in rows if k.startswith("measured_contact_time_")]
     meas = [m for m in meas if all(m["rbjax"][g] is not None for g in GAS)]
     if meas:
         over = {g: float(np.mean([m["rbjax"][g] - m["paper"] for m in meas])) for g in GAS}
-        listing = ", ".join(f"{m['height_m'] * 100:.0f} cm: {m['paper']:.1f} ms vs {m['rbjax']['adiabatic']:.2f} / {m['rbjax']['none']:.2f} ms" for m in meas)
+        listing = ", ".join(
+            f"{m['height_m'] * 100:.0f} cm: {m['paper']:.1f} ms vs {m['rbjax']['adiabatic']:.2f} / {m['rbjax']['none']:.2f} ms"
+            for m in meas
+        )
         text["measured_contact_time"] = (
             f"Measured ({listing}; gas on / gas off): the elastic model is longer by {over['adiabatic']:.2f} ms (gas on) and "
             f"{over['none']:.2f} ms (gas off) on average; the paper found its own prediction about 1 ms (≈ +6 %) too long. "
@@ -204,7 +269,9 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     slope = {g: runs[g]["increase_per_doubling_dB"] for g in GAS}
     spread = {g: float(np.nanmax(np.abs(slope[g][others] - ideal))) for g in GAS}
     lo, hi = _ends(on)  # the lowest and highest heights solved
-    res = {g: (runs[g]["contact_resonance_Hz"][lo], runs[g]["contact_resonance_Hz"][hi]) for g in GAS}
+    res = {
+        g: (runs[g]["contact_resonance_Hz"][lo], runs[g]["contact_resonance_Hz"][hi]) for g in GAS
+    }
     lo63, hi63 = (float(x[0]) for x in band_edges_Hz(1, 63, 63))
     paper63 = PAPER["increase_per_doubling_dB"]["63"]
     text["increase_per_doubling"] = (
@@ -229,7 +296,11 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     )
     tc = {g: (runs[g]["contact_time_s"][lo], runs[g]["contact_time_s"][hi]) for g in GAS}
     r160 = rows.get(f"contact_resonance_{list(PAPER['contact_resonance_Hz'])[-1]}m")
-    match = f" The paper's shift is closest to rbjax with {closer(r160)}." if r160 and all(v is not None for v in r160["rbjax"].values()) else ""
+    match = (
+        f" The paper's shift is closest to rbjax with {closer(r160)}."
+        if r160 and all(v is not None for v in r160["rbjax"].values())
+        else ""
+    )
     text["contact_resonance"] = (
         f"The notch sits near 1.5/t_c, the first zero of a half-sine pulse: 1.5/t_c = {1.5 / tc['adiabatic'][0]:.1f} → "
         f"{1.5 / tc['adiabatic'][1]:.1f} Hz gas on and {1.5 / tc['none'][0]:.1f} → {1.5 / tc['none'][1]:.1f} Hz gas off, against "
@@ -239,5 +310,3 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
         f"a 0.1 Hz grid.{match}"
     )
     return text
-
-

@@ -46,7 +46,9 @@ def _heights(heights_m) -> np.ndarray:
     h = np.asarray(heights_m, dtype=float).reshape(-1)
     check_range("heights_m", h, lower=0.0)
     if h.size < 2:
-        raise ValueError(f"heights_m={h.tolist()} needs at least two heights (valid: two or more heights > 0 m)")
+        raise ValueError(
+            f"heights_m={h.tolist()} needs at least two heights (valid: two or more heights > 0 m)"
+        )
     # The standard height is always included (Figs. 3 and 8; the normalisation of Fig. 9).
     return np.unique(np.round(np.append(h, STANDARD_HEIGHT_M), 12))
 
@@ -111,7 +113,13 @@ def _growth(runs, heights) -> dict:
     except (OSError, ValueError) as exc:  # DataError is a ValueError
         out["recordings_error"] = str(exc)
     for g, run in runs.items():
-        out[g] = growth_per_doubling_dB(heights, run["lfe_octave_dB"], OCTAVE_BANDS, ref_height_m=STANDARD_HEIGHT_M, label=f"paper's elastic model, {GAS[g]}")
+        out[g] = growth_per_doubling_dB(
+            heights,
+            run["lfe_octave_dB"],
+            OCTAVE_BANDS,
+            ref_height_m=STANDARD_HEIGHT_M,
+            label=f"paper's elastic model, {GAS[g]}",
+        )
     return out
 
 
@@ -120,7 +128,9 @@ def _shell_modes() -> dict:
     ``rbjax.terms.shell_modes``, beside the paper's ~60 Hz (§4.1)."""
     from ..terms.shell_modes import THEORIES, shell_frequencies_Hz
 
-    return {t: shell_frequencies_Hz(JIS_RUBBER_BALL, 2, t, n_roots=1).fundamental_Hz for t in THEORIES}
+    return {
+        t: shell_frequencies_Hz(JIS_RUBBER_BALL, 2, t, n_roots=1).fundamental_Hz for t in THEORIES
+    }
 
 
 def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
@@ -154,7 +164,12 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     t = on["time_s"]
     plot.plot_force_components(
         t,
-        {"F_T = F_B + F_G": fb + fg, "F_B (shell, Eqs. 1–3)": fb, "F_G (gas, Eq. 4 corrected)": fg, "F_T, gas off": runs["none"]["force_N"][i1]},
+        {
+            "F_T = F_B + F_G": fb + fg,
+            "F_B (shell, Eqs. 1–3)": fb,
+            "F_G (gas, Eq. 4 corrected)": fg,
+            "F_T, gas off": runs["none"]["force_N"][i1],
+        },
         ax,
         contact_time_s=max(on["contact_time_s"][i1], runs["none"]["contact_time_s"][i1]),
         title="Fig. 3: force components at 1 m drop height",
@@ -165,7 +180,14 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     # Fig. 4: histories for all heights.
     fig, axes = figure(2)
     for ax, (gas, run) in zip(axes, runs.items()):
-        plot.plot_force_histories(t, run["force_N"], heights, ax, contact_time_s=run["contact_time_s"], title=f"Fig. 4: blocked force, {GAS[gas]}")
+        plot.plot_force_histories(
+            t,
+            run["force_N"],
+            heights,
+            ax,
+            contact_time_s=run["contact_time_s"],
+            title=f"Fig. 4: blocked force, {GAS[gas]}",
+        )
     save(fig, "fig04_force_histories.png")
 
     # Fig. 5 and 6: peak force and contact time against height.
@@ -189,8 +211,14 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
         ylabel="contact time (ms)",
         scale=1e3,
         references={
-            "paper, predicted (§4.1)": ([float(h) for h in PAPER["predicted_contact_time_s"]], list(PAPER["predicted_contact_time_s"].values())),
-            "paper, measured (§4.1)": ([float(h) for h in PAPER["measured_contact_time_s"]], list(PAPER["measured_contact_time_s"].values())),
+            "paper, predicted (§4.1)": (
+                [float(h) for h in PAPER["predicted_contact_time_s"]],
+                list(PAPER["predicted_contact_time_s"].values()),
+            ),
+            "paper, measured (§4.1)": (
+                [float(h) for h in PAPER["measured_contact_time_s"]],
+                list(PAPER["measured_contact_time_s"].values()),
+            ),
         },
         band=("tolerance 20 ± 2 ms (at 1 m)", tol[0], tol[1]),
         title="Fig. 6: contact time against drop height",
@@ -200,11 +228,17 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     # Fig. 7: relative difference to the paper's reported values.
     fig, (ax,) = figure(width=7.0)
     entries = [
-        {"label": r["series"], "height_m": r["height_m"], "relative_difference": {GAS[g]: v for g, v in r["relative_difference"].items()}}
+        {
+            "label": r["series"],
+            "height_m": r["height_m"],
+            "relative_difference": {GAS[g]: v for g, v in r["relative_difference"].items()},
+        }
         for r in comparison
         if r["height_m"] is not None and not r["key"].startswith("contact_resonance")
     ]
-    plot.plot_relative_difference(entries, ax, title="Fig. 7: rbjax relative to the paper's values (grey: ±10 %)")
+    plot.plot_relative_difference(
+        entries, ax, title="Fig. 7: rbjax relative to the paper's values (grey: ±10 %)"
+    )
     save(fig, "fig07_relative_difference.png")
 
     # Fig. 8: L_FE octave bands at 1 m inside the tolerance band.
@@ -218,14 +252,31 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     fig, axes = figure(2)
     pick = [h for h in FIG9_HEIGHTS_M if np.any(np.isclose(heights, h))] or list(heights)
     for ax, (g, run) in zip(axes, runs.items()):
-        rows = {f"{h * 100:.0f} cm": run["lfe_octave_dB"][np.flatnonzero(np.isclose(heights, h))[0]] - run["lfe_octave_dB"][i1] for h in pick}
-        plot.plot_band_differences(OCTAVE_BANDS, rows, ax, ylabel="L_FE(h) − L_FE(1 m) (dB)", title=f"Fig. 9: L_FE normalised to 1 m, {GAS[g]}")
+        rows = {
+            f"{h * 100:.0f} cm": run["lfe_octave_dB"][np.flatnonzero(np.isclose(heights, h))[0]]
+            - run["lfe_octave_dB"][i1]
+            for h in pick
+        }
+        plot.plot_band_differences(
+            OCTAVE_BANDS,
+            rows,
+            ax,
+            ylabel="L_FE(h) − L_FE(1 m) (dB)",
+            title=f"Fig. 9: L_FE normalised to 1 m, {GAS[g]}",
+        )
     save(fig, "fig09_lfe_normalised.png")
 
     # Fig. 10: increase against height ratio, with the linear fits of Fig. 11.
     fig, axes = figure(2)
     for ax, (g, run) in zip(axes, runs.items()):
-        plot.plot_lfe_increase(heights / STANDARD_HEIGHT_M, run["lfe_octave_dB"] - run["lfe_octave_dB"][i1], OCTAVE_BANDS, ax, slopes_dB=run["increase_per_doubling_dB"], title=f"Fig. 10: L_FE increase, {GAS[g]}")
+        plot.plot_lfe_increase(
+            heights / STANDARD_HEIGHT_M,
+            run["lfe_octave_dB"] - run["lfe_octave_dB"][i1],
+            OCTAVE_BANDS,
+            ax,
+            slopes_dB=run["increase_per_doubling_dB"],
+            title=f"Fig. 10: L_FE increase, {GAS[g]}",
+        )
     save(fig, "fig10_lfe_increase.png")
 
     fig, (ax,) = figure()
@@ -256,7 +307,10 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
             dict(zip(labels, np.asarray(level))),
             ax,
             resonances_Hz=dict(zip(labels, run["contact_resonance_Hz"][ends])),
-            references_Hz={("paper: " if i == 0 else "") + f"{v:g} Hz at {float(h) * 100:.0f} cm": v for i, (h, v) in enumerate(PAPER["contact_resonance_Hz"].items())},
+            references_Hz={
+                ("paper: " if i == 0 else "") + f"{v:g} Hz at {float(h) * 100:.0f} cm": v
+                for i, (h, v) in enumerate(PAPER["contact_resonance_Hz"].items())
+            },
             fmax_Hz=400.0,
             title=f"Fig. 12: force spectrum, {GAS[g]}",
         )
@@ -271,7 +325,9 @@ def _contact_time_tolerance():
     return tol.lower, tol.upper
 
 
-def _report(runs, heights, comparison, explanations, conformance, files, elapsed_s, growth=None, modes=None) -> str:
+def _report(
+    runs, heights, comparison, explanations, conformance, files, elapsed_s, growth=None, modes=None
+) -> str:
     from ..spectrum.bands import OCTAVE_BANDS
 
     ball = JIS_RUBBER_BALL
@@ -307,7 +363,12 @@ def _report(runs, heights, comparison, explanations, conformance, files, elapsed
     }
     for key, paragraph in explanations.items():
         lines += [f"- **{titles.get(key, key)}** {paragraph}", ""]
-    lines += ["## Per drop height", "", "| height (cm) | t_c on (ms) | t_c off (ms) | F_peak on (N) | F_peak off (N) | e on | e off | L_FE on (dB) | L_FE off (dB) |", "|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "## Per drop height",
+        "",
+        "| height (cm) | t_c on (ms) | t_c off (ms) | F_peak on (N) | F_peak off (N) | e on | e off | L_FE on (dB) | L_FE off (dB) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     on, off = runs["adiabatic"], runs["none"]
     for i, h in enumerate(heights):
         lines.append(
@@ -324,19 +385,45 @@ def _report(runs, heights, comparison, explanations, conformance, files, elapsed
         "|---" * (len(OCTAVE_BANDS) + 1) + "|",
     ]
     for g in GAS:
-        lines.append(f"| rbjax, {GAS[g]} (dB) | " + " | ".join(_f(v) for v in runs[g]["lfe_octave_dB"][i1]) + " |")
+        lines.append(
+            f"| rbjax, {GAS[g]} (dB) | "
+            + " | ".join(_f(v) for v in runs[g]["lfe_octave_dB"][i1])
+            + " |"
+        )
     from ..plot import tolerance_limits
 
     lo, hi = tolerance_limits(OCTAVE_BANDS)
-    lines.append("| tolerance (dB) | " + " | ".join("—" if not np.isfinite(a) else f"{a:g}–{b:g}" for a, b in zip(lo, hi)) + " |")
+    lines.append(
+        "| tolerance (dB) | "
+        + " | ".join("—" if not np.isfinite(a) else f"{a:g}–{b:g}" for a, b in zip(lo, hi))
+        + " |"
+    )
     lines.append("")
     for g in GAS:
         c = conformance[g]
-        failed = [f"{i['name']} ({i['value']:.4g} {i['unit']}, limits {i['lower']:g}–{i['upper']:g})" for i in c["items"] if not i["passed"]]
+        failed = [
+            f"{i['name']} ({i['value']:.4g} {i['unit']}, limits {i['lower']:g}–{i['upper']:g})"
+            for i in c["items"]
+            if not i["passed"]
+        ]
         verdict = "conforms" if c["passed"] else "does not conform: " + "; ".join(failed)
         lines.append(f"- {GAS[g]}: the prediction at 1 m {verdict} ({c['clause']}).")
-    inside = {g: [b for b, v, lower, upper in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi) if np.isfinite(lower) and lower <= v <= upper] for g in GAS}
-    below = {g: [b for b, v, lower in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo) if np.isfinite(lower) and v < lower] for g in GAS}
+    inside = {
+        g: [
+            b
+            for b, v, lower, upper in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo, hi)
+            if np.isfinite(lower) and lower <= v <= upper
+        ]
+        for g in GAS
+    }
+    below = {
+        g: [
+            b
+            for b, v, lower in zip(OCTAVE_BANDS, runs[g]["lfe_octave_dB"][i1], lo)
+            if np.isfinite(lower) and v < lower
+        ]
+        for g in GAS
+    }
     lines += [
         "",
         "Octave bands within the L_FE tolerances at 1 m: "
@@ -370,7 +457,11 @@ def _growth_section(growth, modes) -> list[str]:
             f"a linear source gives {LINEAR_SOURCE_dB:.2f} dB in every band. The paper (§4.2, Fig. 11) reports about 3 dB "
             "for its model (5 dB at 63 Hz) and, for its measured ball, about 3 dB at 31.5 Hz rising to almost 15 dB at "
             "1 kHz. The recordings here are the emulated ones bundled with rbjax (one point per drop, heights "
-            + (", ".join(f"{h * 100:.0f}" for h in growth["recordings"].heights_m) + " cm" if "recordings" in growth else "unavailable")
+            + (
+                ", ".join(f"{h * 100:.0f}" for h in growth["recordings"].heights_m) + " cm"
+                if "recordings" in growth
+                else "unavailable"
+            )
             + "); a fitted model's growth is shown by notebook 02 (`rbjax.studies.growth.model_growth(h, fit.ball, fit.model)`).",
             "",
             growth_table(rows, digits=2),
@@ -414,7 +505,10 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     out.mkdir(parents=True, exist_ok=True)
     runs = {}
     for k, gas in enumerate(GAS, start=1):
-        say(f"reproduce: [{k}/4] simulating {len(heights)} drop heights, {GAS[gas]} (gas={gas!r})", enabled=progress)
+        say(
+            f"reproduce: [{k}/4] simulating {len(heights)} drop heights, {GAS[gas]} (gas={gas!r})",
+            enabled=progress,
+        )
         runs[gas] = _run(heights, gas)
     comparison = _comparison(runs, heights)
     explanations = _explanations(runs, heights, comparison)
@@ -422,7 +516,13 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     conformance = {}
     for g, run in runs.items():
         conformance[g] = (
-            check_conformance(run["lfe_octave_dB"][i1], contact_time_s=run["contact_time_s"][i1], restitution=run["restitution"][i1], mass_kg=JIS_RUBBER_BALL.mass_kg, height_m=STANDARD_HEIGHT_M).to_dict()
+            check_conformance(
+                run["lfe_octave_dB"][i1],
+                contact_time_s=run["contact_time_s"][i1],
+                restitution=run["restitution"][i1],
+                mass_kg=JIS_RUBBER_BALL.mass_kg,
+                height_m=STANDARD_HEIGHT_M,
+            ).to_dict()
             if run["ok"][i1]
             else None
         )
@@ -446,7 +546,9 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             "max_deflection_m": run["max_deflection_m"],
             "lfe_total_dB": run["lfe_total_dB"],
             "lfe_octave_dB": {b: run["lfe_octave_dB"][:, j] for j, b in enumerate(OCTAVE_BANDS)},
-            "lfe_third_octave_dB": {b: run["lfe_third_octave_dB"][:, j] for j, b in enumerate(THIRD_OCTAVE_BANDS)},
+            "lfe_third_octave_dB": {
+                b: run["lfe_third_octave_dB"][:, j] for j, b in enumerate(THIRD_OCTAVE_BANDS)
+            },
             "increase_per_doubling_dB": dict(zip(OCTAVE_BANDS, run["increase_per_doubling_dB"])),
             "contact_resonance_Hz": run["contact_resonance_Hz"],
         }
@@ -455,7 +557,10 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
         {
             "rbjax_version": __version__,
             "paper": "Schoenwald, Zeitler & Nightingale (2011), Acta Acustica united with Acustica 97, 590-598",
-            "ball": {f: getattr(JIS_RUBBER_BALL, f) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")},
+            "ball": {
+                f: getattr(JIS_RUBBER_BALL, f)
+                for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+            },
             "rate_Hz": PAPER_RATE_Hz,
             "heights_m": heights,
             "gas": {g: per_height(run) for g, run in runs.items()},
@@ -471,7 +576,14 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             "elapsed_s": elapsed,
         }
     )
-    (out / "report.md").write_text(_report(runs, heights, comparison, explanations, conformance, files, elapsed, growth, modes) + "\n".join(report_section(measured)) + "\n")
+    (out / "report.md").write_text(
+        _report(runs, heights, comparison, explanations, conformance, files, elapsed, growth, modes)
+        + "\n".join(report_section(measured))
+        + "\n"
+    )
     (out / "results.json").write_text(json.dumps(results, indent=2, allow_nan=False))
-    say(f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}", enabled=progress)
+    say(
+        f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}",
+        enabled=progress,
+    )
     return results

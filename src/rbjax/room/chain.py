@@ -110,19 +110,29 @@ class RoomLevels(eqx.Module):
 def bands(fraction: int) -> tuple[list[str], np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """(labels, exact centres, (lower, upper) edges) of the chain's bands for ``fraction``."""
     if fraction not in BAND_RANGES_Hz:
-        raise RoomChainError(f"fraction={fraction!r} is not a band fraction; valid: 1 (octave), 3 (one-third octave)")
+        raise RoomChainError(
+            f"fraction={fraction!r} is not a band fraction; valid: 1 (octave), 3 (one-third octave)"
+        )
     lo, hi = BAND_RANGES_Hz[fraction]
-    return nominal_centres_Hz(fraction, lo, hi), band_centres_Hz(fraction, lo, hi), band_edges_Hz(fraction, lo, hi)
+    return (
+        nominal_centres_Hz(fraction, lo, hi),
+        band_centres_Hz(fraction, lo, hi),
+        band_edges_Hz(fraction, lo, hi),
+    )
 
 
 def _check_floor(floor: AbstractFloor | None, slab: Slab | None) -> None:
     if floor is None:
         if slab is None:
-            raise RoomChainError("give slab= (the radiating slab; the ball then strikes it) or a modal floor with slab=")
+            raise RoomChainError(
+                "give slab= (the radiating slab; the ball then strikes it) or a modal floor with slab="
+            )
         return
     if isinstance(floor, AbstractModalFloor):
         if slab is None:
-            raise RoomChainError("floor=modal needs slab= (the plate that radiates: its mass per area and critical frequency)")
+            raise RoomChainError(
+                "floor=modal needs slab= (the plate that radiates: its mass per area and critical frequency)"
+            )
         return
     kind = getattr(floor, "name", type(floor).__name__)
     raise RoomChainError(
@@ -140,14 +150,22 @@ def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver
 def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_fft):
     """Per source (band or mode): injected energy W, floor decay a, radiation rate ω η_rad and
     the (bands × sources) membership."""
-    fc = critical_frequency_Hz(slab.thickness_m, slab.youngs_Pa, slab.density_kg_per_m3, slab.poisson)
+    fc = critical_frequency_Hz(
+        slab.thickness_m, slab.youngs_Pa, slab.density_kg_per_m3, slab.poisson
+    )
     mass = slab.mass_per_area_kg_per_m2
 
     def rad_rate(f):
-        sigma = radiation_efficiency(f, fc, slab.length_x_m, slab.length_y_m) if chain.radiation == "iso12354" else jnp.ones_like(f)
+        sigma = (
+            radiation_efficiency(f, fc, slab.length_x_m, slab.length_y_m)
+            if chain.radiation == "iso12354"
+            else jnp.ones_like(f)
+        )
         return 2.0 * jnp.pi * f * radiation_loss_factor(f, sigma, mass)
 
-    if isinstance(floor, AbstractModalFloor) and not (isinstance(floor, FloatingFloor) and chain.floating == "insertion"):
+    if isinstance(floor, AbstractModalFloor) and not (
+        isinstance(floor, FloatingFloor) and chain.floating == "insertion"
+    ):
         _, omega, eta = floor.modes()
         fk = omega / (2.0 * jnp.pi)
         energy = modal_energies_J(force, rate_Hz, floor, n_fft)
@@ -158,9 +176,18 @@ def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_
         return energy, decay, radiate, member.astype(jnp.float64)
     impedance = slab.plate.impedance_Ns_per_m
     if isinstance(floor, FloatingFloor):
-        energy = floating_band_energies_J(force, rate_Hz, edges[0], edges[1], floor, impedance, n_fft)
+        energy = floating_band_energies_J(
+            force, rate_Hz, edges[0], edges[1], floor, impedance, n_fft
+        )
     else:
-        energy = plate_band_energies_J(force, rate_Hz, edges[0], edges[1], impedance, n_record=max(force.shape[-1], int(rate_Hz)))
+        energy = plate_band_energies_J(
+            force,
+            rate_Hz,
+            edges[0],
+            edges[1],
+            impedance,
+            n_record=max(force.shape[-1], int(rate_Hz)),
+        )
     f = jnp.asarray(centres)
     radiate = rad_rate(f)
     decay = 2.0 * jnp.pi * f * slab.structural_loss(f) + 2.0 * radiate
@@ -192,34 +219,69 @@ def room_levels(
     labels, centres, edges = bands(fraction)
     t_band = room.reverberation_per_band(labels)
     impact_floor = slab.plate if floor is None else floor
-    model = make_model(floor=impact_floor) if model is None else eqx.tree_at(lambda m: m.floor, model, impact_floor)
+    model = (
+        make_model(floor=impact_floor)
+        if model is None
+        else eqx.tree_at(lambda m: m.floor, model, impact_floor)
+    )
     times = jnp.arange(n_samples) / rate_Hz
     force = trajectory(height_m, times, ball, model, solver).force_N
     if isinstance(floor, AbstractModalFloor) and n_fft is None:
         n_fft = modal_grid_size(floor, rate_Hz, n_samples)
     force, slab, volume, t_band, floor = as_arrays((force, slab, room.volume_m3, t_band, floor))
-    return _levels_of_force(force, slab, volume, t_band, floor, chain, fraction, float(rate_Hz), n_fft)
+    return _levels_of_force(
+        force, slab, volume, t_band, floor, chain, fraction, float(rate_Hz), n_fft
+    )
 
 
 @eqx.filter_jit
-def _levels_of_force(force, slab: Slab, volume_m3, t_band, floor, chain: Chain, fraction: int, rate_Hz: float, n_fft: int | None) -> RoomLevels:
+def _levels_of_force(
+    force,
+    slab: Slab,
+    volume_m3,
+    t_band,
+    floor,
+    chain: Chain,
+    fraction: int,
+    rate_Hz: float,
+    n_fft: int | None,
+) -> RoomLevels:
     """Steps 2–5 of the chain on the force samples: one compiled program per floor kind,
     chain, fraction, force length and grid (the values are traced)."""
     _, centres, edges = bands(fraction)
-    energy, decay, radiate, member = _sources(floor, slab, force, rate_Hz, centres, edges, chain, n_fft)
+    energy, decay, radiate, member = _sources(
+        floor, slab, force, rate_Hz, centres, edges, chain, n_fft
+    )
     b = decay_rate_per_s(t_band)
     kappa = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s**2 / volume_m3
-    parts = dict(injected_J=energy, radiated_fraction=radiate / decay, floor_decay_per_s=decay, room_decay_per_s=b, radiation_per_s=radiate, membership=member, pressure_scale=kappa)
+    parts = dict(
+        injected_J=energy,
+        radiated_fraction=radiate / decay,
+        floor_decay_per_s=decay,
+        room_decay_per_s=b,
+        radiation_per_s=radiate,
+        membership=member,
+        pressure_scale=kappa,
+    )
 
     def band(bi, row):
-        return maximum_over_time(lambda t: _band_response(parts, chain, bi, row, t), 1e-4, 20.0 / bi)
+        return maximum_over_time(
+            lambda t: _band_response(parts, chain, bi, row, t), 1e-4, 20.0 / bi
+        )
 
     peak, t_star = jax.vmap(band)(b, member)
     # a band without a source (a modal floor without a mode in it) is silent: −inf dB, and a
     # zero gradient rather than 0/0
     heard = peak > 0.0
-    level = jnp.where(heard, 10.0 * jnp.log10(jnp.where(heard, peak, 1.0) / REFERENCE_PRESSURE_Pa**2), -jnp.inf)
-    return RoomLevels(level_dB=level, peak_time_s=t_star, normalised_dB=normalised_level_dB(level, volume_m3, t_band), **parts)
+    level = jnp.where(
+        heard, 10.0 * jnp.log10(jnp.where(heard, peak, 1.0) / REFERENCE_PRESSURE_Pa**2), -jnp.inf
+    )
+    return RoomLevels(
+        level_dB=level,
+        peak_time_s=t_star,
+        normalised_dB=normalised_level_dB(level, volume_m3, t_band),
+        **parts,
+    )
 
 
 def _band_response(parts, chain: Chain, room_rate, row, t):
@@ -234,15 +296,33 @@ def _band_response(parts, chain: Chain, room_rate, row, t):
     if chain.detector:
         rates = rates + [g]
     scale = parts["pressure_scale"] * (g if chain.detector else 1.0)
-    return scale * jnp.sum(row * amp * cascade([jnp.broadcast_to(r, decay.shape) for r in rates], t))
+    return scale * jnp.sum(
+        row * amp * cascade([jnp.broadcast_to(r, decay.shape) for r in rates], t)
+    )
 
 
 @eqx.filter_jit
 def fast_levels_dB(levels: RoomLevels, chain: Chain, times_s):
     """The Fast-weighted level (or, without the detector, the level of p²) of each band at
     ``times_s``: shape (bands, times); the same closed form whose maximum is ``level_dB``."""
-    parts = {k: getattr(levels, k) for k in ("injected_J", "radiated_fraction", "floor_decay_per_s", "room_decay_per_s", "radiation_per_s", "membership", "pressure_scale")}
-    at = jax.vmap(jax.vmap(lambda bi, row, t: _band_response(parts, chain, bi, row, t), in_axes=(None, None, 0)), in_axes=(0, 0, None))
+    parts = {
+        k: getattr(levels, k)
+        for k in (
+            "injected_J",
+            "radiated_fraction",
+            "floor_decay_per_s",
+            "room_decay_per_s",
+            "radiation_per_s",
+            "membership",
+            "pressure_scale",
+        )
+    }
+    at = jax.vmap(
+        jax.vmap(
+            lambda bi, row, t: _band_response(parts, chain, bi, row, t), in_axes=(None, None, 0)
+        ),
+        in_axes=(0, 0, None),
+    )
     y = at(levels.room_decay_per_s, levels.membership, jnp.asarray(times_s, dtype=jnp.float64))
     return 10.0 * jnp.log10(jnp.maximum(y, 1e-300) / REFERENCE_PRESSURE_Pa**2)
 
@@ -256,4 +336,6 @@ def rating_levels(levels_dB, fraction: int):
 
 def rating_unrounded_dB(levels: RoomLevels, fraction: int, *, normalised: bool = False):
     """10 lg Σ 10^{(L + A)/10} over the rating bands, unrounded (the differentiable rating)."""
-    return a_weighted_sum_dB(rating_levels(levels.normalised_dB if normalised else levels.level_dB, fraction), fraction)
+    return a_weighted_sum_dB(
+        rating_levels(levels.normalised_dB if normalised else levels.level_dB, fraction), fraction
+    )

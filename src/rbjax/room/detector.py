@@ -97,7 +97,9 @@ def cascade(rates, t):
     raise ValueError(f"a cascade of {len(rates)} stages; valid: 1 to 3")
 
 
-def maximum_over_time(response, t_min_s: float, t_max_s: float, *, num_grid: int = 256, newton_steps: int = 8):
+def maximum_over_time(
+    response, t_min_s: float, t_max_s: float, *, num_grid: int = 256, newton_steps: int = 8
+):
     """(max_t y(t), t*) of a scalar function ``response(t)`` of time (JAX), with the exact
     gradient of the maximum (module docstring).
 

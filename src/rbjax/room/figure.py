@@ -16,8 +16,18 @@ def plot_impact_sound(res, path=None):
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4), layout="constrained")
     x = np.arange(len(res.bands))
-    left.plot(x, res.level_dB, "o-", label=f"L_i,Fmax (V = {res.volume_m3:g} m³); L_iA,Fmax = {res.LiA_Fmax_dB} dB")
-    left.plot(x, res.normalised_dB, "s--", label=f"normalised (50 m³, 0.5 s); {res.LiA_Fmax_normalised_dB} dB")
+    left.plot(
+        x,
+        res.level_dB,
+        "o-",
+        label=f"L_i,Fmax (V = {res.volume_m3:g} m³); L_iA,Fmax = {res.LiA_Fmax_dB} dB",
+    )
+    left.plot(
+        x,
+        res.normalised_dB,
+        "s--",
+        label=f"normalised (50 m³, 0.5 s); {res.LiA_Fmax_normalised_dB} dB",
+    )
     left.set_xticks(x, res.bands)
     left.set_xlabel("band, Hz")
     left.set_ylabel("level, dB re 20 µPa")

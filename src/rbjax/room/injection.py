@@ -44,9 +44,14 @@ MAX_FFT = 2**21
 POINTS_PER_HALF_WIDTH = 3.0
 
 
-def plate_band_energies_J(force_N, rate_Hz: float, lower_Hz, upper_Hz, impedance_Ns_per_m, *, n_record: int | None = None):
+def plate_band_energies_J(
+    force_N, rate_Hz: float, lower_Hz, upper_Hz, impedance_Ns_per_m, *, n_record: int | None = None
+):
     """Energy injected per band into a floor of real point impedance Z: E_band/Z (J)."""
-    return band_energies_N2s(force_N, rate_Hz, lower_Hz, upper_Hz, n_record=n_record) / impedance_Ns_per_m
+    return (
+        band_energies_N2s(force_N, rate_Hz, lower_Hz, upper_Hz, n_record=n_record)
+        / impedance_Ns_per_m
+    )
 
 
 def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -> int:
@@ -55,16 +60,25 @@ def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -
     samples' count, at most ``MAX_FFT`` (a power of two). The floor's values must be concrete
     (a shape): under a transformation, compute it first and pass it on as ``n_fft``."""
     if is_traced(floor):
-        raise ValueError("modal_grid_size needs the floor's concrete values; under jit/jvp pass n_fft=modal_grid_size(floor, rate_Hz, n_samples) computed outside")
+        raise ValueError(
+            "modal_grid_size needs the floor's concrete values; under jit/jvp pass n_fft=modal_grid_size(floor, rate_Hz, n_samples) computed outside"
+        )
     _, omega, eta = (np.asarray(x, dtype=np.float64) for x in floor.modes())
     freq = omega / (2.0 * math.pi)
     widths = [0.5 * e * f for f, e in zip(freq, eta) if f > 0.0 and e > 0.0]
     if isinstance(floor, FloatingFloor):
-        layer_loss, f0 = (float(np.asarray(x)) for x in (floor.layer_loss_factor, floor.layer_resonance_Hz))
+        layer_loss, f0 = (
+            float(np.asarray(x)) for x in (floor.layer_loss_factor, floor.layer_resonance_Hz)
+        )
         if layer_loss > 0.0:
             widths.append(0.5 * layer_loss * f0)
     step = min([1.0] + [w / POINTS_PER_HALF_WIDTH for w in widths])
-    return int(min(MAX_FFT, max(2 ** math.ceil(math.log2(rate_Hz / step)), 2 ** math.ceil(math.log2(n_samples)))))
+    return int(
+        min(
+            MAX_FFT,
+            max(2 ** math.ceil(math.log2(rate_Hz / step)), 2 ** math.ceil(math.log2(n_samples))),
+        )
+    )
 
 
 def _dtft_Ns(force_N, rate_Hz: float, freq_Hz):
@@ -83,7 +97,9 @@ def modal_energies_J(force_N, rate_Hz: float, floor: AbstractModalFloor, n_fft: 
     df = rate_Hz / n_fft
     mass, omega, eta = floor.modes()
     fk = omega / (2.0 * jnp.pi)
-    resolved = (fk > 0.0) & (eta > 0.0) & (0.5 * eta * fk >= POINTS_PER_HALF_WIDTH * df * (1.0 - 1e-12))
+    resolved = (
+        (fk > 0.0) & (eta > 0.0) & (0.5 * eta * fk >= POINTS_PER_HALF_WIDTH * df * (1.0 - 1e-12))
+    )
     w = 2.0 * jnp.pi * freq
 
     def one(args):
@@ -93,19 +109,36 @@ def modal_energies_J(force_N, rate_Hz: float, floor: AbstractModalFloor, n_fft: 
 
     # an unresolved mode's sum is not used: a harmless resonance (half the Nyquist frequency,
     # η = 1) stands in for it, so that no 0/0 reaches the values or the gradient
-    grid = jax.lax.map(one, (mass, jnp.where(resolved, omega, 0.5 * jnp.pi * rate_Hz), jnp.where(resolved, eta, 1.0)))
+    grid = jax.lax.map(
+        one,
+        (mass, jnp.where(resolved, omega, 0.5 * jnp.pi * rate_Hz), jnp.where(resolved, eta, 1.0)),
+    )
     spectrum = _dtft_Ns(x, rate_Hz, fk)
     narrow = (spectrum.real**2 + spectrum.imag**2) / (2.0 * mass)
     return jnp.where(resolved, grid, narrow)
 
 
-def floating_band_energies_J(force_N, rate_Hz: float, lower_Hz, upper_Hz, floor: FloatingFloor, impedance_Ns_per_m, n_fft: int):
+def floating_band_energies_J(
+    force_N,
+    rate_Hz: float,
+    lower_Hz,
+    upper_Hz,
+    floor: FloatingFloor,
+    impedance_Ns_per_m,
+    n_fft: int,
+):
     """Energy injected per band into a slab of real point impedance Z through the layer of a
     floating floor: Σ_{lower ≤ f < upper} E_F(f) |T(f)|² Δf / Z on the ``n_fft``-point grid of the
     zero-padded force record (module docstring)."""
-    freq, esd = energy_spectrum(jnp.asarray(force_N, dtype=jnp.float64), rate_Hz, n_record=int(n_fft))
+    freq, esd = energy_spectrum(
+        jnp.asarray(force_N, dtype=jnp.float64), rate_Hz, n_record=int(n_fft)
+    )
     t = floor.force_transmissibility(freq)
     passed = esd * (t.real**2 + t.imag**2) * (rate_Hz / int(n_fft))
     grid = np.fft.rfftfreq(int(n_fft), 1.0 / rate_Hz)
-    inside = (grid[None, :] >= np.asarray(lower_Hz)[:, None]) & (grid[None, :] < np.asarray(upper_Hz)[:, None])
-    return jnp.sum(jnp.where(jnp.asarray(inside), passed[None, :], 0.0), axis=-1) / impedance_Ns_per_m
+    inside = (grid[None, :] >= np.asarray(lower_Hz)[:, None]) & (
+        grid[None, :] < np.asarray(upper_Hz)[:, None]
+    )
+    return (
+        jnp.sum(jnp.where(jnp.asarray(inside), passed[None, :], 0.0), axis=-1) / impedance_Ns_per_m
+    )

@@ -58,7 +58,11 @@ def bending_stiffness_Nm(thickness_m, youngs_Pa, poisson):
 def critical_frequency_Hz(thickness_m, youngs_Pa, density_kg_per_m3, poisson):
     """f_c = (c₀²/2π)√(m″/B′) (module docstring)."""
     mass = density_kg_per_m3 * thickness_m
-    return SPEED_OF_SOUND_m_per_s**2 / (2.0 * math.pi) * jnp.sqrt(mass / bending_stiffness_Nm(thickness_m, youngs_Pa, poisson))
+    return (
+        SPEED_OF_SOUND_m_per_s**2
+        / (2.0 * math.pi)
+        * jnp.sqrt(mass / bending_stiffness_Nm(thickness_m, youngs_Pa, poisson))
+    )
 
 
 def radiation_efficiency(freq_Hz, critical_Hz, length_x_m, length_y_m):
@@ -75,14 +79,28 @@ def radiation_efficiency(freq_Hz, critical_Hz, length_x_m, length_y_m):
     lam = jnp.sqrt(below_ratio)
     one = 1.0 - below_ratio
     delta1 = (one * jnp.log((1.0 + lam) / (1.0 - lam)) + 2.0 * lam) / (4.0 * math.pi**2 * one**1.5)
-    delta2 = jnp.where(f < 0.5 * fc, 8.0 * c0**2 * (1.0 - 2.0 * below_ratio) / (fc**2 * math.pi**4 * l1 * l2 * lam * jnp.sqrt(one)), 0.0)
+    delta2 = jnp.where(
+        f < 0.5 * fc,
+        8.0
+        * c0**2
+        * (1.0 - 2.0 * below_ratio)
+        / (fc**2 * math.pi**4 * l1 * l2 * lam * jnp.sqrt(one)),
+        0.0,
+    )
     edge = 2.0 * (l1 + l2) * c0 / (l1 * l2 * fc) * delta1 + delta2
     edge = jnp.where((f < f11) & (sigma2 < edge), sigma2, edge)
     large = jnp.where(above, jnp.minimum(sigma1, sigma3), edge)
-    small = jnp.where(~above & (sigma2 < sigma3), sigma2, jnp.where(above & (sigma1 < sigma3), sigma1, sigma3))
+    small = jnp.where(
+        ~above & (sigma2 < sigma3), sigma2, jnp.where(above & (sigma1 < sigma3), sigma1, sigma3)
+    )
     return jnp.minimum(jnp.where(f11 <= 0.5 * fc, large, small), 2.0)
 
 
 def radiation_loss_factor(freq_Hz, sigma, mass_per_area_kg_per_m2):
     """η_rad = ρ₀c₀σ/(ωm″): the loss of a resonant field by radiation into one room."""
-    return AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s * sigma / (2.0 * math.pi * freq_Hz * mass_per_area_kg_per_m2)
+    return (
+        AIR_DENSITY_kg_per_m3
+        * SPEED_OF_SOUND_m_per_s
+        * sigma
+        / (2.0 * math.pi * freq_Hz * mass_per_area_kg_per_m2)
+    )

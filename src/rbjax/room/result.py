@@ -44,7 +44,9 @@ class ImpactSound:
     radiated_energy_J: float
     warnings: tuple[str, ...]
     levels: RoomLevels = dataclasses.field(repr=False, compare=False)
-    force_N: np.ndarray = dataclasses.field(repr=False, compare=False, default_factory=lambda: np.zeros(0))
+    force_N: np.ndarray = dataclasses.field(
+        repr=False, compare=False, default_factory=lambda: np.zeros(0)
+    )
     rate_Hz: float = 44100.0
     chain: Chain = Chain()
 
@@ -75,7 +77,10 @@ def _contact_samples(height_m, ball, slab, floor, rate_Hz) -> int:
     """Samples over the contact: twice the rigid-floor contact time (the cheap quadrature),
     doubled while the ball is still in contact at the last sample."""
     model = make_model(floor=slab.plate if floor is None else floor)
-    n = int(math.ceil(2.0 * float(np.asarray(simulate(height_m, ball).contact_time_s)) * rate_Hz)) + 2
+    n = (
+        int(math.ceil(2.0 * float(np.asarray(simulate(height_m, ball).contact_time_s)) * rate_Hz))
+        + 2
+    )
     for _ in range(8):
         traj = trajectory(height_m, np.arange(n) / rate_Hz, ball, model)
         status = int(np.asarray(traj.status))
@@ -105,7 +110,18 @@ def impact_sound(
     bare ``slab`` (``floor=None``) or on a modal ``floor`` radiating through ``slab`` into
     ``room`` (``rbjax.room.chain``)."""
     n = _contact_samples(height_m, ball, slab, floor, rate_Hz)
-    lv = room_levels(slab, room, floor=floor, height_m=height_m, ball=ball, chain=chain, fraction=fraction, rate_Hz=rate_Hz, n_samples=n, solver=Solver())
+    lv = room_levels(
+        slab,
+        room,
+        floor=floor,
+        height_m=height_m,
+        ball=ball,
+        chain=chain,
+        fraction=fraction,
+        rate_Hz=rate_Hz,
+        n_samples=n,
+        solver=Solver(),
+    )
     labels, _, edges = bands(fraction)
     t_band = np.asarray(room.reverberation_per_band(labels))
     warnings = _warnings(lv, labels, edges, room, chain, floor, t_band)
@@ -126,27 +142,48 @@ def impact_sound(
         radiated_energy_J=float(np.sum(injected * np.asarray(lv.radiated_fraction))),
         warnings=tuple(warnings),
         levels=lv,
-        force_N=np.asarray(trajectory(height_m, np.arange(n) / rate_Hz, ball, make_model(floor=slab.plate if floor is None else floor)).force_N),
+        force_N=np.asarray(
+            trajectory(
+                height_m,
+                np.arange(n) / rate_Hz,
+                ball,
+                make_model(floor=slab.plate if floor is None else floor),
+            ).force_N
+        ),
         rate_Hz=float(rate_Hz),
         chain=chain,
     )
 
 
-def _warnings(lv: RoomLevels, labels, edges, room: ReceivingRoom, chain: Chain, floor, t_band) -> list[str]:
+def _warnings(
+    lv: RoomLevels, labels, edges, room: ReceivingRoom, chain: Chain, floor, t_band
+) -> list[str]:
     out = []
     fs = room.schroeder_frequency_Hz()
     if fs is not None:
-        below = [lab for lab, hi, f in zip(labels, edges[1], np.broadcast_to(fs, (len(labels),))) if hi < f]
+        below = [
+            lab
+            for lab, hi, f in zip(labels, edges[1], np.broadcast_to(fs, (len(labels),)))
+            if hi < f
+        ]
         if below:
-            out.append(f"bands {', '.join(below)} Hz lie below the room's Schroeder frequency: the diffuse-field level is a room average there")
+            out.append(
+                f"bands {', '.join(below)} Hz lie below the room's Schroeder frequency: the diffuse-field level is a room average there"
+            )
     floor_t60 = 6.0 * math.log(10.0) / np.asarray(lv.floor_decay_per_s)
     if not chain.floor_decay and floor is None and np.any(floor_t60 > SHORT_DECAY_SHARE * t_band):
-        slow = [lab for lab, tf, tr in zip(labels, floor_t60, t_band) if tf > SHORT_DECAY_SHARE * tr]
-        out.append(f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use Chain(floor_decay=True)")
+        slow = [
+            lab for lab, tf, tr in zip(labels, floor_t60, t_band) if tf > SHORT_DECAY_SHARE * tr
+        ]
+        out.append(
+            f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use Chain(floor_decay=True)"
+        )
     if not chain.floor_decay and floor is not None:
         t_room = float(np.min(t_band))
         if np.any(floor_t60 > SHORT_DECAY_SHARE * t_room):
-            out.append("modes of the floor decay slower than 0.3 T: the diffuse-field step (floor_decay=False) is outside its validity")
+            out.append(
+                "modes of the floor decay slower than 0.3 T: the diffuse-field step (floor_decay=False) is outside its validity"
+            )
     if isinstance(floor, FloatingFloor) and chain.floating == "insertion":
         f0 = float(floor.layer_resonance_Hz)
         above = [lab for lab, lo in zip(labels, edges[0]) if lo > 2.0 * f0]
@@ -157,7 +194,11 @@ def _warnings(lv: RoomLevels, labels, edges, room: ReceivingRoom, chain: Chain, 
                 "optimistic by up to 10 lg(f/f0) dB"
             )
     if isinstance(floor, FloatingFloor) and chain.floating == "modes":
-        out.append("floating='modes': the screed's modes radiate with the slab's η_rad, each in its own band only; a rough check, not a prediction (use floating='insertion')")
+        out.append(
+            "floating='modes': the screed's modes radiate with the slab's η_rad, each in its own band only; a rough check, not a prediction (use floating='insertion')"
+        )
     if np.any(np.asarray(lv.radiated_fraction) > 1.0):
-        out.append("a mode radiates more than its loss factor allows (η_rad > η_k): give the modes their radiation loss")
+        out.append(
+            "a mode radiates more than its loss factor allows (η_rad > η_k): give the modes their radiation loss"
+        )
     return out

@@ -65,7 +65,13 @@ class Slab(eqx.Module):
     @classmethod
     def of_plate(cls, plate: InfinitePlate, **sides) -> Slab:
         """The slab of an ``InfinitePlate`` floor (``sides``: the other fields)."""
-        return cls(plate.plate_thickness_m, plate.plate_youngs_Pa, plate.plate_density_kg_per_m3, plate.plate_poisson, **sides)
+        return cls(
+            plate.plate_thickness_m,
+            plate.plate_youngs_Pa,
+            plate.plate_density_kg_per_m3,
+            plate.plate_poisson,
+            **sides,
+        )
 
     @property
     def mass_per_area_kg_per_m2(self):
@@ -93,9 +99,13 @@ class ReceivingRoom(eqx.Module):
         check_range("volume_m3", self.volume_m3, lower=0.0)
         check_range("reverberation_s", self.reverberation_s, lower=0.0)
         if np.ndim(self.volume_m3) != 0:
-            raise RoomChainError(f"volume_m3 has shape {np.shape(self.volume_m3)}; valid: one value")
+            raise RoomChainError(
+                f"volume_m3 has shape {np.shape(self.volume_m3)}; valid: one value"
+            )
         if np.ndim(self.reverberation_s) > 1:
-            raise RoomChainError(f"reverberation_s has shape {np.shape(self.reverberation_s)}; valid: one value or one per band")
+            raise RoomChainError(
+                f"reverberation_s has shape {np.shape(self.reverberation_s)}; valid: one value or one per band"
+            )
 
     def reverberation_per_band(self, labels) -> jnp.ndarray:
         """T per band of ``labels`` (a scalar T broadcast); ``RoomChainError`` on a mismatch."""

@@ -93,13 +93,19 @@ def normalised_level_dB(level_dB, volume_m3, reverberation_s):
     bands of ``level_dB`` (the last axis)."""
     check_range("volume_m3", volume_m3, lower=0.0)
     check_range("reverberation_s", reverberation_s, lower=0.0)
-    return jnp.asarray(level_dB) + 10.0 * jnp.log10(jnp.asarray(volume_m3) / REFERENCE_VOLUME_m3) - fast_correction_dB(reverberation_s)
+    return (
+        jnp.asarray(level_dB)
+        + 10.0 * jnp.log10(jnp.asarray(volume_m3) / REFERENCE_VOLUME_m3)
+        - fast_correction_dB(reverberation_s)
+    )
 
 
 def a_weights_dB(fraction: int) -> np.ndarray:
     """The A-weights of the rating bands of ``fraction`` (1: octaves 63–500 Hz, 3: thirds 50–630 Hz)."""
     if fraction not in RATING_BANDS:
-        raise ValueError(f"fraction={fraction!r} is outside the valid choices 1 (octave), 3 (one-third octave)")
+        raise ValueError(
+            f"fraction={fraction!r} is outside the valid choices 1 (octave), 3 (one-third octave)"
+        )
     table = A_WEIGHTS_OCTAVE_dB if fraction == 1 else A_WEIGHTS_THIRD_OCTAVE_dB
     return np.array(list(table.values()))
 

@@ -122,7 +122,9 @@ def _rates(phi, y, setup: _Setup):
 
 def _combine(y, h, weights, stages):
     """y + h Σ_j w_j k_j, component by component (stages: a tuple of (s, ...) arrays)."""
-    return jax.tree_util.tree_map(lambda y_, k_: y_ + h * jnp.tensordot(weights, k_, axes=1), y, stages)
+    return jax.tree_util.tree_map(
+        lambda y_, k_: y_ + h * jnp.tensordot(weights, k_, axes=1), y, stages
+    )
 
 
 def _stages(phi, y, fy, h, setup: _Setup):
@@ -132,7 +134,9 @@ def _stages(phi, y, fy, h, setup: _Setup):
     time), at the price of multiplying A's zeros (used once per event only)."""
     c, a, _, _ = _tableau()
     c, a = jnp.asarray(c), jnp.asarray(a)
-    stages = jax.tree_util.tree_map(lambda f: jnp.zeros((c.shape[0],) + f.shape, f.dtype).at[0].set(f), fy)
+    stages = jax.tree_util.tree_map(
+        lambda f: jnp.zeros((c.shape[0],) + f.shape, f.dtype).at[0].set(f), fy
+    )
 
     def body(i, stages):
         rates = _rates(phi + c[i] * h, _combine(y, h, a[i], stages), setup)
@@ -150,11 +154,21 @@ def _step_unrolled(phi, y, fy, h, setup: _Setup):
     c, a, b, b_err = _tableau()
     stages = [fy]
     for i in range(1, len(c)):
-        incr = jax.tree_util.tree_map(lambda *ks: sum(a[i, j] * ks[j] for j in range(i) if a[i, j] != 0.0), *stages)
-        stages.append(_rates(phi + c[i] * h, jax.tree_util.tree_map(lambda y_, d_: y_ + h * d_, y, incr), setup))
+        incr = jax.tree_util.tree_map(
+            lambda *ks: sum(a[i, j] * ks[j] for j in range(i) if a[i, j] != 0.0), *stages
+        )
+        stages.append(
+            _rates(
+                phi + c[i] * h, jax.tree_util.tree_map(lambda y_, d_: y_ + h * d_, y, incr), setup
+            )
+        )
 
     def combine(coefficients, y_):
-        return jax.tree_util.tree_map(lambda y0, *ks: y0 + h * sum(cj * k_ for cj, k_ in zip(coefficients, ks) if cj != 0.0), y_, *stages)
+        return jax.tree_util.tree_map(
+            lambda y0, *ks: y0 + h * sum(cj * k_ for cj, k_ in zip(coefficients, ks) if cj != 0.0),
+            y_,
+            *stages,
+        )
 
     zero = jax.tree_util.tree_map(jnp.zeros_like, y)
     return combine(b, y), stages[-1], combine(b_err, zero)
@@ -176,12 +190,16 @@ def _half_turn(y0, setup: _Setup, n_steps: int):
         y, fy, err = carry
         # the FSAL stage (c = 1, last row of A = b) is y′ at the step's end
         y_next, f_next, local = _step_unrolled(h * k, y, fy, h, setup)
-        err = err + jnp.max(jnp.concatenate([jnp.abs(e).reshape(-1) * w for e, w in zip(local, weights)]))
+        err = err + jnp.max(
+            jnp.concatenate([jnp.abs(e).reshape(-1) * w for e, w in zip(local, weights)])
+        )
         out = (y_next, f_next)
         return (*out, err), out
 
     f0 = _rates(0.0, y0, setup)
-    (_, _, err), (ys, fs) = jax.lax.scan(step, (y0, f0, jnp.zeros(())), jnp.arange(2 * n_steps, dtype=jnp.float64))
+    (_, _, err), (ys, fs) = jax.lax.scan(
+        step, (y0, f0, jnp.zeros(())), jnp.arange(2 * n_steps, dtype=jnp.float64)
+    )
     first = lambda x0, xs: jnp.concatenate([x0[None], xs])  # noqa: E731
     return jax.tree_util.tree_map(first, y0, ys), jax.tree_util.tree_map(first, f0, fs), err
 
@@ -225,7 +243,11 @@ def _locate(event, k, phis, ys, fs, g, setup: _Setup, s_end=1.0):
             weights = weights * s
             # term by term: under vmap a product over the short stage axis with per-lane weights
             # is a batched matrix–vector product, a slow library call on the CPU
-            return pa + s * h, jax.tree_util.tree_map(lambda y_, k_: y_ + h * sum(weights[j] * k_[j] for j in range(coef.shape[0])), ya, stages)
+            return pa + s * h, jax.tree_util.tree_map(
+                lambda y_, k_: y_ + h * sum(weights[j] * k_[j] for j in range(coef.shape[0])),
+                ya,
+                stages,
+            )
 
         return curve
 
@@ -246,7 +268,9 @@ def _locate(event, k, phis, ys, fs, g, setup: _Setup, s_end=1.0):
         inside = (proposal >= lo) & (proposal <= hi)
         return lo, hi, jnp.where(inside, proposal, 0.5 * (lo + hi))
 
-    _, _, s = jax.lax.fori_loop(0, EVENT_ITERATIONS, body, jax.lax.stop_gradient((jnp.zeros(()), jnp.asarray(s_end), guess)))
+    _, _, s = jax.lax.fori_loop(
+        0, EVENT_ITERATIONS, body, jax.lax.stop_gradient((jnp.zeros(()), jnp.asarray(s_end), guess))
+    )
     return curve(newton(curve, jax.lax.stop_gradient(s))[1])
 
 
@@ -265,10 +289,18 @@ def _solve(height_m, ball: Ball, model: Model, n_steps: int):
     ys, fs, err = _half_turn(y0, setup, n_steps)
     quarter = lambda tree, part: jax.tree_util.tree_map(lambda x: x[part], tree)  # noqa: E731
     first, second = slice(0, n_steps + 1), slice(n_steps, 2 * n_steps + 1)
-    return v0, setup, (quarter(ys, first), quarter(fs, first)), (quarter(ys, second), quarter(fs, second)), err
+    return (
+        v0,
+        setup,
+        (quarter(ys, first), quarter(fs, first)),
+        (quarter(ys, second), quarter(fs, second)),
+        err,
+    )
 
 
-def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_STEPS) -> ImpactScalars:
+def impact_angle(
+    height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_STEPS
+) -> ImpactScalars:
     """Scalar outputs of ONE impact on the rigid floor by the phase-angle integration.
 
     Same fields and status codes as the ODE path (``rbjax.solve.ode``); ``num_steps`` counts the
@@ -302,7 +334,9 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
         def rate_on(curve, s):
             return jax.jvp(lambda ss: floor_force(*curve(ss)), (s,), (jnp.ones_like(s),))[1]
 
-        g1 = jax.vmap(lambda p, y, f: jax.jvp(floor_force, (p, y), (jnp.ones_like(p), f))[1])(phis1, ys1, fs1)
+        g1 = jax.vmap(lambda p, y, f: jax.jvp(floor_force, (p, y), (jnp.ones_like(p), f))[1])(
+            phis1, ys1, fs1
+        )
         kp, found = _first_fall(g1)
         phi_p, y_p = _locate(rate_on, kp, phis1, ys1, fs1, g1, setup)
         peak_phi = jnp.where(found, phi_p, half)
@@ -313,7 +347,9 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
         g2 = jax.vmap(contact)(phis2.at[-1].set(np.pi - EDGE), ys2)
         ke, ended = _first_fall(g2)
         s_end = jnp.where(ke == n_steps, 1.0 - EDGE / (phis2[1] - phis2[0]), 1.0)
-        phi_e, y_e = _locate(lambda curve, s: contact(*curve(s)), ke, phis2, ys2, fs2, g2, setup, s_end=s_end)
+        phi_e, y_e = _locate(
+            lambda curve, s: contact(*curve(s)), ke, phis2, ys2, fs2, g2, setup, s_end=s_end
+        )
         end_phi = jnp.where(ended, phi_e, np.pi)
         y_end = jax.tree_util.tree_map(lambda a, b: jnp.where(ended, a, b), y_e, y_end)
         early = g2[0] <= 0.0  # no contact force left at maximum compression: not this path's case
@@ -322,7 +358,9 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
     d_end, v_end, _ = _cartesian(end_phi, y_end, setup)
     d_end = jnp.where(end_phi == np.pi, 0.0, d_end)  # sin(π) is 1.2e-16 in floating point
     peak = floor_force(peak_phi, y_peak)
-    first = floor_force_N(jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), y_max[2] * 0.0]), ball, model)  # δ = 0, δ̇ = v₀
+    first = floor_force_N(
+        jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), y_max[2] * 0.0]), ball, model
+    )  # δ = 0, δ̇ = v₀
     peak_force = jnp.maximum(peak, first)
     peak_time = jnp.where(peak >= first, y_peak[1], 0.0)
     restitution = -dynamic_mass_kg(d_end, ball) * v_end / (ball.mass_kg * v0)
@@ -336,7 +374,11 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
     too_deep = d_max > model.max_deflection_ratio * ball.wall_m
     status = jnp.select(
         [failed, singular, too_deep],
-        [STATUS_CODES["solver_failed"], STATUS_CODES["mass_singularity"], STATUS_CODES["deflection_limit"]],
+        [
+            STATUS_CODES["solver_failed"],
+            STATUS_CODES["mass_singularity"],
+            STATUS_CODES["deflection_limit"],
+        ],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
     return ImpactScalars.flagged(
@@ -351,6 +393,8 @@ def impact_angle(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_S
     )
 
 
-def angle_error_estimate(height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_STEPS) -> jax.Array:
+def angle_error_estimate(
+    height_m, ball: Ball, model: Model, *, n_steps: int = DEFAULT_STEPS
+) -> jax.Array:
     """The summed weighted error estimate of ONE impact (``ok`` needs it ≤ ERROR_TOLERANCE)."""
     return _solve(height_m, ball, model, n_steps)[-1]

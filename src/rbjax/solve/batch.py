@@ -60,8 +60,16 @@ SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution", "max_deflecti
 HISTORY_BLOCK = 128
 
 __all__ = [
-    "BALL_PARAMETERS", "SCALAR_OUTPUTS", "parameter_names", "canonical_name", "assemble",
-    "nominal_parameters", "lfe_output_names", "evaluation_paths", "evaluate", "evaluate_jacobian",
+    "BALL_PARAMETERS",
+    "SCALAR_OUTPUTS",
+    "parameter_names",
+    "canonical_name",
+    "assemble",
+    "nominal_parameters",
+    "lfe_output_names",
+    "evaluation_paths",
+    "evaluate",
+    "evaluate_jacobian",
     "sharded_map",
 ]
 
@@ -97,7 +105,9 @@ def lfe_output_names() -> tuple[str, ...]:
     return tuple(f"lfe_{band}_dB" for band in OCTAVE_BANDS)
 
 
-def evaluation_paths(model: Model, solver: Solver | None = None, method: str = "auto") -> tuple[str, str]:
+def evaluation_paths(
+    model: Model, solver: Solver | None = None, method: str = "auto"
+) -> tuple[str, str]:
     """(scalar path, history path) of ``evaluate``: ``"quadrature"``, ``"angle"`` or ``"ode"``
     (``rbjax.solve.simulate.resolve_method``), and ``"sampled"`` or ``"ode"``."""
     scalar = resolve_method(method, model, solver)
@@ -125,9 +135,13 @@ def _one_impact(row: Mapping, model: Model, spec: _Spec) -> dict:
     height, ball, model = assemble(row, None, JIS_RUBBER_BALL, model)
     if spec.n_times:  # L_FE per octave band from the contact samples of the record (§2.4)
         if spec.path == "sampled":
-            *_, force, _, status = _sampled_history(height, ball, model, spec.rate_Hz, spec.n_times, spec.substeps)
+            *_, force, _, status = _sampled_history(
+                height, ball, model, spec.rate_Hz, spec.n_times, spec.substeps
+            )
         else:
-            traj = _trajectory(height, ball, model, spec.solver, jnp.arange(spec.n_times) / spec.rate_Hz)
+            traj = _trajectory(
+                height, ball, model, spec.solver, jnp.arange(spec.n_times) / spec.rate_Hz
+            )
             force, status = traj.force_N, traj.status
         lfe = lfe_octave_dB(force, spec.rate_Hz, n_record=spec.n_total)
         return {"lfe_dB": jnp.where(status == 0, lfe, jnp.nan), "history_status": status}
@@ -164,26 +178,54 @@ def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
     return jax.vmap(one, in_axes=(0, None))
 
 
-def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, model: Model, run: Callable) -> None:
+def _redo(
+    out: dict, rows: np.ndarray, fn: Callable, batch: dict, model: Model, run: Callable
+) -> None:
     """Compute the ``rows`` of ``out`` again with ``fn`` (the batch padded by
     ``inputs.padded_rows``, so that few shapes compile) and write them in place."""
     if rows.size == 0:
         return
     padded = padded_rows(rows)
-    again = run(fn, {k: v[padded] for k, v in batch.items()}, model, desc="ODE for flagged impacts", chunk_size=len(padded))
+    again = run(
+        fn,
+        {k: v[padded] for k, v in batch.items()},
+        model,
+        desc="ODE for flagged impacts",
+        chunk_size=len(padded),
+    )
     for k in out:
         out[k][rows] = again[k][: rows.size]
 
 
-def _evaluate(samples, wrt, *, height_m, ball, model, solver, method, lfe, rate_Hz, duration_s, chunk_size, devices, progress) -> dict:
+def _evaluate(
+    samples,
+    wrt,
+    *,
+    height_m,
+    ball,
+    model,
+    solver,
+    method,
+    lfe,
+    rate_Hz,
+    duration_s,
+    chunk_size,
+    devices,
+    progress,
+) -> dict:
     require_x64()
     model = Model() if model is None else model
     if not samples:
         raise ValueError("samples is empty: give at least one parameter with an array of values")
-    named = {canonical_name(k, model): np.asarray(v, dtype=np.float64).reshape(-1) for k, v in samples.items()}
+    named = {
+        canonical_name(k, model): np.asarray(v, dtype=np.float64).reshape(-1)
+        for k, v in samples.items()
+    }
     n = {v.shape[0] for v in named.values()}
     if len(n) != 1:
-        raise ValueError(f"samples must all have the same length; got {dict((k, v.shape[0]) for k, v in named.items())}")
+        raise ValueError(
+            f"samples must all have the same length; got {dict((k, v.shape[0]) for k, v in named.items())}"
+        )
     # the constructors validate concrete values (jointly: e.g. wall < radius) and name the parameter
     assemble(named, height_m, ball, model)
     check_range("height_m", named.get("height_m", height_m), lower=0.0)
@@ -193,7 +235,9 @@ def _evaluate(samples, wrt, *, height_m, ball, model, solver, method, lfe, rate_
     if wrt and ode_solver.adjoint != "forward":  # jax.jacfwd through diffrax needs it
         ode_solver = dataclasses.replace(ode_solver, adjoint="forward")
     (size,) = n
-    batch = {k: np.full(size, v) for k, v in nominal_parameters(height_m, ball, model).items()} | named
+    batch = {
+        k: np.full(size, v) for k, v in nominal_parameters(height_m, ball, model).items()
+    } | named
     run = functools.partial(sharded_map, chunk_size=chunk_size, devices=devices, progress=progress)
 
     out = run(_impact_fn(_Spec(scalar_path, ode_solver), wrt), batch, model, desc="impacts")
@@ -210,12 +254,28 @@ def _evaluate(samples, wrt, *, height_m, ball, model, solver, method, lfe, rate_
     n_total = max(1, int(round(rate_Hz * duration_s)))
     tc = out["contact_time_s"]
     longest = float(np.nanmax(tc)) if np.any(np.isfinite(tc)) else 0.0
-    n_times = min(n_total, HISTORY_BLOCK * math.ceil((math.ceil(longest * rate_Hz) + 2) / HISTORY_BLOCK))
-    history = _Spec(history_path, ode_solver, n_times, n_total, float(rate_Hz), substeps_for_contact(tc, rate_Hz))
+    n_times = min(
+        n_total, HISTORY_BLOCK * math.ceil((math.ceil(longest * rate_Hz) + 2) / HISTORY_BLOCK)
+    )
+    history = _Spec(
+        history_path,
+        ode_solver,
+        n_times,
+        n_total,
+        float(rate_Hz),
+        substeps_for_contact(tc, rate_Hz),
+    )
     hist = run(_impact_fn(history, wrt), batch, model, desc="L_FE")
     if history_path == "sampled":  # a history the sampled path flags: the ODE's dense output
         again = np.flatnonzero((hist["history_status"] != 0) & (out["status"] == 0))
-        _redo(hist, again, _impact_fn(history._replace(path="ode", substeps=1), wrt), batch, model, run)
+        _redo(
+            hist,
+            again,
+            _impact_fn(history._replace(path="ode", substeps=1), wrt),
+            batch,
+            model,
+            run,
+        )
     for i, name in enumerate(lfe_output_names()):
         out[name] = np.where(flagged, np.nan, hist["lfe_dB"][:, i])
         if wrt:
@@ -248,7 +308,21 @@ def evaluate(
     ``"quadrature"``, ``"angle"``) and ``solver`` choose the path as in ``rbjax.simulate`` (see
     the module docstring).
     """
-    return _evaluate(samples, (), height_m=height_m, ball=ball, model=model, solver=solver, method=method, lfe=lfe, rate_Hz=rate_Hz, duration_s=duration_s, chunk_size=chunk_size, devices=devices, progress=progress)
+    return _evaluate(
+        samples,
+        (),
+        height_m=height_m,
+        ball=ball,
+        model=model,
+        solver=solver,
+        method=method,
+        lfe=lfe,
+        rate_Hz=rate_Hz,
+        duration_s=duration_s,
+        chunk_size=chunk_size,
+        devices=devices,
+        progress=progress,
+    )
 
 
 def evaluate_jacobian(
@@ -277,7 +351,21 @@ def evaluate_jacobian(
     wrt = tuple(samples) if wrt is None else tuple(wrt)
     if not wrt:
         raise ValueError("wrt=() names no parameter; give the parameters to differentiate against")
-    out = _evaluate(samples, wrt, height_m=height_m, ball=ball, model=model, solver=solver, method=method, lfe=lfe, rate_Hz=rate_Hz, duration_s=duration_s, chunk_size=chunk_size, devices=devices, progress=progress)
+    out = _evaluate(
+        samples,
+        wrt,
+        height_m=height_m,
+        ball=ball,
+        model=model,
+        solver=solver,
+        method=method,
+        lfe=lfe,
+        rate_Hz=rate_Hz,
+        duration_s=duration_s,
+        chunk_size=chunk_size,
+        devices=devices,
+        progress=progress,
+    )
     jacobian = {k[2:]: out.pop(k) for k in [k for k in out if k.startswith("d:")]}
     jacobian.pop("lfe_dB", None)
     return out, jacobian

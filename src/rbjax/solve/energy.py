@@ -47,11 +47,19 @@ class EnergyBalance(eqx.Module):
     @property
     def residual_J(self):
         """Impact energy less every term it went to."""
-        return self.impact_energy_J - (self.rebound_energy_J + self.floor_energy_J + self.flux_loss_J + self.contact_work_J + self.cap_work_J)
+        return self.impact_energy_J - (
+            self.rebound_energy_J
+            + self.floor_energy_J
+            + self.flux_loss_J
+            + self.contact_work_J
+            + self.cap_work_J
+        )
 
 
 def _balance(height_m, ball, model, solver) -> EnergyBalance:
-    v0, sols, _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, peak=False, energy=True)
+    v0, sols, _, (t_max, y_max) = _phases(
+        height_m, ball, model, solver, dense=False, peak=False, energy=True
+    )
     sol1, _, sol3 = sols
     t_end, y_end = _final(sol3)
     y_end, acc = _split_energy(y_end, model)
@@ -73,7 +81,12 @@ def _balance(height_m, ball, model, solver) -> EnergyBalance:
 _balance_batch = eqx.filter_jit(eqx.filter_vmap(_balance, in_axes=(0, 0, 0, None)))
 
 
-def energy_balance(height_m: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> EnergyBalance:
+def energy_balance(
+    height_m: ArrayLike,
+    ball: Ball = JIS_RUBBER_BALL,
+    model: Model | None = None,
+    solver: Solver | None = None,
+) -> EnergyBalance:
     """The energy balance of the impact from ``height_m`` (see the module docstring).
 
     Models with a ``BallMode`` or a ``SeriesKelvinVoigt`` are not covered (their own energy
@@ -84,7 +97,9 @@ def energy_balance(height_m: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Mod
     check_inputs(height_m, ball)
     model = Model() if model is None else model
     if model.ball_mode is not None or model.series is not None:
-        raise ValueError("energy_balance: models with a ball_mode or a series element are not covered; valid: ball_mode=None, series=None")
+        raise ValueError(
+            "energy_balance: models with a ball_mode or a series element are not covered; valid: ball_mode=None, series=None"
+        )
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
     out = _balance_batch(height, flat_ball, flat_model, solver)

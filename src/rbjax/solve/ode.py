@@ -53,11 +53,26 @@ from .vector_field import (
 def _force_rate(y, args):
     """dF/dt of the floor force along the compression trajectory (a directional derivative)."""
     ball, model = args
-    _, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (COMPRESSION_FIELD(0.0, y, args),))
+    _, rate = jax.jvp(
+        lambda yy: floor_force_N(yy, ball, model), (y,), (COMPRESSION_FIELD(0.0, y, args),)
+    )
     return rate
 
 
-def _solve(rhs, t0, y0, args, conds, directions, solver: Solver, *, t1=jnp.inf, dense=False, steps=False, max_steps=None):
+def _solve(
+    rhs,
+    t0,
+    y0,
+    args,
+    conds,
+    directions,
+    solver: Solver,
+    *,
+    t1=jnp.inf,
+    dense=False,
+    steps=False,
+    max_steps=None,
+):
     event = dfx.Event(conds, solver.root_finder(), direction=directions)
     return dfx.diffeqsolve(
         dfx.ODETerm(rhs),
@@ -85,7 +100,9 @@ def _saveat(dense: bool, steps: bool):
     sub-save (the force computed at the steps taken only, not over the padded buffer)."""
     if not steps:
         return dfx.SaveAt(t1=True, dense=dense)
-    return dfx.SaveAt(subs=[dfx.SubSaveAt(t1=True), dfx.SubSaveAt(steps=True, fn=_with_force)], dense=dense)
+    return dfx.SaveAt(
+        subs=[dfx.SubSaveAt(t1=True), dfx.SubSaveAt(steps=True, fn=_with_force)], dense=dense
+    )
 
 
 def _final(sol):
@@ -99,7 +116,17 @@ def _ok(sol):
     return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
 
 
-def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: bool = True, energy: bool = False, steps: bool = False):
+def _phases(
+    height_m,
+    ball,
+    model: Model,
+    solver: Solver,
+    dense: bool,
+    *,
+    peak: bool = True,
+    energy: bool = False,
+    steps: bool = False,
+):
     """Solve the phases of one impact; return the diffrax solutions and the phase ends.
 
     With ``peak`` (and a velocity-dependent model) compression stops at the force peak (an
@@ -109,7 +136,9 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
     args = (ball, model)
     v0 = impact_velocity_m_per_s(height_m)
     y0 = _initial_state(v0, ball, model, energy)
-    compression, restitution = (_COMPRESSION_ENERGY, _RESTITUTION_ENERGY) if energy else (COMPRESSION_FIELD, _RESTITUTION)
+    compression, restitution = (
+        (_COMPRESSION_ENERGY, _RESTITUTION_ENERGY) if energy else (COMPRESSION_FIELD, _RESTITUTION)
+    )
     singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
 
     # Event functions are scaled to O(1) so that the root finder's tolerances (which also
@@ -138,7 +167,18 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
     if split:
         # From the force peak on to maximum compression (zero length if they coincide).
         t1 = jnp.where(y_peak[1] > 0.0, jnp.inf, t_peak)
-        sol2 = _solve(compression, t_peak, y_peak, args, (velocity, singularity), (False, True), solver, t1=t1, dense=dense, steps=steps)
+        sol2 = _solve(
+            compression,
+            t_peak,
+            y_peak,
+            args,
+            (velocity, singularity),
+            (False, True),
+            solver,
+            t1=t1,
+            dense=dense,
+            steps=steps,
+        )
         t_max, y_max = _final(sol2)
     else:
         sol2, t_max, y_max = None, t_peak, y_peak
@@ -158,7 +198,9 @@ def _phases(height_m, ball, model: Model, solver: Solver, dense: bool, *, peak: 
         conds3, dirs3 = deflection, False
     # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
     y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
-    sol3 = _solve(restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense, steps=steps)
+    sol3 = _solve(
+        restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense, steps=steps
+    )
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 
 
@@ -172,7 +214,12 @@ def _status(sols, y_max, outputs, ball, model: Model):
     too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
     return jnp.select(
         [step_limit, singular, failed | nonfinite, too_deep],
-        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
+        [
+            STATUS_CODES["step_limit"],
+            STATUS_CODES["mass_singularity"],
+            STATUS_CODES["solver_failed"],
+            STATUS_CODES["deflection_limit"],
+        ],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
 
@@ -187,7 +234,17 @@ def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
     (its rate along the flow, scaled to O(1)) falls through 0; (value, time) at the event, or
     ``value_of`` at t_start if no event occurs."""
     t0, y0 = start
-    sol = _solve(_RESTITUTION, t0, y0, args, lambda t, y, args, **kw: rate_of(y), False, solver, t1=t_end, max_steps=REFINE_MAX_STEPS)
+    sol = _solve(
+        _RESTITUTION,
+        t0,
+        y0,
+        args,
+        lambda t, y, args, **kw: rate_of(y),
+        False,
+        solver,
+        t1=t_end,
+        max_steps=REFINE_MAX_STEPS,
+    )
     t, y = _final(sol)
     hit = sol.result == dfx.RESULTS.event_occurred
     return jnp.where(hit, value_of(y), value_of(y0)), jnp.where(hit, t, t0)
@@ -206,7 +263,9 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
     ts = jnp.concatenate([s.ts[1] for s in sols if s is not None])
     rows = jnp.concatenate([s.ys[1] for s in sols if s is not None])
     valid = jnp.isfinite(ts)
-    rows = jnp.where(valid[:, None], rows, rows[0])  # padding (inf) never reaches an output or a gradient
+    rows = jnp.where(
+        valid[:, None], rows, rows[0]
+    )  # padding (inf) never reaches an output or a gradient
     ys, forces = rows[:, :-1], rows[:, -1]
     ts_safe = jnp.where(valid, ts, 0.0)
     force_scale = reissner_stiffness_N_per_m(ball) * ball.wall_m
@@ -251,7 +310,9 @@ def _free_oscillation(q0, qd0, omega, eta, tau):
     small = jnp.abs(wd) < 1e-9 * jnp.maximum(omega, 1.0)
     safe = jnp.where(small, 1.0, wd)
     sin_over = jnp.where(small, tau, jnp.sin(safe * tau) / safe)
-    q = jnp.exp(-zeta * omega * tau) * (q0 * jnp.cos(wd * tau) + (qd0 + zeta * omega * q0) * sin_over)
+    q = jnp.exp(-zeta * omega * tau) * (
+        q0 * jnp.cos(wd * tau) + (qd0 + zeta * omega * q0) * sin_over
+    )
     return jnp.real(q)
 
 
@@ -287,7 +348,13 @@ def _recontacts(y_end, args):
     if model.ball_mode is not None:
         bm = model.ball_mode
         w, wd = model.ball_mode_states(z)
-        gap_close = gap_close + _free_oscillation(w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus) - w
+        gap_close = (
+            gap_close
+            + _free_oscillation(
+                w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus
+            )
+            - w
+        )
     if model.series is not None:
         w = model.series_states(z)[0]  # relaxes freely: τẇ = −w
         gap_close = gap_close + w * jnp.expm1(-taus / model.series.series_time_constant_s)
@@ -303,7 +370,9 @@ def _recontacts(y_end, args):
 
 
 def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
-    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(height_m, ball, model, solver, dense=False, steps=model.coupled)
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(
+        height_m, ball, model, solver, dense=False, steps=model.coupled
+    )
     sol3 = sols[2]
     t_end, y_end = _final(sol3)
     args = (ball, model)
@@ -322,8 +391,16 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
 
     solved = [s for s in sols if s is not None]
     steps = sum(s.stats["num_steps"] for s in solved)
-    status = _status(sols, y_max.at[0].set(max_deflection), jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]), ball, model)
-    status = jnp.where((status == 0) & recontact, STATUS_CODES["recontact"], status).astype(jnp.int32)
+    status = _status(
+        sols,
+        y_max.at[0].set(max_deflection),
+        jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]),
+        ball,
+        model,
+    )
+    status = jnp.where((status == 0) & recontact, STATUS_CODES["recontact"], status).astype(
+        jnp.int32
+    )
     return ImpactScalars.flagged(
         status,
         steps,
@@ -338,7 +415,9 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
 
 def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
     # compression in one solve: the force peak needs no exact time here
-    v0, (sol1, _, sol3), _, (t_max, y_max) = _phases(height_m, ball, model, solver, dense=True, peak=False)
+    v0, (sol1, _, sol3), _, (t_max, y_max) = _phases(
+        height_m, ball, model, solver, dense=True, peak=False
+    )
     t_end = sol3.ts[-1]
     args = (ball, model)
     status = _status((sol1, sol3), y_max, jnp.stack([t_end, t_max, y_max[0]]), ball, model)
@@ -354,10 +433,22 @@ def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajec
         y = jnp.where(inside, y, jnp.zeros_like(y))
         force = jnp.where(inside, floor_force_N(y, *args), 0.0)
         # a failed solve gives NaN, never a plausible-looking history
-        return jnp.where(failed, jnp.nan, y[0]), jnp.where(failed, jnp.nan, y[1]), jnp.where(failed, jnp.nan, force), inside & ~failed
+        return (
+            jnp.where(failed, jnp.nan, y[0]),
+            jnp.where(failed, jnp.nan, y[1]),
+            jnp.where(failed, jnp.nan, force),
+            inside & ~failed,
+        )
 
     d, v, f, inside = jax.vmap(at)(times_s)
-    return Trajectory(time_s=times_s, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside, status=status)
+    return Trajectory(
+        time_s=times_s,
+        deflection_m=d,
+        velocity_m_per_s=v,
+        force_N=f,
+        in_contact=inside,
+        status=status,
+    )
 
 
 impact_batch = eqx.filter_jit(eqx.filter_vmap(impact_ode, in_axes=(0, 0, 0, None)))

@@ -53,7 +53,11 @@ class ImpactScalars(eqx.Module):
         returns plausible-looking numbers. ``outputs``: the six float fields by name."""
         ok = status == 0
         masked = {name: jnp.where(ok, value, jnp.nan) for name, value in outputs.items()}
-        return cls(**masked, status=jnp.asarray(status, dtype=jnp.int32), num_steps=jnp.asarray(num_steps, dtype=jnp.int32))
+        return cls(
+            **masked,
+            status=jnp.asarray(status, dtype=jnp.int32),
+            num_steps=jnp.asarray(num_steps, dtype=jnp.int32),
+        )
 
 
 class Trajectory(eqx.Module):
@@ -68,5 +72,3 @@ class Trajectory(eqx.Module):
     force_N: jax.Array
     in_contact: jax.Array
     status: jax.Array
-
-

@@ -98,7 +98,6 @@ RULE_TOLERANCE = 1e-9
 RESIDUAL_TOLERANCE = 1e-9
 
 
-
 @functools.cache
 def gauss_legendre_01(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Legendre nodes and weights on [0, 1] (numpy's ``leggauss``, mapped)."""
@@ -118,8 +117,14 @@ def _check(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) 
             f"model.damping={model.damping!r}: the quadrature path needs a contact force F(δ) of the "
             "deflection alone; valid: damping=None (use rbjax.simulate for damped models)"
         )
-    if not isinstance(n_nodes, (int, np.integer)) or isinstance(n_nodes, bool) or not lowest <= n_nodes <= highest:
-        raise ValueError(f"n_nodes={n_nodes!r} must be an integer in the valid range [{lowest}, {highest}]")
+    if (
+        not isinstance(n_nodes, (int, np.integer))
+        or isinstance(n_nodes, bool)
+        or not lowest <= n_nodes <= highest
+    ):
+        raise ValueError(
+            f"n_nodes={n_nodes!r} must be an integer in the valid range [{lowest}, {highest}]"
+        )
 
 
 def _force(d, ball, model):
@@ -165,7 +170,10 @@ def _legendre_tail(m: int) -> np.ndarray:
     """Rows giving the two highest Legendre coefficients a_{m−2}, a_{m−1} and a_0 of the degree-(m − 1)
     interpolant of values at the m Gauss–Legendre points (the discrete projection)."""
     x, w = np.polynomial.legendre.leggauss(m)
-    rows = [(2 * k + 1) / 2.0 * w * np.polynomial.legendre.legval(x, np.eye(m)[k]) for k in (0, m - 2, m - 1)]
+    rows = [
+        (2 * k + 1) / 2.0 * w * np.polynomial.legendre.legval(x, np.eye(m)[k])
+        for k in (0, m - 2, m - 1)
+    ]
     return np.stack(rows)
 
 
@@ -200,8 +208,14 @@ def _refine_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
             end[q + 1, j] = chebyshev.chebval(1.0, deriv) / math.factorial(q)
             if q < SUB_TERMS:
                 anti = chebyshev.chebint(chebyshev.chebmul(t_power[q], deriv), lbnd=-1.0, scl=0.5)
-                sub[q, :, j] = (chebyshev.chebval(1.0, anti) - chebyshev.chebval(lower, anti)) / mu / math.factorial(q)
-    rows = np.concatenate([end, sub.reshape(SUB_TERMS * m, n), to_coef[-TAIL_COEFFICIENTS:]], axis=0)
+                sub[q, :, j] = (
+                    (chebyshev.chebval(1.0, anti) - chebyshev.chebval(lower, anti))
+                    / mu
+                    / math.factorial(q)
+                )
+    rows = np.concatenate(
+        [end, sub.reshape(SUB_TERMS * m, n), to_coef[-TAIL_COEFFICIENTS:]], axis=0
+    )
     return _lobatto_01(n)[1:], np.sin(phi), w_phi, rows[:, 1:]
 
 
@@ -211,7 +225,12 @@ def _row_norms(n: int) -> np.ndarray:
     rows, m = _refine_rules(n)[3], time_nodes(n)
     sub = rows[ROOT_TERMS + 1 : ROOT_TERMS + 1 + SUB_TERMS * m].reshape(SUB_TERMS, m, -1)
     end = np.abs(rows[1 : ROOT_TERMS + 1]).sum(axis=1)
-    return np.array([max(end[q], np.abs(sub[q]).sum(axis=1).max() if q < SUB_TERMS else 0.0) for q in range(ROOT_TERMS)])
+    return np.array(
+        [
+            max(end[q], np.abs(sub[q]).sum(axis=1).max() if q < SUB_TERMS else 0.0)
+            for q in range(ROOT_TERMS)
+        ]
+    )
 
 
 def _weighted_sum(weights, values):
@@ -258,10 +277,14 @@ def _upper_bound(v0, ball, model, target):
     a2 = k / (4.0 * r)
     a4 = jnp.zeros_like(a2)
     if model.gas == "adiabatic":
-        a4 = a4 + AMBIENT_PRESSURE_Pa * math.pi * GAMMA_AIR * (3.0 * r - jnp.minimum(d_linear, two_r)) / (16.0 * r**3)
+        a4 = a4 + AMBIENT_PRESSURE_Pa * math.pi * GAMMA_AIR * (
+            3.0 * r - jnp.minimum(d_linear, two_r)
+        ) / (16.0 * r**3)
     if model.stiffening is not None:
         a4 = a4 + k * model.stiffening.beta / (8.0 * r * ball.wall_m**2)
-    squared = 2.0 * target / (a2 + jnp.sqrt(a2**2 + 4.0 * a4 * target))  # the root of a4 y² + a2 y = target
+    squared = (
+        2.0 * target / (a2 + jnp.sqrt(a2**2 + 4.0 * a4 * target))
+    )  # the root of a4 y² + a2 y = target
     return jnp.minimum(jnp.sqrt(squared), d_log)
 
 
@@ -302,7 +325,9 @@ def _phi_rule_error(d_max, two_r, n: int):
     the left the turning point near δ = −δ_max (φ = −π/2) and the gas term's pole s = −R."""
     b = 4.0 / jnp.pi * jnp.arccosh(jnp.maximum(two_r / jnp.maximum(d_max, 1e-300), 1.0))
     alpha_right = 0.5 * (b + jnp.sqrt(4.0 + b**2))
-    alpha_left = 1.0 + 4.0 / jnp.pi * jnp.arcsin(jnp.clip(0.5 * two_r / jnp.maximum(d_max, 1e-300), 0.0, 1.0))
+    alpha_left = 1.0 + 4.0 / jnp.pi * jnp.arcsin(
+        jnp.clip(0.5 * two_r / jnp.maximum(d_max, 1e-300), 0.0, 1.0)
+    )
     return _bernstein_decay(jnp.minimum(alpha_right, alpha_left), n)
 
 
@@ -370,31 +395,47 @@ def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
     d_max_c = jax.lax.stop_gradient(d_max)
     # (elementwise maxima, not reductions over small stacked axes: those run ~10× slower on CPU)
     z_r_c = jax.lax.stop_gradient(z_r)
-    tail_estimate = jnp.maximum(_tail_estimate(z_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_c[0]), _tail_estimate(z_r_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_r_c[0]))
+    tail_estimate = jnp.maximum(
+        _tail_estimate(z_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_c[0]),
+        _tail_estimate(z_r_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_r_c[0]),
+    )
     # the Taylor remainders in ε, and round-off in the rows of the higher Taylor terms (large for large n)
     e_c = jnp.abs(jax.lax.stop_gradient(e))
     shift_estimate = (e_c * d1 / jnp.maximum(consts[1].radius_m * 2.0 - d1, 1e-300)) ** k_sub
-    shift_estimate = shift_estimate + np.finfo(np.float64).eps * _horner(jnp.asarray(_row_norms(n_nodes)), e_c)
+    shift_estimate = shift_estimate + np.finfo(np.float64).eps * _horner(
+        jnp.asarray(_row_norms(n_nodes)), e_c
+    )
     # the φ rule: a priori from the nearest singularities, a posteriori from the integrands'
     # Legendre tail (the rule's error falls as the square of the interpolant's)
     legendre_rows = jnp.asarray(_legendre_tail(m_phi)).T
     phi_estimate = _phi_rule_error(d_max_c, jax.lax.stop_gradient(two_r), m_phi)
     for rate in (rate_c, rate_r):
         a = jax.lax.stop_gradient(rate) @ legendre_rows
-        phi_estimate = jnp.maximum(phi_estimate, ((jnp.abs(a[1]) + jnp.abs(a[2])) / jnp.abs(a[0])) ** 2)
+        phi_estimate = jnp.maximum(
+            phi_estimate, ((jnp.abs(a[1]) + jnp.abs(a[2])) / jnp.abs(a[0])) ** 2
+        )
     error = jnp.maximum(jnp.maximum(tail_estimate, shift_estimate), phi_estimate)
 
     # δ_max beyond the deflection bound: the root lies past d1 = d_limit (G(d_limit) < M v0²/4R)
     # or past d_limit; trusted only where the interpolant is accurate (else solver_failed).
     at_limit = d1 >= consts[4] * (1.0 - 1e-12)
     shift_ok = jnp.abs(e) <= MAX_SHIFT
-    beyond = (tail_estimate <= RULE_TOLERANCE) & ((at_limit & (z_c[0] * d1 < consts[3])) | (shift_ok & (d_max_c > consts[4])))
+    beyond = (tail_estimate <= RULE_TOLERANCE) & (
+        (at_limit & (z_c[0] * d1 < consts[3])) | (shift_ok & (d_max_c > consts[4]))
+    )
     singular = beyond & (consts[4] >= jax.lax.stop_gradient(d_singular) * (1.0 - 1e-12))
-    finite = functools.reduce(jnp.logical_and, [jnp.isfinite(x) for x in (d_max, t_compression, t_restitution, v_out, peak)])
+    finite = functools.reduce(
+        jnp.logical_and,
+        [jnp.isfinite(x) for x in (d_max, t_compression, t_restitution, v_out, peak)],
+    )
     failed = ~finite | (residual > RESIDUAL_TOLERANCE) | ~shift_ok | ~(error <= RULE_TOLERANCE)
     status = jnp.select(
         [singular, beyond, failed],
-        [STATUS_CODES["mass_singularity"], STATUS_CODES["deflection_limit"], STATUS_CODES["solver_failed"]],
+        [
+            STATUS_CODES["mass_singularity"],
+            STATUS_CODES["deflection_limit"],
+            STATUS_CODES["solver_failed"],
+        ],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
     return _Scalars(v0, d_max, t_compression, t_restitution, v_out, peak, error, status)
@@ -406,7 +447,9 @@ def _num_force_evaluations(n: int) -> int:
     return BRACKET_NODES + n - 2
 
 
-def quadrature_error_estimate(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFAULT_NODES) -> jax.Array:
+def quadrature_error_estimate(
+    height_m, ball: Ball, model: Model, *, n_nodes: int = DEFAULT_NODES
+) -> jax.Array:
     """The scalar path's error estimate for ONE impact (statuses ``ok`` need it ≤ RULE_TOLERANCE):
     the larger of the interpolants' Chebyshev tail (relative), the φ rule's ρ^(−2n) and the Taylor
     remainder in ε."""
@@ -418,7 +461,9 @@ def quadrature_error_estimate(height_m, ball: Ball, model: Model, *, n_nodes: in
 # Force histories: nested Gauss–Legendre rules in σ, δ = δ_max(1 − σ²).
 
 
-def impact_quadrature(height_m, ball: Ball, model: Model, *, n_nodes: int = DEFAULT_NODES) -> ImpactScalars:
+def impact_quadrature(
+    height_m, ball: Ball, model: Model, *, n_nodes: int = DEFAULT_NODES
+) -> ImpactScalars:
     """Scalar outputs of ONE elastic impact by quadrature (same fields and status codes as the ODE).
 
     Args:
@@ -471,10 +516,19 @@ def _impact_positional(height_m, ball, model, n_nodes):
 _batch = eqx.filter_jit(eqx.filter_vmap(_impact_positional, in_axes=(0, 0, 0, None)))
 
 
-def impact_quadrature_batch(height_m, ball: Ball, model: Model, n_nodes: int = DEFAULT_NODES) -> ImpactScalars:
+def impact_quadrature_batch(
+    height_m, ball: Ball, model: Model, n_nodes: int = DEFAULT_NODES
+) -> ImpactScalars:
     """``impact_quadrature`` jitted and vmapped over a leading batch axis of height, ball and model
     array leaves (like ``impact.impact_batch``); model leaves given as scalars (e.g. the default
     ``momentum_flux_weight``) are broadcast to the batch."""
     n = jnp.shape(height_m)[0]
-    model = jax.tree_util.tree_map(lambda x: jnp.broadcast_to(jnp.asarray(x, dtype=jnp.float64), (n,) + jnp.shape(x)[1:]) if jnp.ndim(x) == 0 else x, model)
+    model = jax.tree_util.tree_map(
+        lambda x: (
+            jnp.broadcast_to(jnp.asarray(x, dtype=jnp.float64), (n,) + jnp.shape(x)[1:])
+            if jnp.ndim(x) == 0
+            else x
+        ),
+        model,
+    )
     return _batch(height_m, ball, model, n_nodes)

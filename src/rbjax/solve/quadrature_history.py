@@ -55,7 +55,9 @@ def _max_deflection(v0, ball, model, x, w, d_limit):
     start = jnp.minimum(v0_c * jnp.sqrt(ball_c.mass_kg / k), jax.lax.stop_gradient(d_limit))
 
     def step(_, d):
-        return d - _compression_residual(d, v0_c, ball_c, model_c, x, w) / _compression_slope(d, ball_c, model_c)
+        return d - _compression_residual(d, v0_c, ball_c, model_c, x, w) / _compression_slope(
+            d, ball_c, model_c
+        )
 
     d = jax.lax.stop_gradient(jax.lax.fori_loop(0, NEWTON_STEPS, step, start))
     slope = jax.lax.stop_gradient(_compression_slope(d, ball_c, model_c))
@@ -68,7 +70,9 @@ def _phase_weights(sigma, d_max, ball, model, x, w):
     s = d_max * (1.0 - sigma[..., None] ** 2 * x)
     f = _force(s, ball, model)
     scale = 4.0 * ball.radius_m * d_max / ball.mass_kg
-    return scale * jnp.sum(w * f / (two_r - s), axis=-1), scale * jnp.sum(w * f * (two_r - s), axis=-1)
+    return scale * jnp.sum(w * f / (two_r - s), axis=-1), scale * jnp.sum(
+        w * f * (two_r - s), axis=-1
+    )
 
 
 def _time_rates(sigma, d_max, ball, model, x, w):
@@ -111,24 +115,39 @@ def _solve(height_m, ball, model, n_nodes) -> _Solution:
     singular = _compression_residual(d_singular, v0, ball, model, x, w) > 0.0
     too_deep = _compression_residual(d_limit, v0, ball, model, x, w) > 0.0
     d_max = _max_deflection(v0, ball, model, x, w, d_limit)
-    converged = jnp.abs(_compression_residual(d_max, v0, ball, model, x, w)) <= RESIDUAL_TOLERANCE * v0**2
+    converged = (
+        jnp.abs(_compression_residual(d_max, v0, ball, model, x, w)) <= RESIDUAL_TOLERANCE * v0**2
+    )
 
     rate_c, rate_r = _time_rates(x, d_max, ball, model, x, w)
     t_compression = jnp.sum(w * rate_c)
     t_restitution = jnp.sum(w * rate_r)
     s = d_max * x
-    v_out = jnp.sqrt(d_max * jnp.sum(w * _force(s, ball, model) * (two_r - s)) / (ball.mass_kg * ball.radius_m))
+    v_out = jnp.sqrt(
+        d_max * jnp.sum(w * _force(s, ball, model) * (two_r - s)) / (ball.mass_kg * ball.radius_m)
+    )
 
     finite = jnp.all(jnp.isfinite(jnp.stack([d_max, t_compression, t_restitution, v_out])))
     status = jnp.select(
-        [singular, too_deep, ~(converged & finite) | (rule_error_estimate(d_max, two_r, n_nodes) > HISTORY_RULE_TOLERANCE)],
-        [STATUS_CODES["mass_singularity"], STATUS_CODES["deflection_limit"], STATUS_CODES["solver_failed"]],
+        [
+            singular,
+            too_deep,
+            ~(converged & finite)
+            | (rule_error_estimate(d_max, two_r, n_nodes) > HISTORY_RULE_TOLERANCE),
+        ],
+        [
+            STATUS_CODES["mass_singularity"],
+            STATUS_CODES["deflection_limit"],
+            STATUS_CODES["solver_failed"],
+        ],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
     return _Solution(v0, d_max, t_compression, t_restitution, v_out, status)
 
 
-def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_nodes: int = HISTORY_NODES) -> Trajectory:
+def force_history_quadrature(
+    height_m, ball: Ball, model: Model, times_s, *, n_nodes: int = HISTORY_NODES
+) -> Trajectory:
     """Deflection, velocity and floor force of ONE elastic impact at the given times (0 after contact).
 
     t(δ) is inverted on each phase in the variable σ of δ = δ_max(1 − σ²), where the time from
@@ -150,7 +169,9 @@ def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_n
     d_max, t_c, t_r = sol.d_max, sol.t_compression, sol.t_restitution
     compressing = times <= t_c
     # Time still to go to maximum compression, or already spent since it, clipped to the phase.
-    target = jnp.where(compressing, jnp.clip(t_c - times, 0.0, t_c), jnp.clip(times - t_c, 0.0, t_r))
+    target = jnp.where(
+        compressing, jnp.clip(t_c - times, 0.0, t_c), jnp.clip(times - t_c, 0.0, t_r)
+    )
     length = jnp.where(compressing, t_c, t_r)
 
     def rate(sigma, d_max, ball, model, phase=compressing):
@@ -158,7 +179,9 @@ def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_n
         return jnp.where(phase, rate_c, rate_r)
 
     def tau(sigma, d_max, ball, model):  # ∫₀^σ rate: the n-point rule at σ·x for every sample
-        return sigma * jnp.sum(w * rate(sigma[:, None] * x, d_max, ball, model, compressing[:, None]), axis=-1)
+        return sigma * jnp.sum(
+            w * rate(sigma[:, None] * x, d_max, ball, model, compressing[:, None]), axis=-1
+        )
 
     consts = jax.lax.stop_gradient((d_max, ball, model))
     target_c = jax.lax.stop_gradient(target)
@@ -169,13 +192,21 @@ def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_n
 
     start = jnp.sqrt(2.0) * jnp.sin(0.25 * jnp.pi * target_c / jax.lax.stop_gradient(length))
     sigma = jax.lax.stop_gradient(jax.lax.fori_loop(0, HISTORY_NEWTON_STEPS, step, start))
-    sigma = sigma - (tau(sigma, d_max, ball, model) - target) / jax.lax.stop_gradient(rate(sigma, *consts))
+    sigma = sigma - (tau(sigma, d_max, ball, model) - target) / jax.lax.stop_gradient(
+        rate(sigma, *consts)
+    )
 
     deflection = d_max * (1.0 - sigma**2)
     w_c, w_r = _phase_weights(sigma, d_max, ball, model, x, w)
-    velocity = jnp.where(compressing, sigma * jnp.sqrt(w_c), -sigma * jnp.sqrt(w_r) / (2.0 * ball.radius_m - deflection))
+    velocity = jnp.where(
+        compressing,
+        sigma * jnp.sqrt(w_c),
+        -sigma * jnp.sqrt(w_r) / (2.0 * ball.radius_m - deflection),
+    )
     force = _force(deflection, ball, model)
-    force = force + model.momentum_flux_weight * jnp.where(compressing, ball.mass_kg / (2.0 * ball.radius_m) * sigma**2 * w_c, 0.0)
+    force = force + model.momentum_flux_weight * jnp.where(
+        compressing, ball.mass_kg / (2.0 * ball.radius_m) * sigma**2 * w_c, 0.0
+    )
 
     inside = (times >= 0.0) & (times < t_c + t_r)
     ok = sol.status == 0
@@ -183,4 +214,11 @@ def force_history_quadrature(height_m, ball: Ball, model: Model, times_s, *, n_n
     def out(a):
         return jnp.where(ok, jnp.where(inside, a, 0.0), jnp.nan)
 
-    return Trajectory(time_s=times, deflection_m=out(deflection), velocity_m_per_s=out(velocity), force_N=out(force), in_contact=inside & ok, status=sol.status)
+    return Trajectory(
+        time_s=times,
+        deflection_m=out(deflection),
+        velocity_m_per_s=out(velocity),
+        force_N=out(force),
+        in_contact=inside & ok,
+        status=sol.status,
+    )

@@ -98,7 +98,9 @@ def _force_and_rate(y, ydot, ball, model):
     return force, rate, inside
 
 
-def record_samples(height_m, shift_s, ball, model: Model, rate_Hz: float, num_samples: int, substeps: int):
+def record_samples(
+    height_m, shift_s, ball, model: Model, rate_Hz: float, num_samples: int, substeps: int
+):
     """(force (N,), dforce/dshift (N,), status) of one impact at the record's samples
     t_i = i/rate_Hz, i < ``num_samples``, the contact starting at ``shift_s`` (see the module
     docstring)."""
@@ -130,11 +132,19 @@ def record_samples(height_m, shift_s, ball, model: Model, rate_Hz: float, num_sa
         bad = bad | (going & broken)
         going = going & inside & ~broken
         out = (jnp.where(going, c_j * f, 0.0), jnp.where(going, -(d_j * f + e_j * r), 0.0))
-        return (jnp.where(going, y_new, y), jnp.where(going, k_new, k), going, bad, singular_hit), out
+        return (
+            jnp.where(going, y_new, y),
+            jnp.where(going, k_new, k),
+            going,
+            bad,
+            singular_hit,
+        ), out
 
     false = jnp.asarray(False)
     k0 = _RESTITUTION(0.0, y0, args)
-    (_, _, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(step, (y0, k0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate))
+    (_, _, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(
+        step, (y0, k0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate)
+    )
 
     # place the contact-relative samples j at record samples n0 + j
     i = jnp.arange(num_samples)
@@ -143,6 +153,10 @@ def record_samples(height_m, shift_s, ball, model: Model, rate_Hz: float, num_sa
     jj = jnp.clip(j, 0, num_samples - 1)
     force = jnp.where(valid, hist_f[jj], 0.0)
     d_shift = jnp.where(valid, hist_d[jj], 0.0)
-    status = jnp.where(singular_hit, STATUS_CODES["mass_singularity"], jnp.where(bad, STATUS_CODES["solver_failed"], STATUS_CODES["ok"])).astype(jnp.int32)
+    status = jnp.where(
+        singular_hit,
+        STATUS_CODES["mass_singularity"],
+        jnp.where(bad, STATUS_CODES["solver_failed"], STATUS_CODES["ok"]),
+    ).astype(jnp.int32)
     failed = status != 0
     return jnp.where(failed, jnp.nan, force), jnp.where(failed, jnp.nan, d_shift), status

@@ -83,7 +83,11 @@ def _hermite_max(d0, v0, d1, v1, dt):
     a, b = d0 - d1, dt
 
     def slope(s):
-        return (6.0 * s * s - 6.0 * s) * a + (3.0 * s * s - 4.0 * s + 1.0) * b * v0 + (3.0 * s * s - 2.0 * s) * b * v1
+        return (
+            (6.0 * s * s - 6.0 * s) * a
+            + (3.0 * s * s - 4.0 * s + 1.0) * b * v0
+            + (3.0 * s * s - 2.0 * s) * b * v1
+        )
 
     def curvature(s):
         return (12.0 * s - 6.0) * a + (6.0 * s - 4.0) * b * v0 + (6.0 * s - 2.0) * b * v1
@@ -93,7 +97,12 @@ def _hermite_max(d0, v0, d1, v1, dt):
         c = curvature(s)
         s = jnp.clip(s - slope(s) / jnp.where(c < 0.0, c, -1.0), 0.0, 1.0)
     s2, s3 = s * s, s * s * s
-    value = (2.0 * s3 - 3.0 * s2 + 1.0) * d0 + (s3 - 2.0 * s2 + s) * b * v0 + (-2.0 * s3 + 3.0 * s2) * d1 + (s3 - s2) * b * v1
+    value = (
+        (2.0 * s3 - 3.0 * s2 + 1.0) * d0
+        + (s3 - 2.0 * s2 + s) * b * v0
+        + (-2.0 * s3 + 3.0 * s2) * d1
+        + (s3 - s2) * b * v1
+    )
     return jnp.maximum(value, jnp.maximum(d0, d1))
 
 
@@ -138,14 +147,25 @@ def _sampled_history(height_m, ball, model: Model, rate_Hz, num_samples: int, su
         bad = bad | (going & broken)
         ended = ended | (going & ~broken & ~inside)
         going = ~(ended | bad)
-        carry = (jnp.where(going, yn, y), jnp.where(going, kn, k1), jnp.where(going, fn, force), going, ended, bad, singular_hit, i + 1)
+        carry = (
+            jnp.where(going, yn, y),
+            jnp.where(going, kn, k1),
+            jnp.where(going, fn, force),
+            going,
+            ended,
+            bad,
+            singular_hit,
+            i + 1,
+        )
         return carry, record
 
     k0, f0, _ = _sample(y0, ball, model)
     false = jnp.asarray(False)
     start = (y0, k0, f0, jnp.asarray(True), false, false, false, jnp.asarray(0))
     # the step after the last sample records nothing; it tells whether the contact outlasts them
-    (_, _, _, _, ended, bad, singular_hit, _), records = jax.lax.scan(step, start, None, length=num_samples)
+    (_, _, _, _, ended, bad, singular_hit, _), records = jax.lax.scan(
+        step, start, None, length=num_samples
+    )
     d, v, f = records[:, 0], records[:, 1], records[:, 2]
     inside = (jnp.arange(num_samples) == 0) | (d > 0.0)
 
@@ -153,8 +173,18 @@ def _sampled_history(height_m, ball, model: Model, rate_Hz, num_samples: int, su
     still_going = ~(ended | bad)
     singular_hit = singular_hit | (d_max >= singular * (1.0 - 1e-9))
     status = jnp.select(
-        [still_going, singular_hit, bad | ~jnp.isfinite(d_max), d_max > model.max_deflection_ratio * ball.wall_m],
-        [STATUS_CODES["step_limit"], STATUS_CODES["mass_singularity"], STATUS_CODES["solver_failed"], STATUS_CODES["deflection_limit"]],
+        [
+            still_going,
+            singular_hit,
+            bad | ~jnp.isfinite(d_max),
+            d_max > model.max_deflection_ratio * ball.wall_m,
+        ],
+        [
+            STATUS_CODES["step_limit"],
+            STATUS_CODES["mass_singularity"],
+            STATUS_CODES["solver_failed"],
+            STATUS_CODES["deflection_limit"],
+        ],
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
     failed = status != 0
@@ -187,7 +217,9 @@ def substeps_for_contact(contact_time_s, rate_Hz: float) -> int:
     finite = tc[np.isfinite(tc) & (tc > 0.0)]
     if finite.size == 0:
         return DEFAULT_SUBSTEPS
-    return max(DEFAULT_SUBSTEPS, math.ceil(MIN_STEPS_PER_CONTACT / (float(np.min(finite)) * rate_Hz)))
+    return max(
+        DEFAULT_SUBSTEPS, math.ceil(MIN_STEPS_PER_CONTACT / (float(np.min(finite)) * rate_Hz))
+    )
 
 
 @eqx.filter_jit
@@ -196,16 +228,29 @@ def _sampled_program(height_m, ball, model, rate_Hz, num_samples: int, substeps:
     dispatch): one per batch shape, ``num_samples``, ``substeps`` and model structure."""
     shape, height, ball, model = broadcast_inputs(height_m, ball, model)
     solve = jax.vmap(lambda h, b, m: _sampled_history(h, b, m, rate_Hz, num_samples, substeps))
-    out = jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), solve(height, ball, model))
+    out = jax.tree_util.tree_map(
+        lambda x: x.reshape(shape + x.shape[1:]), solve(height, ball, model)
+    )
     return jnp.arange(num_samples) / rate_Hz, out
 
 
-def sampled_solve(height_m, ball: Ball, model: Model, rate_Hz, num_samples: int, substeps: int) -> Trajectory:
+def sampled_solve(
+    height_m, ball: Ball, model: Model, rate_Hz, num_samples: int, substeps: int
+) -> Trajectory:
     """``sampled_history`` after its checks, with ``time_s`` the 1-D sample grid (not repeated
     per impact)."""
     height, ball, model, rate = as_arrays((height_m, ball, model, rate_Hz))
-    times, (d, v, f, inside, status) = _sampled_program(height, ball, model, rate, num_samples, substeps)
-    return Trajectory(time_s=times, deflection_m=d, velocity_m_per_s=v, force_N=f, in_contact=inside, status=status)
+    times, (d, v, f, inside, status) = _sampled_program(
+        height, ball, model, rate, num_samples, substeps
+    )
+    return Trajectory(
+        time_s=times,
+        deflection_m=d,
+        velocity_m_per_s=v,
+        force_N=f,
+        in_contact=inside,
+        status=status,
+    )
 
 
 @eqx.filter_jit
@@ -256,7 +301,9 @@ def sampled_history(
         raise ValueError(f"model={model!r} must be an rbjax.Model")
     reason = sampled_history_unsupported(model)
     if reason is not None:
-        raise ValueError(f"sampled_history cannot solve this model: {reason}; use rbjax.trajectory (the ODE)")
+        raise ValueError(
+            f"sampled_history cannot solve this model: {reason}; use rbjax.trajectory (the ODE)"
+        )
     check_inputs(height_m, ball)
     num_samples = _count("num_samples", num_samples)
     substeps = _count("substeps", substeps)

@@ -80,7 +80,10 @@ def _to_host(x: jax.Array) -> np.ndarray:
 @functools.lru_cache(maxsize=32)
 def _sharded(fn: Callable, devices: tuple) -> Callable:
     mesh = Mesh(np.array(devices), (BATCH_AXIS,))
-    batch, replicated = NamedSharding(mesh, PartitionSpec(BATCH_AXIS)), NamedSharding(mesh, PartitionSpec())
+    batch, replicated = (
+        NamedSharding(mesh, PartitionSpec(BATCH_AXIS)),
+        NamedSharding(mesh, PartitionSpec()),
+    )
     return jax.jit(fn, in_shardings=(batch, replicated), out_shardings=batch)
 
 
@@ -112,8 +115,12 @@ def sharded_map(
         raise ValueError("inputs must be a pytree of arrays with a leading batch axis")
     n = leaves[0].shape[0]
     if n == 0 or any(x.shape[:1] != (n,) for x in leaves):
-        raise ValueError(f"inputs must share a non-empty leading axis; got shapes {[x.shape for x in leaves]}")
-    chunk_size = min(chunk_size, math.ceil(n / len(devices)))  # a small study pads no further than one chunk
+        raise ValueError(
+            f"inputs must share a non-empty leading axis; got shapes {[x.shape for x in leaves]}"
+        )
+    chunk_size = min(
+        chunk_size, math.ceil(n / len(devices))
+    )  # a small study pads no further than one chunk
     step = chunk_size * len(devices)
     n_steps = math.ceil(n / step)
     pad = n_steps * step - n
@@ -127,7 +134,9 @@ def sharded_map(
     from tqdm import tqdm  # a text bar on stderr, also inside notebooks
 
     outs = []
-    with tqdm(total=n, desc=desc, unit="eval", file=sys.stderr, disable=not progress, leave=False) as bar:
+    with tqdm(
+        total=n, desc=desc, unit="eval", file=sys.stderr, disable=not progress, leave=False
+    ) as bar:
         for k in range(n_steps):
             chunk = [_global_array(x[k * step : (k + 1) * step], sharding) for x in leaves]
             out = mapped(jax.tree_util.tree_unflatten(treedef, chunk), shared)

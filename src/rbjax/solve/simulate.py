@@ -38,8 +38,6 @@ from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
 METHODS = ("auto", "ode", "quadrature", "angle")
 
 
-
-
 class _Unset:
     """The default of a keyword option not given (``None`` is a value some options refuse)."""
 
@@ -50,7 +48,17 @@ class _Unset:
 UNSET: Any = _Unset()
 
 
-def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffening=None, max_deflection_ratio=2.0, ball_mode=None, floor=None, series=None) -> Model:
+def make_model(
+    *,
+    gas="adiabatic",
+    blocked_force="paper",
+    damping=None,
+    stiffening=None,
+    max_deflection_ratio=2.0,
+    ball_mode=None,
+    floor=None,
+    series=None,
+) -> Model:
     """A ``Model`` from the keyword options of ``simulate`` (validated)."""
     return Model(
         gas=gas,
@@ -62,7 +70,6 @@ def make_model(*, gas="adiabatic", blocked_force="paper", damping=None, stiffeni
         floor=floor,
         series=series,
     )
-
 
 
 def quadrature_unsupported(model: Model) -> str | None:
@@ -91,7 +98,9 @@ def resolve_method(method: str, model: Model, solver: Solver | None = None) -> s
     reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
     if method in reasons:
         if reasons[method] is not None:
-            raise ValueError(f"method={method!r} cannot solve this model: {reasons[method]}; valid: method='ode' or method='auto'")
+            raise ValueError(
+                f"method={method!r} cannot solve this model: {reasons[method]}; valid: method='ode' or method='auto'"
+            )
         return method
     if method == "ode" or solver is not None:
         return "ode"
@@ -143,7 +152,9 @@ class ImpactResult(eqx.Module):
         codes = np.asarray(self.status).reshape(-1)
         if np.any(codes != 0):
             heights = np.broadcast_to(np.asarray(self.height_m), np.shape(self.status)).reshape(-1)
-            bad = [f"height_m={h:g}: {STATUS_NAMES[int(c)]}" for h, c in zip(heights, codes) if c != 0]
+            bad = [
+                f"height_m={h:g}: {STATUS_NAMES[int(c)]}" for h, c in zip(heights, codes) if c != 0
+            ]
             raise RuntimeError("impact solve failed: " + "; ".join(bad[:10]))
         return self
 
@@ -158,7 +169,9 @@ class ImpactResult(eqx.Module):
         contact)."""
         return self.history().force_N
 
-    def history(self, rate_Hz: float | None = None, duration_s: float | None = None, *, pad: bool = True) -> Trajectory:
+    def history(
+        self, rate_Hz: float | None = None, duration_s: float | None = None, *, pad: bool = True
+    ) -> Trajectory:
         """Deflection, velocity and floor force sampled at ``rate_Hz`` over ``duration_s``.
 
         Only the samples during contact are integrated; the rest of the record is zero (with
@@ -170,7 +183,16 @@ class ImpactResult(eqx.Module):
         """
         rate = self.rate_Hz if rate_Hz is None else rate_Hz
         duration = self.duration_s if duration_s is None else duration_s
-        return force_history(self.height_m, self.ball, self.model, self.solver, rate_Hz=rate, duration_s=duration, contact_time_s=self.contact_time_s, pad=pad)
+        return force_history(
+            self.height_m,
+            self.ball,
+            self.model,
+            self.solver,
+            rate_Hz=rate,
+            duration_s=duration,
+            contact_time_s=self.contact_time_s,
+            pad=pad,
+        )
 
     def lfe_octave_dB(self) -> jax.Array:
         """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.levels.lfe_octave_dB``) of the force record
@@ -178,20 +200,27 @@ class ImpactResult(eqx.Module):
         shape (..., 6), NaN where the solve failed."""
         from ..spectrum.levels import lfe_octave_dB
 
-        return lfe_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
+        return lfe_octave_dB(
+            self.history(pad=False).force_N,
+            self.rate_Hz,
+            n_record=int(round(self.rate_Hz * self.duration_s)),
+        )
 
     def lfe_third_octave_dB(self) -> jax.Array:
         """One-third-octave-band L_FE of the force record, as ``lfe_octave_dB``; shape (..., 18)."""
         from ..spectrum.levels import lfe_third_octave_dB
 
-        return lfe_third_octave_dB(self.history(pad=False).force_N, self.rate_Hz, n_record=int(round(self.rate_Hz * self.duration_s)))
+        return lfe_third_octave_dB(
+            self.history(pad=False).force_N,
+            self.rate_Hz,
+            n_record=int(round(self.rate_Hz * self.duration_s)),
+        )
 
     def plot(self, ax=None, *, rate_Hz: float | None = None):
         """Plot the force histories over the contact (one line per height)."""
         from ..plot import plot_histories
 
         return plot_histories(self, ax=ax, rate_Hz=rate_Hz)
-
 
 
 def simulate(
@@ -245,27 +274,63 @@ def simulate(
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
     options = {
-        "gas": gas, "blocked_force": blocked_force, "damping": damping, "stiffening": stiffening,
-        "max_deflection_ratio": max_deflection_ratio, "ball_mode": ball_mode, "floor": floor, "series": series,
+        "gas": gas,
+        "blocked_force": blocked_force,
+        "damping": damping,
+        "stiffening": stiffening,
+        "max_deflection_ratio": max_deflection_ratio,
+        "ball_mode": ball_mode,
+        "floor": floor,
+        "series": series,
     }
-    given = {k: v for k, v in options.items() if v is not UNSET and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor", "series"))}
+    given = {
+        k: v
+        for k, v in options.items()
+        if v is not UNSET
+        and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor", "series"))
+    }
     if model is None:
         model = make_model(**given)
     elif not isinstance(model, Model):
-        raise ValueError(f"model={model!r} must be an rbjax.Model (or None, to build one from the keywords)")
+        raise ValueError(
+            f"model={model!r} must be an rbjax.Model (or None, to build one from the keywords)"
+        )
     elif given:
-        raise ValueError(f"simulate got model= and the keyword options {sorted(given)}: give the options in the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out")
+        raise ValueError(
+            f"simulate got model= and the keyword options {sorted(given)}: give the options in the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out"
+        )
     path = resolve_method(method, model, solver)
     solver = Solver() if solver is None else solver
-    return _simulate(height_m, ball, model, solver, rate_Hz=rate_Hz, duration_s=duration_s, method=path, fallback=method == "auto")
+    return _simulate(
+        height_m,
+        ball,
+        model,
+        solver,
+        rate_Hz=rate_Hz,
+        duration_s=duration_s,
+        method=path,
+        fallback=method == "auto",
+    )
 
 
-def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, method="ode", fallback=False) -> ImpactResult:
+def _simulate(
+    height_m,
+    ball,
+    model,
+    solver,
+    *,
+    rate_Hz=PAPER_RATE_Hz,
+    duration_s=PAPER_DURATION_S,
+    method="ode",
+    fallback=False,
+) -> ImpactResult:
     if method in ("quadrature", "angle"):
         height, out, method = _fast_scalars(method, height_m, ball, model, solver, fallback)
     else:
         shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
-        out = jax.tree_util.tree_map(lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver))
+        out = jax.tree_util.tree_map(
+            lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver)
+        )
         height = flat_height.reshape(shape)
     return ImpactResult(
         height_m=height,
@@ -283,7 +348,6 @@ def _simulate(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_
         duration_s=float(duration_s),
         method=method,
     )
-
 
 
 @eqx.filter_jit
@@ -317,11 +381,19 @@ def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
     pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
     redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
     index = jnp.asarray(failed)
-    out = jax.tree_util.tree_map(lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo)
+    out = jax.tree_util.tree_map(
+        lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo
+    )
     return height, out, path + "+ode"
 
 
-def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_BALL, model: Model | None = None, solver: Solver | None = None) -> Trajectory:
+def trajectory(
+    height_m: ArrayLike,
+    times_s: ArrayLike,
+    ball: Ball = JIS_RUBBER_BALL,
+    model: Model | None = None,
+    solver: Solver | None = None,
+) -> Trajectory:
     """State and floor force at the given times (1-D, shared by all heights); differentiable.
 
     The building block for fitting: ``times_s`` is static in shape, so this jits and goes
@@ -339,7 +411,18 @@ def trajectory(height_m: ArrayLike, times_s: ArrayLike, ball: Ball = JIS_RUBBER_
     return jax.tree_util.tree_map(lambda x: x.reshape(shape + x.shape[1:]), traj)
 
 
-def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, duration_s=PAPER_DURATION_S, contact_time_s=None, method="auto", pad=True) -> Trajectory:
+def force_history(
+    height_m,
+    ball,
+    model,
+    solver,
+    *,
+    rate_Hz=PAPER_RATE_Hz,
+    duration_s=PAPER_DURATION_S,
+    contact_time_s=None,
+    method="auto",
+    pad=True,
+) -> Trajectory:
     """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
 
     Only the first ⌈t_c·rate⌉ + 2 samples are integrated (t_c: the longest contact time of the
@@ -365,7 +448,9 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
         path = resolve_method("auto", model)
-        contact_time_s = _simulate(height_m, ball, model, solver, method=path, fallback=True).contact_time_s
+        contact_time_s = _simulate(
+            height_m, ball, model, solver, method=path, fallback=True
+        ).contact_time_s
     tc = None if is_traced(contact_time_s) else np.asarray(contact_time_s, dtype=float)
     if tc is None:
         n_contact = n_total
@@ -373,16 +458,25 @@ def force_history(height_m, ball, model, solver, *, rate_Hz=PAPER_RATE_Hz, durat
         longest = np.nanmax(tc) if np.any(np.isfinite(tc)) else 0.0
         n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
     default_solver = solver is None or solver == Solver()
-    sampled = method == "auto" and n_contact < n_total and default_solver and sampled_history_unsupported(model) is None
+    sampled = (
+        method == "auto"
+        and n_contact < n_total
+        and default_solver
+        and sampled_history_unsupported(model) is None
+    )
 
     def solve(n):
         if sampled:
-            return sampled_solve(height_m, ball, model, rate_Hz, n, substeps_for_contact(tc, rate_Hz))
+            return sampled_solve(
+                height_m, ball, model, rate_Hz, n, substeps_for_contact(tc, rate_Hz)
+            )
         return trajectory(height_m, jnp.arange(n) / rate_Hz, ball, model, solver)
 
     def outlasts(traj):
         """The contact goes on after the last sample computed (the ODE: is in contact there)."""
-        return np.asarray(traj.status == STATUS_CODES["step_limit"] if sampled else traj.in_contact[..., -1])
+        return np.asarray(
+            traj.status == STATUS_CODES["step_limit"] if sampled else traj.in_contact[..., -1]
+        )
 
     traj = solve(n_contact)
     if n_contact < n_total and not is_traced(traj.status) and np.any(outlasts(traj)):

@@ -60,7 +60,9 @@ def body_velocity_m_per_s(y, ball, model):
 
 def _series_velocity(y, ball, model):
     """ẇ = −(w + C F_c)/τ of the series element (``rbjax.terms.series_kelvin_voigt``)."""
-    return model.series.velocity_m_per_s(model.series_states(y[2:])[0], _contact_force(y, ball, model))
+    return model.series.velocity_m_per_s(
+        model.series_states(y[2:])[0], _contact_force(y, ball, model)
+    )
 
 
 def _vector_field(flux_on: bool, energy: bool = False):
@@ -87,8 +89,12 @@ def _vector_field(flux_on: bool, energy: bool = False):
             # F_c and G = ∂F_c/∂δ δ̇ + ∂F_c/∂z ż in one forward pass, H = ∂F_c/∂δ̇ (the damping
             # laws only) in another: the series element's dF_c/dt = G + H δ̈
             zd = z[: model.num_damping_states]
-            force, g_c = jax.jvp(lambda dd, zz: contact_force_N(dd, v, zz, ball, model), (d, zd), (v, parts[0]))
-            h_c = jax.jvp(lambda vv: damping_force_N(d, vv, zd, ball, model), (v,), (jnp.ones_like(v),))[1]
+            force, g_c = jax.jvp(
+                lambda dd, zz: contact_force_N(dd, v, zz, ball, model), (d, zd), (v, parts[0])
+            )
+            h_c = jax.jvp(
+                lambda vv: damping_force_N(d, vv, zd, ball, model), (v,), (jnp.ones_like(v),)
+            )[1]
         thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
         accel = (thrust - force) / dynamic_mass_kg(d, ball)
         if model.ball_mode is not None:
@@ -114,7 +120,9 @@ def _vector_field(flux_on: bool, energy: bool = False):
             accel = accel - floor.acceleration_m_per_s2(states, ff)
             if floor.massless:
                 nd = model.num_damping_states
-                ydot = jnp.concatenate([jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)])
+                ydot = jnp.concatenate(
+                    [jnp.stack([v, jnp.zeros_like(v)]), parts[0], jnp.zeros(y.shape[0] - 2 - nd)]
+                )
                 force_of = lambda yy: floor_force_N(yy, ball, model)  # noqa: E731
                 _, g = jax.jvp(force_of, (y,), (ydot,))
                 _, h = jax.jvp(force_of, (y,), (jnp.zeros_like(y).at[1].set(1.0),))
@@ -142,8 +150,13 @@ def _energy_rates(y, ball, model):
     u_dot = floor_velocity_m_per_s(y, ball, model)
     flux = momentum_flux_N(v, ball)
     per_speed = ball.mass_kg / (2.0 * ball.radius_m)
-    cap = 0.5 * per_speed * v * u_dot**2 + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
-    return jnp.stack([ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap])
+    cap = (
+        0.5 * per_speed * v * u_dot**2
+        + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
+    )
+    return jnp.stack(
+        [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap]
+    )
 
 
 def _split_energy(y, model):

@@ -111,5 +111,3 @@ def nominal_centres_Hz(fraction: int, fmin_Hz: float, fmax_Hz: float) -> list[st
 # R10 preferred numbers (ISO 3, ISO 266): the nominal mid-band frequencies of the
 # base-ten one-third-octave bands, IEC 61260-1:2014 Annex E, one decade.
 _R10 = ("1", "1.25", "1.6", "2", "2.5", "3.15", "4", "5", "6.3", "8")
-
-

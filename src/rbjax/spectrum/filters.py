@@ -33,7 +33,9 @@ __all__ = [
 ]
 
 
-def butter_lowpass_sos(order: int = 4, cutoff_Hz: float = 1250.0, rate_Hz: float = 44100.0) -> np.ndarray:
+def butter_lowpass_sos(
+    order: int = 4, cutoff_Hz: float = 1250.0, rate_Hz: float = 44100.0
+) -> np.ndarray:
     """Digital Butterworth low-pass as second-order sections, shape ``(ceil(order/2), 6)``.
 
     ``scipy.signal.butter(order, cutoff_Hz, fs=rate_Hz, output="sos")``: rows
@@ -95,4 +97,6 @@ def sosfilt_jax(sos, x) -> jax.Array:
 
 def lowpass_np(x, cutoff_Hz: float, rate_Hz: float, order: int = 4) -> np.ndarray:
     """Causal Butterworth low-pass of ``x`` along its last axis (``scipy.signal.sosfilt``)."""
-    return scipy.signal.sosfilt(butter_lowpass_sos(order, cutoff_Hz, rate_Hz), np.asarray(x, dtype=np.float64))
+    return scipy.signal.sosfilt(
+        butter_lowpass_sos(order, cutoff_Hz, rate_Hz), np.asarray(x, dtype=np.float64)
+    )

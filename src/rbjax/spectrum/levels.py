@@ -382,7 +382,9 @@ def _first_notch_bin(power, k_lo, k_hi):
     return 1 + jnp.argmax(is_min, axis=-1), jnp.any(is_min, axis=-1)
 
 
-def contact_resonance_Hz(force_N, rate_Hz, fmin_Hz: float = 20.0, fmax_Hz: float = 200.0) -> jax.Array:
+def contact_resonance_Hz(
+    force_N, rate_Hz, fmin_Hz: float = 20.0, fmax_Hz: float = 200.0
+) -> jax.Array:
     """The "fundamental contact resonance": the first minimum (notch) of the narrow-band
     force spectrum |F(f)| above ``fmin_Hz`` (paper §4.2, Fig. 12: 66 Hz at 10 cm and
     73 Hz at 160 cm drop height for a ~20 ms pulse; a half-sine of duration T has it at
@@ -465,7 +467,9 @@ def lfe_increase_per_doubling_dB(height_m, lfe_dB, ref_height_m: float = 1.0) ->
             "expected (n_heights,) and (n_heights, ...) with n_heights >= 2"
         )
     if not is_traced(height_m) and np.ptp(np.asarray(height_m, float)) == 0:
-        raise ValueError(f"height_m={np.asarray(height_m).tolist()} needs at least two distinct heights")
+        raise ValueError(
+            f"height_m={np.asarray(height_m).tolist()} needs at least two distinct heights"
+        )
     return _least_squares_slope(jnp.log2(h / ref_height_m), y)
 
 

@@ -22,7 +22,19 @@ from .selection import (
 from .sweep import load_config, run_sweep, write_outputs
 
 __all__ = [
-    "Growth", "GrowthError", "growth_per_doubling_dB", "growth_table", "model_growth",
-    "recording_growth", "Candidate", "Selection", "cross_validate", "held_out_comparison",
-    "recommend", "select_model", "load_config", "run_sweep", "write_outputs",
+    "Growth",
+    "GrowthError",
+    "growth_per_doubling_dB",
+    "growth_table",
+    "model_growth",
+    "recording_growth",
+    "Candidate",
+    "Selection",
+    "cross_validate",
+    "held_out_comparison",
+    "recommend",
+    "select_model",
+    "load_config",
+    "run_sweep",
+    "write_outputs",
 ]

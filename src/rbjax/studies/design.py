@@ -69,9 +69,16 @@ DESIGN_RANGES = {
 #: The wall's range with ``vary_wall``: the mass follows it at the ball's density and is checked.
 WALL_RANGE_M = (0.020, 0.045)
 STANDARD_HEIGHT_M = RUBBER_BALL_TOLERANCES.drop_height.nominal
-ITEMS = tuple(f"lfe_{b}_dB" for b in TOLERANCED_OCTAVE_BANDS) + ("contact_time_s", "restitution", "mass_kg")
+ITEMS = tuple(f"lfe_{b}_dB" for b in TOLERANCED_OCTAVE_BANDS) + (
+    "contact_time_s",
+    "restitution",
+    "mass_kg",
+)
 _TOLERANCES = tuple(RUBBER_BALL_TOLERANCES.lfe_octave_dB[b] for b in TOLERANCED_OCTAVE_BANDS) + (
-    RUBBER_BALL_TOLERANCES.contact_time, RUBBER_BALL_TOLERANCES.restitution, RUBBER_BALL_TOLERANCES.mass)
+    RUBBER_BALL_TOLERANCES.contact_time,
+    RUBBER_BALL_TOLERANCES.restitution,
+    RUBBER_BALL_TOLERANCES.mass,
+)
 #: Smooth minimum's temperature, in tolerance half-widths.
 SOFTMIN_TEMPERATURE = 0.01
 
@@ -169,10 +176,14 @@ class DesignResult:
     def verdict(self) -> str:
         label = dict(zip(ITEMS, (t.name for t in _TOLERANCES)))[self.blocking]
         if self.conforms:
-            return (f"{self.model_name} on the {self.geometry.upper()} geometry conforms: smallest margin "
-                    f"{self.smallest_margin:.3f} of the tolerance ({label}: {self.margins[self.blocking]:+.3g} {self._unit(self.blocking)}).")
-        return (f"No {self.model_name} ball on the {self.geometry.upper()} geometry conforms in every item: the best smallest margin is "
-                f"{self.smallest_margin:.3f} of the tolerance, blocked by {label} ({self.margins[self.blocking]:+.3g} {self._unit(self.blocking)}).")
+            return (
+                f"{self.model_name} on the {self.geometry.upper()} geometry conforms: smallest margin "
+                f"{self.smallest_margin:.3f} of the tolerance ({label}: {self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
+            )
+        return (
+            f"No {self.model_name} ball on the {self.geometry.upper()} geometry conforms in every item: the best smallest margin is "
+            f"{self.smallest_margin:.3f} of the tolerance, blocked by {label} ({self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
+        )
 
     def _unit(self, item: str) -> str:
         return dict(zip(ITEMS, (t.unit for t in _TOLERANCES)))[item]
@@ -181,13 +192,24 @@ class DesignResult:
         from ..terms.serialize import ball_to_dict, model_to_dict
 
         return {
-            "kind": "design", "clause": CLAUSE, "model_name": self.model_name, "geometry": self.geometry,
-            "ball": ball_to_dict(self.ball), "model": model_to_dict(self.model), "parameters": dict(self.parameters),
-            "margins": dict(self.margins), "normalised_margins": dict(self.normalised_margins),
-            "smallest_margin": self.smallest_margin, "blocking": self.blocking, "conforms": self.conforms,
-            "verdict": self.verdict(), "conformance": self.conformance.to_dict(),
-            "start_margins": list(self.start_margins), "optimiser_margins": dict(self.optimiser_margins),
-            "steps": self.steps, "time_s": self.time_s,
+            "kind": "design",
+            "clause": CLAUSE,
+            "model_name": self.model_name,
+            "geometry": self.geometry,
+            "ball": ball_to_dict(self.ball),
+            "model": model_to_dict(self.model),
+            "parameters": dict(self.parameters),
+            "margins": dict(self.margins),
+            "normalised_margins": dict(self.normalised_margins),
+            "smallest_margin": self.smallest_margin,
+            "blocking": self.blocking,
+            "conforms": self.conforms,
+            "verdict": self.verdict(),
+            "conformance": self.conformance.to_dict(),
+            "start_margins": list(self.start_margins),
+            "optimiser_margins": dict(self.optimiser_margins),
+            "steps": self.steps,
+            "time_s": self.time_s,
         }
 
     def table(self) -> str:
@@ -218,8 +240,19 @@ class DesignResult:
         return path
 
 
-def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, steps: int = 150, learning_rate: float = 0.08,
-           vary_wall: bool = False, gas: str = "adiabatic", blocked_force: str = "paper", seed: int = 0, progress: bool = False) -> DesignResult:
+def design(
+    model: str = "paper",
+    geometry: str = "jis",
+    *,
+    n_starts: int = 8,
+    steps: int = 150,
+    learning_rate: float = 0.08,
+    vary_wall: bool = False,
+    gas: str = "adiabatic",
+    blocked_force: str = "paper",
+    seed: int = 0,
+    progress: bool = False,
+) -> DesignResult:
     """Maximise the smallest margin to the rubber-ball table at 1 m (see the module docstring).
 
     Args:
@@ -242,12 +275,18 @@ def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, st
     parse_model_terms(model)
     ball = GEOMETRIES[geometry]
     base = model_from_name(model, gas=gas, blocked_force=blocked_force)
-    names = tuple(n for n in fitted_parameter_names(base) if n != "poisson") + (("wall_m",) if vary_wall else ())
+    names = tuple(n for n in fitted_parameter_names(base) if n != "poisson") + (
+        ("wall_m",) if vary_wall else ()
+    )
     specs = _specs(names)
-    start_model = model_from_name(model, gas=gas, blocked_force=blocked_force, values=_start_values(base, ball))
+    start_model = model_from_name(
+        model, gas=gas, blocked_force=blocked_force, values=_start_values(base, ball)
+    )
     density = _density(ball)
     rng = np.random.default_rng(seed)
-    first = [float(s.to_unconstrained(_value_of(n, ball, start_model))) for n, s in zip(names, specs)]
+    first = [
+        float(s.to_unconstrained(_value_of(n, ball, start_model))) for n, s in zip(names, specs)
+    ]
     phis = np.vstack([first] + [rng.uniform(-3.0, 3.0, len(names)) for _ in range(n_starts - 1)])
     num_samples = window_samples(0.045)  # contacts to ~67 ms: E ≥ 0.5 MPa keeps them shorter
     args = as_arrays((ball, start_model))
@@ -256,7 +295,9 @@ def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, st
     history = []
     best_phi, best = phis.copy(), np.full(n_starts, -np.inf)
     for k in range(steps + 1):
-        soft, grad, values = _step_program(jnp.asarray(phis), args[0], args[1], names, specs, density, num_samples)
+        soft, grad, values = _step_program(
+            jnp.asarray(phis), args[0], args[1], names, specs, density, num_samples
+        )
         hard = np.min(np.asarray(normalised_margins(values)), axis=-1)
         hard = np.where(np.isfinite(hard), hard, -np.inf)
         better = hard > best
@@ -268,8 +309,13 @@ def design(model: str = "paper", geometry: str = "jis", *, n_starts: int = 8, st
         updates, state = opt.update(jnp.asarray(g), state)
         phis = np.asarray(optax.apply_updates(jnp.asarray(phis), updates))
     win = int(np.argmax(best))
-    say(f"design {model}/{geometry}: smallest margin {best[win]:.4f} after {steps} steps × {n_starts} starts ({time.perf_counter() - t0:.1f} s)", enabled=progress)
-    return _result(model, geometry, best_phi[win], args, names, specs, density, num_samples, best, steps, t0)
+    say(
+        f"design {model}/{geometry}: smallest margin {best[win]:.4f} after {steps} steps × {n_starts} starts ({time.perf_counter() - t0:.1f} s)",
+        enabled=progress,
+    )
+    return _result(
+        model, geometry, best_phi[win], args, names, specs, density, num_samples, best, steps, t0
+    )
 
 
 def _start_values(model, ball) -> dict:
@@ -287,15 +333,26 @@ def _value_of(name, ball, model) -> float:
     return next(r.value for r in parameter_table(1.0, ball, model) if r.name == name)
 
 
-def _result(model_name, geometry, phi, args, names, specs, density, num_samples, start_best, steps, t0) -> DesignResult:
+def _result(
+    model_name, geometry, phi, args, names, specs, density, num_samples, start_best, steps, t0
+) -> DesignResult:
     ball, model = args
-    optimiser_values = np.asarray(_item_values(jnp.asarray(phi), ball, model, names, specs, density, num_samples))
+    optimiser_values = np.asarray(
+        _item_values(jnp.asarray(phi), ball, model, names, specs, density, num_samples)
+    )
     b, m = _ball_model(jnp.asarray(phi), ball, model, names, specs, density)
-    b = Ball(*(as_float(getattr(b, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")))
+    b = Ball(
+        *(
+            as_float(getattr(b, f))
+            for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+        )
+    )
     m = jax.tree_util.tree_map(lambda x: float(x) if eqx.is_array(x) else x, m)
     res = simulate(STANDARD_HEIGHT_M, b, m)
     lfe = np.asarray(res.lfe_octave_dB())
-    check = check_conformance(lfe, contact_time_s=res.contact_time_s, restitution=res.restitution, mass_kg=b.mass_kg)
+    check = check_conformance(
+        lfe, contact_time_s=res.contact_time_s, restitution=res.restitution, mass_kg=b.mass_kg
+    )
     by_name = {it.name: it for it in check.items}
     items = {k: by_name[t.name] for k, t in zip(ITEMS, _TOLERANCES)}
     margins = {k: float(items[k].margin) for k in ITEMS}
@@ -306,8 +363,19 @@ def _result(model_name, geometry, phi, args, names, specs, density, num_samples,
         values["mass_kg"] = as_float(b.mass_kg)
     om = np.asarray(normalised_margins(optimiser_values))
     return DesignResult(
-        model_name=model_name, geometry=geometry, ball=b, model=m, parameters=values, conformance=check, margins=margins,
-        normalised_margins=normalised, smallest_margin=float(normalised[blocking]), blocking=blocking, conforms=check.passed,
-        start_margins=tuple(float(x) for x in start_best), optimiser_margins={k: float(x) for k, x in zip(ITEMS, om)},
-        steps=steps, time_s=time.perf_counter() - t0,
+        model_name=model_name,
+        geometry=geometry,
+        ball=b,
+        model=m,
+        parameters=values,
+        conformance=check,
+        margins=margins,
+        normalised_margins=normalised,
+        smallest_margin=float(normalised[blocking]),
+        blocking=blocking,
+        conforms=check.passed,
+        start_margins=tuple(float(x) for x in start_best),
+        optimiser_margins={k: float(x) for k, x in zip(ITEMS, om)},
+        steps=steps,
+        time_s=time.perf_counter() - t0,
     )

@@ -103,7 +103,10 @@ def growth_table(growths: Sequence[Growth], *, digits: int = 1) -> str:
     if not growths:
         raise GrowthError("growth_table needs at least one Growth")
     bands = growths[0].bands_Hz
-    lines = ["| dB per doubling | " + " | ".join(f"{b} Hz" for b in bands) + " |", "|---" * (len(bands) + 1) + "|"]
+    lines = [
+        "| dB per doubling | " + " | ".join(f"{b} Hz" for b in bands) + " |",
+        "|---" * (len(bands) + 1) + "|",
+    ]
     for g in growths:
         if g.bands_Hz != bands:
             raise GrowthError(f"growth_table: bands differ ({g.bands_Hz} vs {bands})")
@@ -119,7 +122,14 @@ def growth_table(growths: Sequence[Growth], *, digits: int = 1) -> str:
     return "\n".join(lines)
 
 
-def growth_per_doubling_dB(heights_m, lfe_dB_by_band, bands_Hz: Sequence[str] | None = None, *, ref_height_m: float = 1.0, label: str = "") -> Growth:
+def growth_per_doubling_dB(
+    heights_m,
+    lfe_dB_by_band,
+    bands_Hz: Sequence[str] | None = None,
+    *,
+    ref_height_m: float = 1.0,
+    label: str = "",
+) -> Growth:
     """Least-squares growth of L_FE per doubling of drop height, band by band.
 
     Args:
@@ -145,16 +155,24 @@ def growth_per_doubling_dB(heights_m, lfe_dB_by_band, bands_Hz: Sequence[str] | 
     if y.ndim == 1:
         y = y[:, None]
     if y.ndim != 2 or y.shape[0] != h.shape[0]:
-        raise GrowthError(f"lfe_dB_by_band has shape {y.shape}; expected ({h.shape[0]}, n_bands) to match heights_m {h.shape}")
+        raise GrowthError(
+            f"lfe_dB_by_band has shape {y.shape}; expected ({h.shape[0]}, n_bands) to match heights_m {h.shape}"
+        )
     if not np.all(np.isfinite(h)) or np.any(h <= 0):
         raise GrowthError(f"heights_m={h.tolist()} must all be finite and > 0")
     if not (math.isfinite(ref_height_m) and ref_height_m > 0):
         raise GrowthError(f"ref_height_m={ref_height_m!r} must be finite and > 0")
     if np.unique(h).size < 2:
-        raise GrowthError(f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights")
+        raise GrowthError(
+            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights"
+        )
     n_bands = y.shape[1]
     if bands_Hz is None:
-        bands = tuple(OCTAVE_BANDS) if n_bands == len(OCTAVE_BANDS) else tuple(str(i) for i in range(n_bands))
+        bands = (
+            tuple(OCTAVE_BANDS)
+            if n_bands == len(OCTAVE_BANDS)
+            else tuple(str(i) for i in range(n_bands))
+        )
     else:
         bands = tuple(str(b) for b in bands_Hz)
         if len(bands) != n_bands:
@@ -189,7 +207,9 @@ def growth_per_doubling_dB(heights_m, lfe_dB_by_band, bands_Hz: Sequence[str] | 
     )
 
 
-def recording_lfe_dB(recordings=None, *, window_s: float = 0.03, pre_onset_s: float = 0.003, average: bool = False):
+def recording_lfe_dB(
+    recordings=None, *, window_s: float = 0.03, pre_onset_s: float = 0.003, average: bool = False
+):
     """Octave-band L_FE of force-plate recordings: ``(heights_m, lfe_dB (N, 6))``.
 
     Each record is conditioned (``rbjax.data.condition`` through ``rbjax.fit.prepare_data``:
@@ -211,7 +231,9 @@ def recording_lfe_dB(recordings=None, *, window_s: float = 0.03, pre_onset_s: fl
     return np.asarray(data.height_m, dtype=float), np.asarray(lfe_octave_dB(padded, data.rate_Hz))
 
 
-def recording_growth(recordings=None, *, average: bool = False, ref_height_m: float = 1.0, label: str = "recordings") -> Growth:
+def recording_growth(
+    recordings=None, *, average: bool = False, ref_height_m: float = 1.0, label: str = "recordings"
+) -> Growth:
     """Growth per doubling of recorded L_FE (default: the bundled emulated recordings, one
     point per drop, so the standard error includes the drop-to-drop scatter)."""
     from ..spectrum.bands import OCTAVE_BANDS
@@ -220,7 +242,9 @@ def recording_growth(recordings=None, *, average: bool = False, ref_height_m: fl
     return growth_per_doubling_dB(h, lfe, OCTAVE_BANDS, ref_height_m=ref_height_m, label=label)
 
 
-def model_lfe_dB(heights_m, ball: Ball = JIS_RUBBER_BALL, model=None, **simulate_kwargs) -> np.ndarray:
+def model_lfe_dB(
+    heights_m, ball: Ball = JIS_RUBBER_BALL, model=None, **simulate_kwargs
+) -> np.ndarray:
     """Octave-band L_FE (n_heights, 6) of a model's 44.1 kHz × 1 s blocked-force records.
 
     ``model``: an ``rbjax.Model`` (e.g. a fit's ``FitResult.model``, with ``ball`` its
@@ -234,20 +258,32 @@ def model_lfe_dB(heights_m, ball: Ball = JIS_RUBBER_BALL, model=None, **simulate
         res = simulate(np.asarray(heights_m, dtype=float), ball, **simulate_kwargs)
     else:
         if simulate_kwargs:
-            raise ValueError(f"model_lfe_dB: pass either model or simulate options, not both ({sorted(simulate_kwargs)})")
+            raise ValueError(
+                f"model_lfe_dB: pass either model or simulate options, not both ({sorted(simulate_kwargs)})"
+            )
         from ..solve.simulate import _simulate, check_inputs, resolve_method
         from ..terms.model import Solver
 
         h = np.asarray(heights_m, dtype=float)
         check_inputs(h, ball, PAPER_RATE_Hz, 1.0)
-        res = _simulate(h, ball, model, Solver(), method=resolve_method("auto", model, None), fallback=True)
+        res = _simulate(
+            h, ball, model, Solver(), method=resolve_method("auto", model, None), fallback=True
+        )
     force = np.asarray(res.history().force_N)
     lfe = np.array(lfe_octave_dB(force, PAPER_RATE_Hz))
     lfe[np.asarray(res.status).reshape(-1) != 0] = np.nan
     return lfe
 
 
-def model_growth(heights_m, ball: Ball = JIS_RUBBER_BALL, model=None, *, ref_height_m: float = 1.0, label: str = "model", **simulate_kwargs) -> Growth:
+def model_growth(
+    heights_m,
+    ball: Ball = JIS_RUBBER_BALL,
+    model=None,
+    *,
+    ref_height_m: float = 1.0,
+    label: str = "model",
+    **simulate_kwargs,
+) -> Growth:
     """Growth per doubling of a model's octave-band L_FE, simulated at ``heights_m``.
 
     ``model``/``simulate_kwargs`` as in :func:`model_lfe_dB`: e.g.
@@ -258,5 +294,13 @@ def model_growth(heights_m, ball: Ball = JIS_RUBBER_BALL, model=None, *, ref_hei
 
     h = np.asarray(heights_m, dtype=float).reshape(-1)
     if np.unique(h).size < 2:
-        raise GrowthError(f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights")
-    return growth_per_doubling_dB(h, model_lfe_dB(h, ball, model, **simulate_kwargs), OCTAVE_BANDS, ref_height_m=ref_height_m, label=label)
+        raise GrowthError(
+            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights"
+        )
+    return growth_per_doubling_dB(
+        h,
+        model_lfe_dB(h, ball, model, **simulate_kwargs),
+        OCTAVE_BANDS,
+        ref_height_m=ref_height_m,
+        label=label,
+    )

@@ -103,16 +103,29 @@ def cross_validate(
     """
     data = prepare_data(data)
     if len(data.heights_m) < 2:
-        raise ValueError(f"cross-validation needs at least 2 drop heights; the data have {len(data.heights_m)}")
+        raise ValueError(
+            f"cross-validation needs at least 2 drop heights; the data have {len(data.heights_m)}"
+        )
     if base is None:
         base = fit(data, model, blocked_force=blocked_force, progress=False, **fit_kwargs)
     folds = data.heights_m if heights is None else np.atleast_1d(np.asarray(heights, dtype=float))
     rows = []
     for h in folds:
         keep = [x for x in data.heights_m if abs(x - h) > 5e-4]
-        res = fit(data, model, blocked_force=blocked_force, fit_heights=keep, start=base, progress=False, **fit_kwargs)
+        res = fit(
+            data,
+            model,
+            blocked_force=blocked_force,
+            fit_heights=keep,
+            start=base,
+            progress=False,
+            **fit_kwargs,
+        )
         row = held_out_rows(res, [h])[0]
-        say(f"cv {model}/{blocked_force}: without {h:g} m: held-out error {row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)", enabled=progress)
+        say(
+            f"cv {model}/{blocked_force}: without {h:g} m: held-out error {row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)",
+            enabled=progress,
+        )
         rows.append(row)
     return tuple(rows)
 
@@ -187,22 +200,53 @@ class Selection:
         from ..spectrum.bands import OCTAVE_BANDS
         from ..text import fmt, format_table
 
-        header = ["model", "blocked force", "p", "conv", "rms (N)", "CV err (%)", "± SE", "|Δt_c| (%)", "|Δpeak| (%)"]
+        header = [
+            "model",
+            "blocked force",
+            "p",
+            "conv",
+            "rms (N)",
+            "CV err (%)",
+            "± SE",
+            "|Δt_c| (%)",
+            "|Δpeak| (%)",
+        ]
         header += [f"|ΔL| {b}" for b in OCTAVE_BANDS] + ["AIC", "BIC", ""]
         rows = []
         for c in self.candidates:
-            mark = "recommended" if c is self.recommended else ("within noise" if c in self.within_noise else "")
+            mark = (
+                "recommended"
+                if c is self.recommended
+                else ("within noise" if c in self.within_noise else "")
+            )
             rows.append(
-                [c.model_name, c.blocked_force, str(c.n_physical), "yes" if c.fit.converged else "no",
-                 fmt(c.fit.residual_rms_N, ".1f"), fmt(c.cv_error_pct, ".2f"), fmt(c.cv_se_pct, ".2f"),
-                 fmt(c.mean_abs("contact_time_pct"), ".2f"), fmt(c.mean_abs("peak_force_pct"), ".2f")]
+                [
+                    c.model_name,
+                    c.blocked_force,
+                    str(c.n_physical),
+                    "yes" if c.fit.converged else "no",
+                    fmt(c.fit.residual_rms_N, ".1f"),
+                    fmt(c.cv_error_pct, ".2f"),
+                    fmt(c.cv_se_pct, ".2f"),
+                    fmt(c.mean_abs("contact_time_pct"), ".2f"),
+                    fmt(c.mean_abs("peak_force_pct"), ".2f"),
+                ]
                 + [fmt(x, ".2f") for x in c.mean_abs("lfe_octave_dB")]
                 + [fmt(c.fit.aic, ".0f"), fmt(c.fit.bic, ".0f"), mark]
             )
         base = self.baseline
         rows.append(
-            ["paper (unfitted)", "paper", "0", "—", "—", fmt(np.mean([b.history_error_pct for b in base]), ".2f"), "—",
-             fmt(np.mean([abs(b.contact_time_pct) for b in base]), ".2f"), fmt(np.mean([abs(b.peak_force_pct) for b in base]), ".2f")]
+            [
+                "paper (unfitted)",
+                "paper",
+                "0",
+                "—",
+                "—",
+                fmt(np.mean([b.history_error_pct for b in base]), ".2f"),
+                "—",
+                fmt(np.mean([abs(b.contact_time_pct) for b in base]), ".2f"),
+                fmt(np.mean([abs(b.peak_force_pct) for b in base]), ".2f"),
+            ]
             + [fmt(x, ".2f") for x in np.mean([np.abs(b.lfe_octave_dB) for b in base], axis=0)]
             + ["—", "—", "JIS ball, E = 1.6 MPa"]
         )
@@ -221,7 +265,10 @@ class Selection:
         from ..spectrum.bands import OCTAVE_BANDS
 
         return {
-            "recommended": {"model_name": self.recommended.model_name, "blocked_force": self.recommended.blocked_force},
+            "recommended": {
+                "model_name": self.recommended.model_name,
+                "blocked_force": self.recommended.blocked_force,
+            },
             "within_noise": [c.label for c in self.within_noise],
             "rule": self.rule,
             "blocked_force_note": self.blocked_force_note,
@@ -245,7 +292,9 @@ def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
     failed = [c for c in candidates if not math.isfinite(c.cv_error_pct)]
     candidates = [c for c in candidates if math.isfinite(c.cv_error_pct)]
     if not candidates:
-        raise ValueError(f"every candidate failed cross-validation (non-finite held-out error): {', '.join(c.label for c in failed)}")
+        raise ValueError(
+            f"every candidate failed cross-validation (non-finite held-out error): {', '.join(c.label for c in failed)}"
+        )
     best = min(candidates, key=lambda c: c.cv_error_pct)
     within = tuple(c for c in candidates if c is best or _paired(c, best)[0] <= _paired(c, best)[1])
     chosen = min(within, key=lambda c: (c.n_physical, c.cv_error_pct))
@@ -256,7 +305,10 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
     pair = [c for c in candidates if c.model_name == chosen.model_name]
     if len(pair) < 2:
         return f"blocked force: only {chosen.blocked_force!r} was tried for {chosen.model_name}."
-    a, b = (c for c in pair if c.blocked_force == "momentum"), (c for c in pair if c.blocked_force == "paper")
+    a, b = (
+        (c for c in pair if c.blocked_force == "momentum"),
+        (c for c in pair if c.blocked_force == "paper"),
+    )
     mom, pap = next(a, None), next(b, None)
     if mom is None or pap is None:
         return "blocked force: not compared."
@@ -264,7 +316,8 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
     verdict = (
         "the data support 'momentum' (the floor also takes the momentum flux (M/2R)δ̇² in compression)"
         if mean > 2 * se
-        else "the data support 'paper' (F_B + F_G + F_d)" if mean < -2 * se
+        else "the data support 'paper' (F_B + F_G + F_d)"
+        if mean < -2 * se
         else "the data do not distinguish the two definitions"
     )
     return (
@@ -288,7 +341,9 @@ def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
     return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
 
 
-def shared_structures(names: Sequence[str], gas: str = "adiabatic", given: Model | None = None) -> dict[str, Model]:
+def shared_structures(
+    names: Sequence[str], gas: str = "adiabatic", given: Model | None = None
+) -> dict[str, Model]:
     """The structure each candidate named is fitted in (``given``, if one is given, for all):
     one :func:`shared_structure` for the candidates without the series element and one for
     those with it. The element's closed-form coupling makes every solve of a program that
@@ -306,7 +361,9 @@ def shared_structures(names: Sequence[str], gas: str = "adiabatic", given: Model
     return out
 
 
-def candidate_pairs(candidates: Sequence[str], blocked_forces: Sequence[str]) -> list[tuple[str, str]]:
+def candidate_pairs(
+    candidates: Sequence[str], blocked_forces: Sequence[str]
+) -> list[tuple[str, str]]:
     """(model, blocked force) pairs: ``"name"`` pairs with every blocked force,
     ``"name/paper"`` or ``"name/momentum"`` with that one only."""
     from .._validate import check_choice
@@ -344,13 +401,30 @@ def select_model(
     t0 = time.perf_counter()
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
-    structures = shared_structures([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic"), fit_kwargs.pop("superset", None))
+    structures = shared_structures(
+        [name for name, _ in pairs],
+        fit_kwargs.get("gas", "adiabatic"),
+        fit_kwargs.pop("superset", None),
+    )
     out = []
     for name, bf in pairs:
         say(f"select: fitting {name}/{bf} to all heights", enabled=progress)
-        base = fit(data, name, blocked_force=bf, progress=False, superset=structures[name], **fit_kwargs)
-        say(f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}", enabled=progress)
-        folds = cross_validate(data, name, blocked_force=bf, base=base, progress=progress, superset=structures[name], **fit_kwargs)
+        base = fit(
+            data, name, blocked_force=bf, progress=False, superset=structures[name], **fit_kwargs
+        )
+        say(
+            f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}",
+            enabled=progress,
+        )
+        folds = cross_validate(
+            data,
+            name,
+            blocked_force=bf,
+            base=base,
+            progress=progress,
+            superset=structures[name],
+            **fit_kwargs,
+        )
         out.append(Candidate(name, bf, base, folds))
     chosen, within = recommend(out)
     baseline = tuple(held_out_rows(predict(data, superset=structures[pairs[0][0]]), data.heights_m))
@@ -377,14 +451,27 @@ class HoldOutComparison:
         from ..spectrum.bands import OCTAVE_BANDS
         from ..text import fmt, format_table
 
-        header = ["model", "h (m)", "history (%)", "Δt_c (%)", "Δpeak (%)"] + [f"ΔL {b} (dB)" for b in OCTAVE_BANDS]
+        header = ["model", "h (m)", "history (%)", "Δt_c (%)", "Δpeak (%)"] + [
+            f"ΔL {b} (dB)" for b in OCTAVE_BANDS
+        ]
         rows = []
         for label, held in self.rows.items():
             for r in held:
-                rows.append([label, f"{r.height_m:.2f}", fmt(r.history_error_pct, ".2f"), fmt(r.contact_time_pct, "+.2f"), fmt(r.peak_force_pct, "+.2f")]
-                            + [fmt(x, "+.2f") for x in r.lfe_octave_dB])
+                rows.append(
+                    [
+                        label,
+                        f"{r.height_m:.2f}",
+                        fmt(r.history_error_pct, ".2f"),
+                        fmt(r.contact_time_pct, "+.2f"),
+                        fmt(r.peak_force_pct, "+.2f"),
+                    ]
+                    + [fmt(x, "+.2f") for x in r.lfe_octave_dB]
+                )
         fitted = ", ".join(f"{h:g}" for h in self.fit_heights_m)
-        return format_table(header, rows) + f"\n(fitted to {fitted} m; errors are predicted − measured at the other heights)"
+        return (
+            format_table(header, rows)
+            + f"\n(fitted to {fitted} m; errors are predicted − measured at the other heights)"
+        )
 
     def to_dict(self) -> dict:
         return {
@@ -409,16 +496,36 @@ def held_out_comparison(
     ``starts``: optional {(model, blocked_force): FitResult} warm starts."""
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
-    structures = shared_structures([name for name, _ in pairs], fit_kwargs.get("gas", "adiabatic"), fit_kwargs.pop("superset", None))
+    structures = shared_structures(
+        [name for name, _ in pairs],
+        fit_kwargs.get("gas", "adiabatic"),
+        fit_kwargs.pop("superset", None),
+    )
     fit_heights = tuple(float(h) for h in fit_heights)
-    rest = tuple(float(h) for h in data.heights_m if not any(abs(h - f) < 5e-4 for f in fit_heights))
+    rest = tuple(
+        float(h) for h in data.heights_m if not any(abs(h - f) < 5e-4 for f in fit_heights)
+    )
     if not rest:
         raise ValueError("held_out_comparison: every height is in fit_heights; nothing is held out")
     rows = {}
     for name, bf in pairs:
         start = (starts or {}).get((name, bf))
-        res = fit(data, name, blocked_force=bf, fit_heights=fit_heights, start=start, progress=False, superset=structures[name], **fit_kwargs)
+        res = fit(
+            data,
+            name,
+            blocked_force=bf,
+            fit_heights=fit_heights,
+            start=start,
+            progress=False,
+            superset=structures[name],
+            **fit_kwargs,
+        )
         rows[f"{name}/{bf}"] = tuple(held_out_rows(res, rest))
-        say(f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})", enabled=progress)
-    rows["paper (unfitted)"] = tuple(held_out_rows(predict(data, superset=structures[pairs[0][0]]), rest))
+        say(
+            f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})",
+            enabled=progress,
+        )
+    rows["paper (unfitted)"] = tuple(
+        held_out_rows(predict(data, superset=structures[pairs[0][0]]), rest)
+    )
     return HoldOutComparison(fit_heights, rest, rows)

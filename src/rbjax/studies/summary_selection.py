@@ -45,8 +45,16 @@ class SummarySelection:
     def table(self) -> str:
         from ..text import format_table
 
-        rows = [[name, str(c.fit.n_free), f"{c.fit.chi2:.3g}", f"{c.held_out_rms:.3g}", "←" if name == self.recommended else ""]
-                for name, c in self.candidates.items()]
+        rows = [
+            [
+                name,
+                str(c.fit.n_free),
+                f"{c.fit.chi2:.3g}",
+                f"{c.held_out_rms:.3g}",
+                "←" if name == self.recommended else "",
+            ]
+            for name, c in self.candidates.items()
+        ]
         lines = [format_table(["model", "free", "χ² (all)", "held-out rms (σ)", ""], rows)]
         lines += [f"{k}: skipped ({v})" for k, v in self.skipped.items()]
         return "\n".join(lines)
@@ -55,35 +63,63 @@ class SummarySelection:
         return {
             "method": "leave one figure out",
             "recommended": self.recommended,
-            "candidates": {k: {"held_out_rms_sigma": c.held_out_rms, "held_out_errors_sigma": list(c.held_out_errors), "chi2": c.fit.chi2, "n_free": c.fit.n_free}
-                           for k, c in self.candidates.items()},
+            "candidates": {
+                k: {
+                    "held_out_rms_sigma": c.held_out_rms,
+                    "held_out_errors_sigma": list(c.held_out_errors),
+                    "chi2": c.fit.chi2,
+                    "n_free": c.fit.n_free,
+                }
+                for k, c in self.candidates.items()
+            },
             "skipped": dict(self.skipped),
         }
 
 
-def select_summary(table, models: Sequence[str] = SUMMARY_MODELS, *, held_out=(), progress: bool = False, **options) -> SummarySelection:
+def select_summary(
+    table, models: Sequence[str] = SUMMARY_MODELS, *, held_out=(), progress: bool = False, **options
+) -> SummarySelection:
     """Compare ``models`` on the table's figures by leave-one-figure-out prediction (see the
     module docstring). ``held_out`` figures stay out of every fit; ``options`` go to
     :func:`rbjax.fit.summary.fit_summary` (``fix``, ``gas``, ``blocked_force``, ``ball``)."""
     table = as_table(table)
     held = {(round(float(h), 4), f) for h, f in held_out}
-    entries = [(float(table.heights_m[i]), f) for i, f in table.entries() if (round(float(table.heights_m[i]), 4), f) not in held]
+    entries = [
+        (float(table.heights_m[i]), f)
+        for i, f in table.entries()
+        if (round(float(table.heights_m[i]), 4), f) not in held
+    ]
     candidates, skipped = {}, {}
     fix = dict(options.get("fix") or {})
     for name in models:
-        structure = model_from_name(name, gas=options.get("gas", "adiabatic"), blocked_force=options.get("blocked_force", "paper"))
+        structure = model_from_name(
+            name,
+            gas=options.get("gas", "adiabatic"),
+            blocked_force=options.get("blocked_force", "paper"),
+        )
         p = len([n for n in fitted_parameter_names(structure) if n != "poisson" and n not in fix])
         if len(entries) - 1 < p:
-            skipped[name] = f"{p} free parameters need at least {p + 1} figures to leave one out; the fit has {len(entries)}"
+            skipped[name] = (
+                f"{p} free parameters need at least {p + 1} figures to leave one out; the fit has {len(entries)}"
+            )
             continue
         full = fit_summary(table, name, held_out=list(held_out), **options)
-        start = {k: v.value for k, v in full.parameters.items() if not v.fixed and k != "effective_modulus_Pa"}
+        start = {
+            k: v.value
+            for k, v in full.parameters.items()
+            if not v.fixed and k != "effective_modulus_Pa"
+        }
         errors = []
         for h, f in entries:
-            part = fit_summary(table, name, held_out=list(held_out) + [(h, f)], start=start, **options)
+            part = fit_summary(
+                table, name, held_out=list(held_out) + [(h, f)], start=start, **options
+            )
             errors.append(part.row(h, f)["normalised_error"])
         rms = math.sqrt(float(np.mean(np.square(errors))))
         candidates[name] = SummaryCandidate(full, rms, tuple(errors))
-        say(f"select_summary {name}: held-out rms {rms:.3g} σ over {len(errors)} figures", enabled=progress)
+        say(
+            f"select_summary {name}: held-out rms {rms:.3g} σ over {len(errors)} figures",
+            enabled=progress,
+        )
     recommended = min(candidates, key=lambda k: candidates[k].held_out_rms) if candidates else None
     return SummarySelection(candidates, recommended, skipped)

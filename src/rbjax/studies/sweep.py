@@ -83,7 +83,19 @@ from ..terms.serialize import to_json
 from . import sensitivity as sens
 
 SWEEP_KINDS = (*sens.METHODS, "conformance")
-CONFIG_KEYS = ("kind", "seed", "height_m", "outputs", "chunk_size", "ball", "model", "solver", "ranges", "distributions", *SWEEP_KINDS)
+CONFIG_KEYS = (
+    "kind",
+    "seed",
+    "height_m",
+    "outputs",
+    "chunk_size",
+    "ball",
+    "model",
+    "solver",
+    "ranges",
+    "distributions",
+    *SWEEP_KINDS,
+)
 #: Sample sizes of a method whose table does not give one.
 DEFAULT_SIZES = {"sobol": 1024, "morris": 100, "fast": 1000, "pawn": 1000, "dgsm": 1024}
 
@@ -106,7 +118,9 @@ def _base(config: dict):
         raise ValueError(f"ball = {ball_fields!r}: expected a [ball] table")
     unknown = set(ball_fields) - set(BALL_PARAMETERS)
     if unknown:
-        raise ValueError(f"[ball] has unknown keys {sorted(unknown)}; valid: {', '.join(BALL_PARAMETERS)}")
+        raise ValueError(
+            f"[ball] has unknown keys {sorted(unknown)}; valid: {', '.join(BALL_PARAMETERS)}"
+        )
     ball = JIS_RUBBER_BALL.replace(**{k: float(v) for k, v in ball_fields.items()})
     model = model_from_dict(config.get("model", {}))
     if "solver" not in config:  # the fastest exact path
@@ -114,7 +128,9 @@ def _base(config: dict):
     solver_fields = config["solver"]
     unknown = set(solver_fields) - {f.name for f in dataclasses.fields(Solver)}
     if unknown:
-        raise ValueError(f"[solver] has unknown keys {sorted(unknown)}; valid: {', '.join(f.name for f in dataclasses.fields(Solver))}")
+        raise ValueError(
+            f"[solver] has unknown keys {sorted(unknown)}; valid: {', '.join(f.name for f in dataclasses.fields(Solver))}"
+        )
     return float(config.get("height_m", 1.0)), ball, model, Solver(**solver_fields)
 
 
@@ -129,7 +145,9 @@ def run_sweep(config: dict, *, progress: bool = False, devices=None):
 
     unknown = set(config) - set(CONFIG_KEYS)
     if unknown:
-        raise ValueError(f"config has unknown keys {sorted(unknown)}; valid: {', '.join(CONFIG_KEYS)}")
+        raise ValueError(
+            f"config has unknown keys {sorted(unknown)}; valid: {', '.join(CONFIG_KEYS)}"
+        )
     kind = config.get("kind")
     if kind not in SWEEP_KINDS:
         raise ValueError(f"kind={kind!r} is not a known sweep; valid: {', '.join(SWEEP_KINDS)}")
@@ -170,7 +188,9 @@ def run_sweep(config: dict, *, progress: bool = False, devices=None):
     if unknown:
         raise ValueError(f"[{kind}] has unknown keys {sorted(unknown)}; valid: {', '.join(valid)}")
     n = options.pop(size, DEFAULT_SIZES[kind])
-    return sens.global_sensitivity(ranges, n, method=kind, outputs=tuple(outputs), **options, **common)
+    return sens.global_sensitivity(
+        ranges, n, method=kind, outputs=tuple(outputs), **options, **common
+    )
 
 
 def write_outputs(result, path, config: dict | None = None) -> list[Path]:

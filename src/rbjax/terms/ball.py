@@ -38,7 +38,12 @@ class Ball(eqx.Module):
         "mass_kg": Parameter("kg", **POSITIVE, description="total mass M"),
         "youngs_Pa": Parameter("Pa", **POSITIVE, description="Young's modulus E (Eqs. 1–3)"),
         "poisson": Parameter(
-            "1", lower=-1.0, upper=0.5, upper_open=False, transform="interval", description="Poisson's ratio ν (Eqs. 1–3)"
+            "1",
+            lower=-1.0,
+            upper=0.5,
+            upper_open=False,
+            transform="interval",
+            description="Poisson's ratio ν (Eqs. 1–3)",
         ),
     }
 
@@ -57,7 +62,12 @@ class Ball(eqx.Module):
 
     def as_arrays(self) -> Ball:
         """The same ball with every field a float64 JAX array (what the jitted core takes)."""
-        return Ball(*(jnp.asarray(getattr(self, f.name), dtype=jnp.float64) for f in dataclasses.fields(self)))
+        return Ball(
+            *(
+                jnp.asarray(getattr(self, f.name), dtype=jnp.float64)
+                for f in dataclasses.fields(self)
+            )
+        )
 
     @property
     def stiffness_N_per_m(self):

@@ -45,9 +45,17 @@ class BallMode(eqx.Module):
     name: ClassVar[str] = "ball-mode"
     num_states: ClassVar[int] = 2
     PARAMETERS: ClassVar = {
-        "mode_mass_ratio": Parameter("1", **NON_NEGATIVE, description="μ = M/m_b, the ball's mass over the mode's mass at the contact"),
-        "mode_frequency_Hz": Parameter("Hz", **POSITIVE, description="natural frequency f of the ball's mode"),
-        "mode_loss_factor": Parameter("1", **NON_NEGATIVE, description="loss factor η of the ball's mode"),
+        "mode_mass_ratio": Parameter(
+            "1",
+            **NON_NEGATIVE,
+            description="μ = M/m_b, the ball's mass over the mode's mass at the contact",
+        ),
+        "mode_frequency_Hz": Parameter(
+            "Hz", **POSITIVE, description="natural frequency f of the ball's mode"
+        ),
+        "mode_loss_factor": Parameter(
+            "1", **NON_NEGATIVE, description="loss factor η of the ball's mode"
+        ),
     }
 
     def __check_init__(self):
@@ -61,7 +69,11 @@ class BallMode(eqx.Module):
         """(ẇ, ẅ) of the mode's displacement at the contact, driven by −F_c."""
         w, wd = states[0], states[1]
         omega = 2.0 * jnp.pi * self.mode_frequency_Hz
-        wdd = -(jnp.asarray(self.mode_mass_ratio) * contact_force_N) / ball.mass_kg - self.mode_loss_factor * omega * wd - omega**2 * w
+        wdd = (
+            -(jnp.asarray(self.mode_mass_ratio) * contact_force_N) / ball.mass_kg
+            - self.mode_loss_factor * omega * wd
+            - omega**2 * w
+        )
         return jnp.stack([wd, wdd])
 
     @classmethod
@@ -74,7 +86,14 @@ class BallMode(eqx.Module):
     START_ALTERNATIVES: ClassVar = {"mode_frequency_Hz": (300.0, 1200.0)}
 
     @classmethod
-    def start(cls, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
+    def start(
+        cls,
+        stiffness_N_per_m: float,
+        mass_kg: float,
+        restitution: float,
+        contact_time_s: float,
+        speed_m_per_s: float,
+    ) -> dict:
         """Start values for fitting: a light contact zone (μ = 20) ringing near 600 Hz, η = 0.2."""
         return {"mode_mass_ratio": 20.0, "mode_frequency_Hz": 600.0, "mode_loss_factor": 0.2}
 
@@ -82,5 +101,7 @@ class BallMode(eqx.Module):
 def from_modal_mass(mass_kg: float, frequency_Hz: float, loss_factor: float, ball) -> BallMode:
     """A ``BallMode`` from the mode's mass at the contact point (kg) instead of μ = M/m_b."""
     if not mass_kg > 0.0 or not math.isfinite(mass_kg):
-        raise ValueError(f"mass_kg={mass_kg!r} is outside the valid range (0, inf): a mode needs a positive mass")
+        raise ValueError(
+            f"mass_kg={mass_kg!r} is outside the valid range (0, inf): a mode needs a positive mass"
+        )
     return BallMode(float(ball.mass_kg) / mass_kg, frequency_Hz, loss_factor)

@@ -55,7 +55,14 @@ class AbstractDamping(eqx.Module):
         return jnp.zeros(0)
 
     @classmethod
-    def start(cls, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
+    def start(
+        cls,
+        stiffness_N_per_m: float,
+        mass_kg: float,
+        restitution: float,
+        contact_time_s: float,
+        speed_m_per_s: float,
+    ) -> dict:
         """Start values for fitting from a linear spring k, the mass, and the measured
         restitution, contact time and impact speed (a damped linear oscillator)."""
         return {}
@@ -67,7 +74,9 @@ class AbstractDamping(eqx.Module):
         (or not allowed) overrides this."""
         specs = cls.PARAMETERS
         if not all(s.lower == 0.0 and not s.lower_open for s in specs.values()):
-            raise NotImplementedError(f"{cls.__name__} must define off(): not every parameter may be 0")
+            raise NotImplementedError(
+                f"{cls.__name__} must define off(): not every parameter may be 0"
+            )
         return cls(**{name: 0.0 for name in specs})
 
 
@@ -85,15 +94,22 @@ class KelvinVoigt(AbstractDamping):
 
     damping_Ns_per_m: ArrayLike
     name = "kelvin-voigt"
-    PARAMETERS = {"damping_Ns_per_m": Parameter("N s/m", **NON_NEGATIVE, description="viscous coefficient c in F_d = cδ̇")}
+    PARAMETERS = {
+        "damping_Ns_per_m": Parameter(
+            "N s/m", **NON_NEGATIVE, description="viscous coefficient c in F_d = cδ̇"
+        )
+    }
 
     def force_N(self, deflection_m, velocity_m_per_s, internal, ball):
         return self.damping_Ns_per_m * velocity_m_per_s
 
     @classmethod
     def start(cls, stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s):
-        return {"damping_Ns_per_m": 2 * damping_ratio(restitution) * math.sqrt(stiffness_N_per_m * mass_kg)}
-
+        return {
+            "damping_Ns_per_m": 2
+            * damping_ratio(restitution)
+            * math.sqrt(stiffness_N_per_m * mass_kg)
+        }
 
 
 class HuntCrossley(AbstractDamping):
@@ -110,7 +126,11 @@ class HuntCrossley(AbstractDamping):
     alpha_s_per_m: ArrayLike
     exponent: float = eqx.field(static=True, default=1.0)
     name = "hunt-crossley"
-    PARAMETERS = {"alpha_s_per_m": Parameter("s/m", **NON_NEGATIVE, description="Hunt–Crossley α in F_d = αkδ(δ/h)^(n−1)δ̇")}
+    PARAMETERS = {
+        "alpha_s_per_m": Parameter(
+            "s/m", **NON_NEGATIVE, description="Hunt–Crossley α in F_d = αkδ(δ/h)^(n−1)δ̇"
+        )
+    }
 
     def __check_init__(self):
         check_declared(self)
@@ -131,7 +151,6 @@ class HuntCrossley(AbstractDamping):
         return {"alpha_s_per_m": 3 * (1 - restitution) / (2 * speed_m_per_s)}
 
 
-
 class Zener(AbstractDamping):
     """Standard linear solid: a Maxwell branch (spring k₁ = r·k, dashpot k₁τ) beside the shell.
 
@@ -149,8 +168,12 @@ class Zener(AbstractDamping):
     name = "zener"
     num_states = 1
     PARAMETERS = {
-        "stiffness_ratio": Parameter("1", **NON_NEGATIVE, description="Maxwell branch stiffness k₁/k"),
-        "relaxation_time_s": Parameter("s", **POSITIVE, description="Maxwell branch relaxation time τ"),
+        "stiffness_ratio": Parameter(
+            "1", **NON_NEGATIVE, description="Maxwell branch stiffness k₁/k"
+        ),
+        "relaxation_time_s": Parameter(
+            "s", **POSITIVE, description="Maxwell branch relaxation time τ"
+        ),
     }
 
     def force_N(self, deflection_m, velocity_m_per_s, internal, ball):
@@ -163,7 +186,10 @@ class Zener(AbstractDamping):
     @classmethod
     def start(cls, stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s):
         eta = -2 * math.log(restitution) / math.pi  # loss factor of the rebound
-        return {"stiffness_ratio": max(2 * eta / max(1 - eta, 0.1), 0.05), "relaxation_time_s": contact_time_s / math.pi}
+        return {
+            "stiffness_ratio": max(2 * eta / max(1 - eta, 0.1), 0.05),
+            "relaxation_time_s": contact_time_s / math.pi,
+        }
 
     @classmethod
     def off(cls):

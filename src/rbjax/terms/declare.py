@@ -43,11 +43,20 @@ class Parameter:
 
     def __post_init__(self):
         if self.transform not in TRANSFORMS:
-            raise ValueError(f"transform={self.transform!r} is not known; valid: {', '.join(TRANSFORMS)}")
+            raise ValueError(
+                f"transform={self.transform!r} is not known; valid: {', '.join(TRANSFORMS)}"
+            )
 
     def check(self, name: str, value) -> None:
         """Raise ``ValueError`` naming the parameter if a concrete value is outside its bounds."""
-        check_range(name, value, lower=self.lower, upper=self.upper, lower_open=self.lower_open, upper_open=self.upper_open)
+        check_range(
+            name,
+            value,
+            lower=self.lower,
+            upper=self.upper,
+            lower_open=self.lower_open,
+            upper_open=self.upper_open,
+        )
 
     def to_unconstrained(self, value):
         """φ with ``from_unconstrained(φ) = value`` (values on a closed bound are moved inside by 1e-12)."""
@@ -110,7 +119,10 @@ HEIGHT_ERROR_BOUND_M = 0.01
 
 
 HEIGHT_ERROR = Parameter(
-    "m", lower=-HEIGHT_ERROR_BOUND_M, upper=HEIGHT_ERROR_BOUND_M, transform="interval",
+    "m",
+    lower=-HEIGHT_ERROR_BOUND_M,
+    upper=HEIGHT_ERROR_BOUND_M,
+    transform="interval",
     description="error of a record's nominal drop height",
 )
 
@@ -124,5 +136,3 @@ def check_declared(module) -> None:
     """Check every declared field of a term against its bounds (concrete values only)."""
     for name, spec in declarations(module).items():
         spec.check(name, getattr(module, name))
-
-

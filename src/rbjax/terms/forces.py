@@ -112,7 +112,9 @@ class CubicStiffening(eqx.Module):
     """
 
     beta: ArrayLike
-    PARAMETERS: ClassVar = {"beta": Parameter("1", **NON_NEGATIVE, description="cubic stiffening β in kδ(1 + β(δ/h)²)")}
+    PARAMETERS: ClassVar = {
+        "beta": Parameter("1", **NON_NEGATIVE, description="cubic stiffening β in kδ(1 + β(δ/h)²)")
+    }
 
     def __check_init__(self):
         check_declared(self)
@@ -147,5 +149,8 @@ def damping_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
 
 def internal_rates(deflection_m, velocity_m_per_s, internal, ball, model):
     """Time derivatives of the internal states of the model's damping terms (concatenated)."""
-    rates = [term.internal_rates(deflection_m, velocity_m_per_s, z, ball) for term, z in zip(model.damping, model.split_internal(internal))]
+    rates = [
+        term.internal_rates(deflection_m, velocity_m_per_s, z, ball)
+        for term, z in zip(model.damping, model.split_internal(internal))
+    ]
     return jnp.concatenate([jnp.zeros(0), *rates])

@@ -73,7 +73,12 @@ class Model(eqx.Module):
     floor: AbstractFloor
     PARAMETERS: ClassVar = {
         "momentum_flux_weight": Parameter(
-            "1", lower=0.0, upper=1.0, lower_open=False, upper_open=False, transform="interval",
+            "1",
+            lower=0.0,
+            upper=1.0,
+            lower_open=False,
+            upper_open=False,
+            transform="interval",
             description="share of the momentum flux (M/2R)δ̇² in the floor force during compression",
         )
     }
@@ -109,7 +114,9 @@ class Model(eqx.Module):
     def __check_init__(self):
         check_choice("gas", self.gas, GAS_OPTIONS)
         check_declared(self)
-        if not isinstance(self.damping, tuple) or not all(isinstance(d, AbstractDamping) for d in self.damping):
+        if not isinstance(self.damping, tuple) or not all(
+            isinstance(d, AbstractDamping) for d in self.damping
+        ):
             raise ValueError(
                 f"damping={self.damping!r} is not a damping model; valid: None, an rbjax.AbstractDamping "
                 "(KelvinVoigt, HuntCrossley, Zener, …) or a tuple of them"
@@ -124,8 +131,16 @@ class Model(eqx.Module):
         if self.series is not None and not isinstance(self.series, SeriesKelvinVoigt):
             raise ValueError(f"series={self.series!r} must be None or an rbjax.SeriesKelvinVoigt")
         if not isinstance(self.floor, AbstractFloor):
-            raise ValueError(f"floor={self.floor!r} is not a floor; valid: an rbjax.terms.floors.kinds.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)")
-        check_range("max_deflection_ratio", self.max_deflection_ratio, lower=0.0, upper=float("inf"), upper_open=False)
+            raise ValueError(
+                f"floor={self.floor!r} is not a floor; valid: an rbjax.terms.floors.kinds.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)"
+            )
+        check_range(
+            "max_deflection_ratio",
+            self.max_deflection_ratio,
+            lower=0.0,
+            upper=float("inf"),
+            upper_open=False,
+        )
 
     @property
     def blocked_force(self) -> str:
@@ -160,7 +175,12 @@ class Model(eqx.Module):
     def num_internal_states(self) -> int:
         """States beyond (δ, δ̇): the damping laws', the ball mode's (w, ẇ), the series
         element's (w), then the floor's."""
-        return self.num_damping_states + self._num_mode_states + self._num_series_states + self.floor.num_states
+        return (
+            self.num_damping_states
+            + self._num_mode_states
+            + self._num_series_states
+            + self.floor.num_states
+        )
 
     def ball_mode_states(self, internal):
         """(w, ẇ) of the ball mode from the internal-state vector (empty without one)."""
@@ -185,14 +205,25 @@ class Model(eqx.Module):
             i += d.num_states
         return out
 
-    def term_starts(self, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
+    def term_starts(
+        self,
+        stiffness_N_per_m: float,
+        mass_kg: float,
+        restitution: float,
+        contact_time_s: float,
+        speed_m_per_s: float,
+    ) -> dict:
         """Start values for fitting the parameters of the damping laws, the ball mode and the
         series element (each term's ``start`` from the shell's stiffness, the ball's mass and
         the measured restitution, contact time and impact speed)."""
         out: dict = {}
         for term in (*self.damping, self.ball_mode, self.series):
             if term is not None:
-                out.update(type(term).start(stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s))
+                out.update(
+                    type(term).start(
+                        stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s
+                    )
+                )
         return out
 
     @property
@@ -286,7 +317,9 @@ class Solver(eqx.Module):
         return optx.Newton(rtol=1e-12, atol=1e-13)
 
 
-def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False, series: bool = False) -> Model:
+def superset_model(
+    base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False, series: bool = False
+) -> Model:
     """``base`` with every damping law of ``laws`` (default: all registered), the stiffening
     and (with ``ball_mode``, ``series``) the ball mode and the series element present but
     switched off (their ``off()`` values, β = 0, μ = 0, C = 0).
@@ -301,10 +334,22 @@ def superset_model(base: Model, laws=None, stiffening: bool = True, ball_mode: b
     laws = tuple(DAMPING_MODELS.values()) if laws is None else tuple(laws)
     have = {type(d) for d in base.damping}
     damping = base.damping + tuple(law.off() for law in laws if law not in have)
-    stiff = base.stiffening if base.stiffening is not None else (CubicStiffening(0.0) if stiffening else None)
+    stiff = (
+        base.stiffening
+        if base.stiffening is not None
+        else (CubicStiffening(0.0) if stiffening else None)
+    )
     mode = base.ball_mode if base.ball_mode is not None else (BallMode.off() if ball_mode else None)
-    element = base.series if base.series is not None else (SeriesKelvinVoigt.off() if series else None)
+    element = (
+        base.series if base.series is not None else (SeriesKelvinVoigt.off() if series else None)
+    )
     return Model(
-        gas=base.gas, damping=damping, stiffening=stiff, max_deflection_ratio=base.max_deflection_ratio,
-        momentum_flux_weight=base.momentum_flux_weight, ball_mode=mode, series=element, floor=base.floor,
+        gas=base.gas,
+        damping=damping,
+        stiffening=stiff,
+        max_deflection_ratio=base.max_deflection_ratio,
+        momentum_flux_weight=base.momentum_flux_weight,
+        ball_mode=mode,
+        series=element,
+        floor=base.floor,
     )

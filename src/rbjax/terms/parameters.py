@@ -47,7 +47,9 @@ def _leaf_entries(height_m, ball, model):
             owner = _step(owner, key)
         key = path[-1]
         if not isinstance(key, jax.tree_util.GetAttrKey):
-            raise TypeError(f"parameter at {jax.tree_util.keystr(path)} is not a named field of a term")
+            raise TypeError(
+                f"parameter at {jax.tree_util.keystr(path)} is not a named field of a term"
+            )
         spec = declarations(owner).get(key.name)
         if spec is None:
             raise TypeError(
@@ -58,7 +60,9 @@ def _leaf_entries(height_m, ball, model):
     names = [n for n, _, _ in out]
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
-        raise ValueError(f"parameter names {dupes} occur in more than one term; names must be unique")
+        raise ValueError(
+            f"parameter names {dupes} occur in more than one term; names must be unique"
+        )
     return out
 
 
@@ -85,13 +89,17 @@ class ParameterInfo:
         return self.spec.unit
 
 
-def parameter_names(height_m: ArrayLike = 1.0, ball: Ball | None = None, model: Model | None = None) -> tuple[str, ...]:
+def parameter_names(
+    height_m: ArrayLike = 1.0, ball: Ball | None = None, model: Model | None = None
+) -> tuple[str, ...]:
     """Names of the continuous parameters of an impact, in vector order."""
     ball, model = _defaults(ball, model)
     return tuple(n for n, _, _ in _leaf_entries(height_m, ball, model))
 
 
-def parameter_table(height_m: ArrayLike, ball: Ball | None, model: Model | None) -> tuple[ParameterInfo, ...]:
+def parameter_table(
+    height_m: ArrayLike, ball: Ball | None, model: Model | None
+) -> tuple[ParameterInfo, ...]:
     """Name, value and declaration of every parameter of the impact (scalar values)."""
     ball, model = _defaults(ball, model)
     tree = (height_m, ball, model)
@@ -110,7 +118,9 @@ def declaration(name: str, ball=None, model=None) -> Parameter:
     for n, spec, _ in _leaf_entries(1.0, ball, model):
         if n == name:
             return spec
-    raise ValueError(f"parameter {name!r} is not known; valid: {', '.join(parameter_names(1.0, ball, model))}")
+    raise ValueError(
+        f"parameter {name!r} is not known; valid: {', '.join(parameter_names(1.0, ball, model))}"
+    )
 
 
 def _defaults(ball, model):
@@ -129,7 +139,9 @@ def from_vector(vector, ball, model):
     leaves, treedef = jax.tree_util.tree_flatten((0.0, ball, model))
     n = len(leaves)
     if jnp.shape(vector) != (n,):
-        raise ValueError(f"parameter vector has shape {jnp.shape(vector)}; expected ({n},) for {parameter_names(1.0, ball, model)}")
+        raise ValueError(
+            f"parameter vector has shape {jnp.shape(vector)}; expected ({n},) for {parameter_names(1.0, ball, model)}"
+        )
     return jax.tree_util.tree_unflatten(treedef, [vector[i] for i in range(n)])
 
 

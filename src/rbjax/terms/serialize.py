@@ -83,10 +83,20 @@ def model_to_dict(model: Model) -> dict:
     stiffening = None if model.stiffening is None else _fields(model.stiffening)
     w = as_float(model.momentum_flux_weight)
     out: dict[str, Any] = {"gas": model.gas}
-    out.update({"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w})
-    out.update({"max_deflection_ratio": as_float(model.max_deflection_ratio), "damping": damping, "stiffening": stiffening})
+    out.update(
+        {"blocked_force": model.blocked_force} if w in (0.0, 1.0) else {"momentum_flux_weight": w}
+    )
+    out.update(
+        {
+            "max_deflection_ratio": as_float(model.max_deflection_ratio),
+            "damping": damping,
+            "stiffening": stiffening,
+        }
+    )
     out["ball_mode"] = None if model.ball_mode is None else _fields(model.ball_mode)
-    if model.series is not None:  # absent, not null, without one: files written before it stay valid
+    if (
+        model.series is not None
+    ):  # absent, not null, without one: files written before it stay valid
         out["series"] = _fields(model.series)
     out["floor"] = {"name": model.floor.name, **_fields(model.floor)}
     return out
@@ -158,7 +168,9 @@ def to_json(obj) -> str:
 
 def save_params(path, ball: Ball, model: Model, **extra) -> None:
     """Write ``{"ball": .., "model": .., **extra}`` as JSON."""
-    Path(path).write_text(json.dumps({"ball": ball_to_dict(ball), "model": model_to_dict(model), **extra}, indent=2))
+    Path(path).write_text(
+        json.dumps({"ball": ball_to_dict(ball), "model": model_to_dict(model), **extra}, indent=2)
+    )
 
 
 def load_params(path) -> tuple[Ball, Model]:

@@ -47,8 +47,16 @@ class SeriesKelvinVoigt(eqx.Module):
     name: ClassVar[str] = "series-kelvin-voigt"
     num_states: ClassVar[int] = 1
     PARAMETERS: ClassVar = {
-        "series_compliance_m_per_N": Parameter("m/N", **NON_NEGATIVE, description="C = 1/k_b, compliance of the spring in series with the shell (τẇ = −(w + C F_c))"),
-        "series_time_constant_s": Parameter("s", **POSITIVE, description="τ = c_b/k_b, relaxation time of the element in series with the shell"),
+        "series_compliance_m_per_N": Parameter(
+            "m/N",
+            **NON_NEGATIVE,
+            description="C = 1/k_b, compliance of the spring in series with the shell (τẇ = −(w + C F_c))",
+        ),
+        "series_time_constant_s": Parameter(
+            "s",
+            **POSITIVE,
+            description="τ = c_b/k_b, relaxation time of the element in series with the shell",
+        ),
     }
 
     def __check_init__(self):
@@ -62,7 +70,9 @@ class SeriesKelvinVoigt(eqx.Module):
     @property
     def damping_Ns_per_m(self):
         """c_b = τ/C (infinite when the term is off)."""
-        return jnp.asarray(self.series_time_constant_s) / jnp.asarray(self.series_compliance_m_per_N)
+        return jnp.asarray(self.series_time_constant_s) / jnp.asarray(
+            self.series_compliance_m_per_N
+        )
 
     def velocity_m_per_s(self, w, contact_force_N):
         """ẇ = −(w + C F_c)/τ."""
@@ -74,8 +84,18 @@ class SeriesKelvinVoigt(eqx.Module):
         return cls(0.0, 1e-3)
 
     @classmethod
-    def start(cls, stiffness_N_per_m: float, mass_kg: float, restitution: float, contact_time_s: float, speed_m_per_s: float) -> dict:
+    def start(
+        cls,
+        stiffness_N_per_m: float,
+        mass_kg: float,
+        restitution: float,
+        contact_time_s: float,
+        speed_m_per_s: float,
+    ) -> dict:
         """Start values for fitting: a spring five times stiffer than the shell's, relaxing in a
         quarter of the contact (k_b ≈ 5 k, c_b ≈ 5 k t_c/4: near what fits of the ball mode
         reach in their overdamped limit)."""
-        return {"series_compliance_m_per_N": 0.2 / stiffness_N_per_m, "series_time_constant_s": 0.25 * contact_time_s}
+        return {
+            "series_compliance_m_per_N": 0.2 / stiffness_N_per_m,
+            "series_time_constant_s": 0.25 * contact_time_s,
+        }

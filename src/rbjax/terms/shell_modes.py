@@ -97,20 +97,32 @@ def _scalar_ball(ball: Ball) -> dict[str, float]:
     if not isinstance(ball, Ball):
         raise TypeError(f"ball={ball!r} must be an rbjax.Ball")
     try:
-        vals = {f: as_float(getattr(ball, f)) for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")}
+        vals = {
+            f: as_float(getattr(ball, f))
+            for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
+        }
     except (TypeError, ValueError) as exc:
         raise ValueError(f"ball must have scalar fields (one ball, not a batch): {exc}") from None
     return vals
 
 
 def _check_n_max(n_max) -> int:
-    if isinstance(n_max, bool) or not isinstance(n_max, (int, np.integer)) or n_max < 0 or n_max > 40:
+    if (
+        isinstance(n_max, bool)
+        or not isinstance(n_max, (int, np.integer))
+        or n_max < 0
+        or n_max > 40
+    ):
         raise ValueError(f"n_max={n_max!r} must be an integer in [0, 40]")
     return int(n_max)
 
 
 def _check_count(name, value, upper=20) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= upper:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, np.integer))
+        or not 1 <= value <= upper
+    ):
         raise ValueError(f"{name}={value!r} must be an integer in [1, {upper}]")
     return int(value)
 
@@ -118,7 +130,9 @@ def _check_count(name, value, upper=20) -> int:
 def _check_poisson(nu: float, upper_closed: bool) -> None:
     ok = -1.0 < nu <= 0.5 if upper_closed else -1.0 < nu < 0.5
     if not (math.isfinite(nu) and ok):
-        raise ValueError(f"poisson={nu!r} is outside the valid range (-1, 0.5{']' if upper_closed else ')'}")
+        raise ValueError(
+            f"poisson={nu!r} is outside the valid range (-1, 0.5{']' if upper_closed else ')'}"
+        )
 
 
 def shell_density_kg_per_m3(ball: Ball = JIS_RUBBER_BALL) -> float:
@@ -168,7 +182,9 @@ def _thin_matrices(n: int, poisson: float, thickness_ratio: float):
     # a² κ_θ = −(xP' − λP)(W − U), a² κ_φ = xP'(W − U).
     e_t = np.stack([x * dP - lam * P, P])  # coefficients of (U, W)
     e_p = np.stack([-x * dP, P])
-    k_t = np.stack([(x * dP - lam * P), -(x * dP - lam * P)])  # (U, W) coefficients of −(xP'−λP)(W−U)
+    k_t = np.stack(
+        [(x * dP - lam * P), -(x * dP - lam * P)]
+    )  # (U, W) coefficients of −(xP'−λP)(W−U)
     k_p = np.stack([-x * dP, x * dP])
 
     def form(a, b):
@@ -294,7 +310,13 @@ def elastic_sphere_omega(
     vals = _elastic_det(grid, n, inner_ratio, gamma, nu)
     roots: list[float] = []
     for i in np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0):
-        root = brentq(lambda w: float(_elastic_det(w, n, inner_ratio, gamma, nu)), grid[i], grid[i + 1], xtol=1e-13, rtol=1e-13)
+        root = brentq(
+            lambda w: float(_elastic_det(w, n, inner_ratio, gamma, nu)),
+            grid[i],
+            grid[i + 1],
+            xtol=1e-13,
+            rtol=1e-13,
+        )
         roots.append(float(root))
         if len(roots) == n_roots:
             break
@@ -343,11 +365,15 @@ class ShellModes:
     def table(self) -> str:
         """A Markdown table: n, branch, frequency."""
         lines = [f"| n | branch | f ({self.theory}) (Hz) |", "|---|---|---|"]
-        lines += [f"| {n} | {b} | {f:.1f} |" for n, b, f in zip(self.n, self.branch, self.frequency_Hz)]
+        lines += [
+            f"| {n} | {b} | {f:.1f} |" for n, b, f in zip(self.n, self.branch, self.frequency_Hz)
+        ]
         return "\n".join(lines)
 
 
-def shell_frequencies_Hz(ball: Ball = JIS_RUBBER_BALL, n_max: int = 4, theory: str = "elastic", *, n_roots: int = 2) -> ShellModes:
+def shell_frequencies_Hz(
+    ball: Ball = JIS_RUBBER_BALL, n_max: int = 4, theory: str = "elastic", *, n_roots: int = 2
+) -> ShellModes:
     """Axisymmetric free-vibration frequencies of the ball's shell, n = 0 … ``n_max``.
 
     Args:
@@ -368,7 +394,9 @@ def shell_frequencies_Hz(ball: Ball = JIS_RUBBER_BALL, n_max: int = 4, theory: s
     b = _scalar_ball(ball)
     R, h, E, nu = b["radius_m"], b["wall_m"], b["youngs_Pa"], b["poisson"]
     if not (R > 0 and 0 < h < R and E > 0 and b["mass_kg"] > 0):
-        raise ValueError(f"ball: need R > 0, 0 < h < R, E > 0, M > 0; got R={R}, h={h}, E={E}, M={b['mass_kg']}")
+        raise ValueError(
+            f"ball: need R > 0, 0 < h < R, E > 0, M > 0; got R={R}, h={h}, E={E}, M={b['mass_kg']}"
+        )
     _check_poisson(nu, True)
     rho = shell_density_kg_per_m3(ball)
     rows: list[tuple[int, int, float]] = []

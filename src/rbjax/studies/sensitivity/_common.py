@@ -16,16 +16,22 @@ def _is_lfe(name: str) -> bool:
     return name.startswith("lfe_")
 
 
-def check_ranges(ranges: Mapping, canonical: Callable = lambda n: n) -> dict[str, tuple[float, float]]:
+def check_ranges(
+    ranges: Mapping, canonical: Callable = lambda n: n
+) -> dict[str, tuple[float, float]]:
     """``ranges`` (parameter → (low, high)) checked: finite, low < high; names made canonical."""
     if not isinstance(ranges, Mapping) or not ranges:
-        raise ValueError(f"ranges={ranges!r} must be a non-empty mapping of parameter name to (low, high)")
+        raise ValueError(
+            f"ranges={ranges!r} must be a non-empty mapping of parameter name to (low, high)"
+        )
     out = {}
     for name, bounds in ranges.items():
         try:
             low, high = (float(b) for b in bounds)
         except (TypeError, ValueError):
-            raise ValueError(f"ranges[{name!r}]={bounds!r} must be a pair (low, high) of numbers") from None
+            raise ValueError(
+                f"ranges[{name!r}]={bounds!r} must be a pair (low, high) of numbers"
+            ) from None
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise ValueError(f"ranges[{name!r}]=({low!r}, {high!r}) must be finite with low < high")
         out[canonical(name)] = (low, high)
@@ -34,7 +40,11 @@ def check_ranges(ranges: Mapping, canonical: Callable = lambda n: n) -> dict[str
 
 def salib_problem(ranges: Mapping) -> dict:
     """The SALib problem of independent uniform inputs over ``ranges`` (checked)."""
-    return {"num_vars": len(ranges), "names": list(ranges), "bounds": [list(b) for b in ranges.values()]}
+    return {
+        "num_vars": len(ranges),
+        "names": list(ranges),
+        "bounds": [list(b) for b in ranges.values()],
+    }
 
 
 def check_count(name: str, value, lowest: int, power_of_two: bool = False, why: str = "") -> int:
@@ -42,7 +52,9 @@ def check_count(name: str, value, lowest: int, power_of_two: bool = False, why: 
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= lowest
     if ok and power_of_two and value & (value - 1):
         below = 1 << (int(value).bit_length() - 1)
-        raise ValueError(f"{name}={value!r} must be a power of two{why}: e.g. {below} or {2 * below}")
+        raise ValueError(
+            f"{name}={value!r} must be a power of two{why}: e.g. {below} or {2 * below}"
+        )
     if not ok:
         raise ValueError(f"{name}={value!r} must be an integer ≥ {lowest}{why}")
     return int(value)
@@ -55,7 +67,11 @@ def inputs_dict(x: np.ndarray, names) -> dict[str, np.ndarray]:
 
 def outputs_dict(y, n_rows: int) -> dict[str, np.ndarray]:
     """``func``'s result as output name → (n_rows,) float array (a bare array is ``"y"``)."""
-    out = {k: np.asarray(v, dtype=float) for k, v in y.items()} if isinstance(y, Mapping) else {"y": np.asarray(y, dtype=float)}
+    out = (
+        {k: np.asarray(v, dtype=float) for k, v in y.items()}
+        if isinstance(y, Mapping)
+        else {"y": np.asarray(y, dtype=float)}
+    )
     for name, v in out.items():
         if v.shape != (n_rows,):
             raise ValueError(f"func returned {name!r} with shape {v.shape}; expected ({n_rows},)")
@@ -79,7 +95,9 @@ def interval(value, half_width) -> np.ndarray:
     return np.stack([value - half_width, value + half_width], axis=-1)
 
 
-def shared_fields(ranges: Mapping, outputs: Mapping, n_evaluations: int, res: Mapping) -> dict[str, Any]:
+def shared_fields(
+    ranges: Mapping, outputs: Mapping, n_evaluations: int, res: Mapping
+) -> dict[str, Any]:
     """The fields every result of :mod:`~rbjax.studies.sensitivity.results` has, from the
     checked ``ranges``, the outputs (by name) and the per-output ``n_valid`` and ``salib``."""
     return {

@@ -23,7 +23,11 @@ from ...solve.simulate import make_model
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
 
-DISTRIBUTION_KINDS = {"uniform": ("low", "high"), "normal": ("mean", "sd"), "lognormal": ("median", "sigma")}
+DISTRIBUTION_KINDS = {
+    "uniform": ("low", "high"),
+    "normal": ("mean", "sd"),
+    "lognormal": ("median", "sigma"),
+}
 
 
 def _distribution(name: str, spec) -> tuple[str, float, float]:
@@ -35,21 +39,38 @@ def _distribution(name: str, spec) -> tuple[str, float, float]:
         if keys is None or set(spec) != set(keys):
             raise ValueError(
                 f"distributions[{name!r}]={spec!r} (kind {kind!r}) is not valid; valid: "
-                + "; ".join(f"{{kind = {k!r}, {', '.join(v)}}}" for k, v in DISTRIBUTION_KINDS.items())
+                + "; ".join(
+                    f"{{kind = {k!r}, {', '.join(v)}}}" for k, v in DISTRIBUTION_KINDS.items()
+                )
             )
         a, b = (spec[k] for k in keys)
     else:
         try:
             kind, a, b = spec
         except (TypeError, ValueError):
-            raise ValueError(f"distributions[{name!r}]={spec!r} must be a mapping or (kind, a, b)") from None
+            raise ValueError(
+                f"distributions[{name!r}]={spec!r} must be a mapping or (kind, a, b)"
+            ) from None
         if kind not in DISTRIBUTION_KINDS:
-            raise ValueError(f"distributions[{name!r}] kind {kind!r} is not known; valid: {', '.join(DISTRIBUTION_KINDS)}")
+            raise ValueError(
+                f"distributions[{name!r}] kind {kind!r} is not known; valid: {', '.join(DISTRIBUTION_KINDS)}"
+            )
     a, b = float(a), float(b)
-    ok = math.isfinite(a) and math.isfinite(b) and (a < b if kind == "uniform" else b > 0.0) and (kind != "lognormal" or a > 0.0)
+    ok = (
+        math.isfinite(a)
+        and math.isfinite(b)
+        and (a < b if kind == "uniform" else b > 0.0)
+        and (kind != "lognormal" or a > 0.0)
+    )
     if not ok:
-        need = {"uniform": "low < high", "normal": "sd > 0", "lognormal": "median > 0 and sigma > 0"}[kind]
-        raise ValueError(f"distributions[{name!r}] = {kind}({a!r}, {b!r}) is not valid: needs {need}")
+        need = {
+            "uniform": "low < high",
+            "normal": "sd > 0",
+            "lognormal": "median > 0 and sigma > 0",
+        }[kind]
+        raise ValueError(
+            f"distributions[{name!r}] = {kind}({a!r}, {b!r}) is not valid: needs {need}"
+        )
     return kind, a, b
 
 
@@ -76,7 +97,9 @@ def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[f
         return (math.nan, math.nan)
     from scipy.stats import binomtest
 
-    ci = binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    ci = binomtest(int(successes), int(n)).proportion_ci(
+        confidence_level=confidence, method="wilson"
+    )
     return (float(ci.low), float(ci.high))
 
 
@@ -118,7 +141,9 @@ class ConformanceProbability:
         }
 
     def table(self) -> str:
-        lines = [f"Conformance probability, {self.n_valid} valid of {self.n_samples} samples, {self.confidence:.0%} Wilson interval"]
+        lines = [
+            f"Conformance probability, {self.n_valid} valid of {self.n_samples} samples, {self.confidence:.0%} Wilson interval"
+        ]
         for k, p in self.probability.items():
             lo, hi = self.interval[k]
             lines.append(f"  {k:<18} {p:7.4f}  [{lo:.4f}, {hi:.4f}]")
@@ -133,13 +158,22 @@ def conformance_flags(values: Mapping, tolerances=None) -> dict[str, np.ndarray]
 
     tol = RUBBER_BALL_TOLERANCES if tolerances is None else tolerances
     inside = lambda t, v: (t.lower <= v) & (v <= t.upper)  # noqa: E731
-    flags = {f"lfe_{b}_dB": inside(tol.lfe_octave_dB[b], values[f"lfe_{b}_dB"]) for b in TOLERANCED_OCTAVE_BANDS}
+    flags = {
+        f"lfe_{b}_dB": inside(tol.lfe_octave_dB[b], values[f"lfe_{b}_dB"])
+        for b in TOLERANCED_OCTAVE_BANDS
+    }
     flags["lfe"] = np.all(np.stack(list(flags.values())), axis=0)
     flags["contact_time_s"] = inside(tol.contact_time, values["contact_time_s"])
     flags["restitution"] = inside(tol.restitution, values["restitution"])
     flags["mass_kg"] = inside(tol.mass, values["mass_kg"])
     flags["height_m"] = inside(tol.drop_height, values["height_m"])
-    flags["overall"] = flags["lfe"] & flags["contact_time_s"] & flags["restitution"] & flags["mass_kg"] & flags["height_m"]
+    flags["overall"] = (
+        flags["lfe"]
+        & flags["contact_time_s"]
+        & flags["restitution"]
+        & flags["mass_kg"]
+        & flags["height_m"]
+    )
     return flags
 
 
@@ -178,13 +212,27 @@ def conformance_probability(
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
     if model is None:
-        model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+        model = make_model(
+            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
+        )
     if not isinstance(distributions, Mapping) or not distributions:
-        raise ValueError(f"distributions={distributions!r} must be a non-empty mapping of parameter name to distribution")
+        raise ValueError(
+            f"distributions={distributions!r} must be a non-empty mapping of parameter name to distribution"
+        )
     distributions = {canonical_name(k, model): v for k, v in distributions.items()}
     parsed = {k: _distribution(k, v) for k, v in distributions.items()}
     samples = draw_samples(distributions, int(n_samples), seed)
-    out = evaluate(samples, height_m=height_m, ball=ball, model=model, solver=solver, lfe=True, chunk_size=chunk_size, devices=devices, progress=progress)
+    out = evaluate(
+        samples,
+        height_m=height_m,
+        ball=ball,
+        model=model,
+        solver=solver,
+        lfe=True,
+        chunk_size=chunk_size,
+        devices=devices,
+        progress=progress,
+    )
     n = int(n_samples)
     values = dict(out)
     values["mass_kg"] = samples.get("mass_kg", np.full(n, as_float(ball.mass_kg)))
@@ -204,5 +252,9 @@ def conformance_probability(
         probability=probability,
         interval=interval,
         distributions=parsed,
-        samples={**{f"input_{k}": v for k, v in samples.items()}, **out, **{f"pass_{k}": v & valid for k, v in flags.items()}},
+        samples={
+            **{f"input_{k}": v for k, v in samples.items()},
+            **out,
+            **{f"pass_{k}": v & valid for k, v in flags.items()},
+        },
     )

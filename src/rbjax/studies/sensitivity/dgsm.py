@@ -78,8 +78,16 @@ class DGSMResult(IndexResult):
 
     _METHOD = "dgsm"
     _RANKING = "total_bound"
-    _INDICES = (("nu", "nu", "nu_ci"), ("nu_fd", "nu_fd", "nu_fd_ci"), ("S_T <=", "total_bound", None), ("(fd)", "total_bound_fd", None))
-    _PLOTTED = (("S_T bound (exact)", "total_bound", None), ("S_T bound (finite diff.)", "total_bound_fd", None))
+    _INDICES = (
+        ("nu", "nu", "nu_ci"),
+        ("nu_fd", "nu_fd", "nu_fd_ci"),
+        ("S_T <=", "total_bound", None),
+        ("(fd)", "total_bound_fd", None),
+    )
+    _PLOTTED = (
+        ("S_T bound (exact)", "total_bound", None),
+        ("S_T bound (finite diff.)", "total_bound_fd", None),
+    )
     _DESIGN = ("n_base", "delta", "confidence", "seconds_exact", "seconds_fd")
 
     def _title(self) -> str:
@@ -90,7 +98,11 @@ class DGSMResult(IndexResult):
 
     def _rank(self, output: str) -> np.ndarray:
         exact = np.asarray(self.total_bound[output], dtype=float)
-        return exact if np.any(np.isfinite(exact)) else np.asarray(self.total_bound_fd[output], dtype=float)
+        return (
+            exact
+            if np.any(np.isfinite(exact))
+            else np.asarray(self.total_bound_fd[output], dtype=float)
+        )
 
 
 def dgsm_measures(
@@ -133,14 +145,30 @@ def dgsm_measures(
         start = time.perf_counter()
         grads = jacobian(inputs_dict(x[:: d + 1], ranges))
         seconds_exact = time.perf_counter() - start
-        grads = {k: np.asarray(v, dtype=float) for k, v in (grads.items() if isinstance(grads, Mapping) else {"y": grads}.items())}
+        grads = {
+            k: np.asarray(v, dtype=float)
+            for k, v in (grads.items() if isinstance(grads, Mapping) else {"y": grads}.items())
+        }
         missing = [o for o in outputs if o not in grads or grads[o].shape != (n, d)]
         if missing:
             raise ValueError(f"jacobian returned no ({n}, {d}) derivatives for {missing}")
 
     z = float(norm.ppf(0.5 + confidence / 2.0))
     widths2 = np.array([(hi - lo) ** 2 for lo, hi in ranges.values()])
-    res: dict[str, dict] = {k: {} for k in ("var", "nu", "nu_ci", "bound", "nu_fd", "nu_fd_ci", "bound_fd", "n_valid", "salib")}
+    res: dict[str, dict] = {
+        k: {}
+        for k in (
+            "var",
+            "nu",
+            "nu_ci",
+            "bound",
+            "nu_fd",
+            "nu_fd_ci",
+            "bound_fd",
+            "n_valid",
+            "salib",
+        )
+    }
     for name, y in outputs.items():
         keep = finite_groups(y, d + 1)
         if grads:
@@ -154,10 +182,19 @@ def dgsm_measures(
         if m < 2 or not variance > 0.0:
             continue
         rows = np.repeat(keep, d + 1)
-        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
+        si = analyze.analyze(
+            problem,
+            x[rows],
+            y[rows],
+            num_resamples=n_bootstrap,
+            conf_level=confidence,
+            seed=salib_seed(seed),
+        )
         res["salib"][name] = si
         res["nu_fd"][name] = np.asarray(si["vi"], dtype=float)
-        res["nu_fd_ci"][name] = interval(si["vi"], z * np.asarray(si["vi_std"]) / math.sqrt(m))  # SALib's std of (Δf/Δx)²
+        res["nu_fd_ci"][name] = interval(
+            si["vi"], z * np.asarray(si["vi_std"]) / math.sqrt(m)
+        )  # SALib's std of (Δf/Δx)²
         res["bound_fd"][name] = np.asarray(si["dgsm"], dtype=float)
         if grads:
             squares = grads[name][keep] ** 2

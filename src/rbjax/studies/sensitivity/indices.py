@@ -56,7 +56,11 @@ def _random_saltelli(problem: dict, n: int, second_order: bool, seed: int) -> np
     a, b = base[:, :d], base[:, d:]
     eye = np.eye(d, dtype=bool)
     ab = np.where(eye[None], b[:, None, :], a[:, None, :])  # (n, d, d): A with column i from B
-    blocks = [a[:, None], ab] + ([np.where(eye[None], a[:, None, :], b[:, None, :])] if second_order else []) + [b[:, None]]
+    blocks = (
+        [a[:, None], ab]
+        + ([np.where(eye[None], a[:, None, :], b[:, None, :])] if second_order else [])
+        + [b[:, None]]
+    )
     unit = np.concatenate(blocks, axis=1).reshape(-1, d)
     low, high = np.array(problem["bounds"]).T
     return low + (high - low) * unit
@@ -92,8 +96,14 @@ def sobol_indices(
     """
     ranges = check_ranges(ranges)
     if design not in SOBOL_DESIGNS:
-        raise ValueError(f"design={design!r} is not known; valid: {', '.join(map(repr, SOBOL_DESIGNS))}")
-    why = " for the Sobol' sequence design (its balance holds for 2^m points)" if design == "sobol" else ""
+        raise ValueError(
+            f"design={design!r} is not known; valid: {', '.join(map(repr, SOBOL_DESIGNS))}"
+        )
+    why = (
+        " for the Sobol' sequence design (its balance holds for 2^m points)"
+        if design == "sobol"
+        else ""
+    )
     n = check_count("n_base", n_base, 2, power_of_two=design == "sobol", why=why)
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
@@ -108,9 +118,14 @@ def sobol_indices(
     step = 2 * d + 2 if second_order else d + 2
     inputs = inputs_dict(x, ranges)
     outputs = outputs_dict(func(inputs), n * step)
-    block = np.concatenate([[0], 2 + np.arange(d), 2 + d + np.arange(d) if second_order else [], [1]]).astype(int)
+    block = np.concatenate(
+        [[0], 2 + np.arange(d), 2 + d + np.arange(d) if second_order else [], [1]]
+    ).astype(int)
 
-    res: dict[str, dict] = {k: {} for k in ("S1", "ST", "S1_ci", "ST_ci", "S2", "S2_ci", "mean", "var", "n_valid", "salib")}
+    res: dict[str, dict] = {
+        k: {}
+        for k in ("S1", "ST", "S1_ci", "ST_ci", "S2", "S2_ci", "mean", "var", "n_valid", "salib")
+    }
     nan_d, nan_dd = np.full(d, np.nan), np.full((d, d), np.nan)
     for name, y in outputs.items():
         keep = finite_groups(y, step)
@@ -125,7 +140,14 @@ def sobol_indices(
             res["S1_ci"][name] = res["ST_ci"][name] = np.full((d, 2), np.nan)
             res["S2"][name] = res["S2_ci"][name] = nan_dd
             continue
-        si = analyze.analyze(problem, rows.reshape(-1), calc_second_order=second_order, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
+        si = analyze.analyze(
+            problem,
+            rows.reshape(-1),
+            calc_second_order=second_order,
+            num_resamples=n_bootstrap,
+            conf_level=confidence,
+            seed=salib_seed(seed),
+        )
         res["salib"][name] = si
         _store_first_and_total(res, name, si)
         if second_order:
@@ -143,7 +165,12 @@ def sobol_indices(
         second_order_ci=res["S2_ci"] if second_order else None,
         mean=res["mean"],
         variance=res["var"],
-        samples={**inputs, **outputs, "block": np.tile(block, n), "base": np.repeat(np.arange(n), step)},
+        samples={
+            **inputs,
+            **outputs,
+            "block": np.tile(block, n),
+            "base": np.repeat(np.arange(n), step),
+        },
     )
 
 
@@ -169,22 +196,30 @@ def morris_screening(
     r = check_count("n_trajectories", n_trajectories, 2)
     p = check_count("n_levels", n_levels, 2)
     if p % 2:
-        raise ValueError(f"n_levels={n_levels!r} must be an even integer ≥ 2 (an odd grid biases the effects)")
+        raise ValueError(
+            f"n_levels={n_levels!r} must be an even integer ≥ 2 (an odd grid biases the effects)"
+        )
     if optimal_trajectories is not None:
         k = check_count("optimal_trajectories", optimal_trajectories, 2)
         if k >= r:
-            raise ValueError(f"optimal_trajectories={k!r} must be fewer than n_trajectories={r!r} (the candidates it picks from)")
+            raise ValueError(
+                f"optimal_trajectories={k!r} must be fewer than n_trajectories={r!r} (the candidates it picks from)"
+            )
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
     from SALib.analyze import morris as analyze
     from SALib.sample import morris as sample
 
     problem, d = salib_problem(ranges), len(ranges)
-    x = sample.sample(problem, r, num_levels=p, optimal_trajectories=optimal_trajectories, seed=seed)
+    x = sample.sample(
+        problem, r, num_levels=p, optimal_trajectories=optimal_trajectories, seed=seed
+    )
     n_traj = x.shape[0] // (d + 1)
     inputs = inputs_dict(x, ranges)
     outputs = outputs_dict(func(inputs), x.shape[0])
-    res: dict[str, dict] = {k: {} for k in ("mu", "mu_star", "sigma", "mu_star_ci", "n_valid", "salib")}
+    res: dict[str, dict] = {
+        k: {} for k in ("mu", "mu_star", "sigma", "mu_star_ci", "n_valid", "salib")
+    }
     for name, y in outputs.items():
         keep = finite_groups(y, d + 1)
         res["n_valid"][name] = m = int(keep.sum())
@@ -193,7 +228,15 @@ def morris_screening(
             res["mu_star_ci"][name] = np.full((d, 2), np.nan)
             continue
         rows = np.repeat(keep, d + 1)
-        si = analyze.analyze(problem, x[rows], y[rows], num_resamples=n_bootstrap, conf_level=confidence, num_levels=p, seed=salib_seed(seed))
+        si = analyze.analyze(
+            problem,
+            x[rows],
+            y[rows],
+            num_resamples=n_bootstrap,
+            conf_level=confidence,
+            num_levels=p,
+            seed=salib_seed(seed),
+        )
         res["salib"][name] = si
         for key in ("mu", "mu_star", "sigma"):
             res[key][name] = np.asarray(si[key], dtype=float)
@@ -230,7 +273,12 @@ def fast_indices(
     """
     ranges = check_ranges(ranges)
     m_int = check_count("interference", interference, 1)
-    n = check_count("n_per_parameter", n_per_parameter, 4 * m_int**2 + 1, why=f" (N > 4 M² = {4 * m_int**2} for M = {m_int})")
+    n = check_count(
+        "n_per_parameter",
+        n_per_parameter,
+        4 * m_int**2 + 1,
+        why=f" (N > 4 M² = {4 * m_int**2} for M = {m_int})",
+    )
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
     from SALib.analyze import fast as analyze
@@ -249,7 +297,14 @@ def fast_indices(
             continue
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", "FAST confidence intervals", UserWarning)
-            si = analyze.analyze(problem, y, M=m_int, num_resamples=n_bootstrap, conf_level=confidence, seed=salib_seed(seed))
+            si = analyze.analyze(
+                problem,
+                y,
+                M=m_int,
+                num_resamples=n_bootstrap,
+                conf_level=confidence,
+                seed=salib_seed(seed),
+            )
         res["salib"][name] = si
         _store_first_and_total(res, name, si)
     return FastResult(
@@ -265,7 +320,9 @@ def fast_indices(
     )
 
 
-def pawn_indices(func: Callable, ranges: Mapping, n_samples: int, *, n_conditioning: int = 10, seed: int = 0) -> PawnResult:
+def pawn_indices(
+    func: Callable, ranges: Mapping, n_samples: int, *, n_conditioning: int = 10, seed: int = 0
+) -> PawnResult:
     """PAWN indices of ``func`` (SALib; Pianosi & Wagener 2015) from ``n_samples`` Latin
     hypercube points, each parameter's range cut into ``n_conditioning`` slices."""
     ranges = check_ranges(ranges)

@@ -79,7 +79,9 @@ class Sensitivity:
         out = {}
         for o in self.outputs:
             scale = _LN10_OVER_10 if _is_lfe(o) else 1.0 / self.values[o]
-            out[o] = {p: self.jacobian[o][p] * self.parameter_values[p] * scale for p in self.parameters}
+            out[o] = {
+                p: self.jacobian[o][p] * self.parameter_values[p] * scale for p in self.parameters
+            }
         return out
 
     def to_dict(self) -> list[dict]:
@@ -94,8 +96,13 @@ class Sensitivity:
                     "status": names[i],
                     "parameters": {p: float(self.parameter_values[p][i]) for p in self.parameters},
                     "values": {o: float(self.values[o][i]) for o in self.outputs},
-                    "jacobian": {o: {p: float(self.jacobian[o][p][i]) for p in self.parameters} for o in self.outputs},
-                    "elasticity": {o: {p: float(el[o][p][i]) for p in self.parameters} for o in self.outputs},
+                    "jacobian": {
+                        o: {p: float(self.jacobian[o][p][i]) for p in self.parameters}
+                        for o in self.outputs
+                    },
+                    "elasticity": {
+                        o: {p: float(el[o][p][i]) for p in self.parameters} for o in self.outputs
+                    },
                 }
             )
         return rows
@@ -113,16 +120,24 @@ class Sensitivity:
         outputs = self.outputs if outputs is None else tuple(outputs)
         unknown = set(outputs) - set(self.outputs)
         if unknown:
-            raise ValueError(f"outputs {sorted(unknown)} are not known; valid: {', '.join(self.outputs)}")
+            raise ValueError(
+                f"outputs {sorted(unknown)} are not known; valid: {', '.join(self.outputs)}"
+            )
         n = len(self.height_m)
         if not (isinstance(height_index, (int, np.integer)) and 0 <= height_index < n):
-            raise ValueError(f"height_index={height_index!r} is outside the valid range: an integer in [0, {n - 1}]")
+            raise ValueError(
+                f"height_index={height_index!r} is outside the valid range: an integer in [0, {n - 1}]"
+            )
         i = int(height_index)
         el = self.elasticity
         ncols = min(3, len(outputs))
         nrows = math.ceil(len(outputs) / ncols)
         fig, axes = plt.subplots(
-            nrows, ncols, squeeze=False, layout="constrained", figsize=figsize or (4.0 * ncols, 0.35 * len(self.parameters) * nrows + 1.2 * nrows)
+            nrows,
+            ncols,
+            squeeze=False,
+            layout="constrained",
+            figsize=figsize or (4.0 * ncols, 0.35 * len(self.parameters) * nrows + 1.2 * nrows),
         )
         for ax, o in zip(axes.flat, outputs):
             vals = np.array([el[o][p][i] for p in self.parameters])
@@ -137,12 +152,17 @@ class Sensitivity:
             ax.tick_params(labelsize=8)
         for ax in list(axes.flat)[len(outputs) :]:
             ax.set_visible(False)
-        fig.suptitle(f"Local sensitivity at drop height {self.height_m[i]:g} m ({self.status_name[i]})", fontsize=10)
+        fig.suptitle(
+            f"Local sensitivity at drop height {self.height_m[i]:g} m ({self.status_name[i]})",
+            fontsize=10,
+        )
         return fig
 
 
 @functools.lru_cache(maxsize=16)
-def _local_jacobian_fn(names: tuple, wrt: tuple, solver: Solver, n_times: int, n_total: int, rate_Hz: float) -> Callable:
+def _local_jacobian_fn(
+    names: tuple, wrt: tuple, solver: Solver, n_times: int, n_total: int, rate_Hz: float
+) -> Callable:
     """Jitted (θ, ball, model) → (values, tangents per wrt parameter, status); one compile per setup."""
     from ...spectrum.levels import lfe_octave_dB
 
@@ -159,7 +179,12 @@ def _local_jacobian_fn(names: tuple, wrt: tuple, solver: Solver, n_times: int, n
 
     def fn(theta, ball, model):
         def tangent(i):
-            return {k: jnp.where(i == wrt.index(k), 1.0, 0.0) * jnp.ones_like(v) if k in wrt else jnp.zeros_like(v) for k, v in theta.items()}
+            return {
+                k: jnp.where(i == wrt.index(k), 1.0, 0.0) * jnp.ones_like(v)
+                if k in wrt
+                else jnp.zeros_like(v)
+                for k, v in theta.items()
+            }
 
         def push(i):
             return jax.jvp(lambda t: outputs(t, ball, model), (theta,), (tangent(i),), has_aux=True)
@@ -209,9 +234,19 @@ def local_sensitivity(
     if heights.ndim != 1:
         raise ValueError(f"height_m has shape {np.shape(height_m)}; expected a scalar or 1-D array")
     if model is None:
-        model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+        model = make_model(
+            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
+        )
     valid = parameter_names(model)
-    wrt = valid if wrt is None else tuple(dict.fromkeys(canonical_name(w, model) for w in ([wrt] if isinstance(wrt, str) else wrt)))
+    wrt = (
+        valid
+        if wrt is None
+        else tuple(
+            dict.fromkeys(
+                canonical_name(w, model) for w in ([wrt] if isinstance(wrt, str) else wrt)
+            )
+        )
+    )
     if not wrt:
         raise ValueError(f"wrt is empty; valid parameters: {', '.join(valid)}")
     wrt = tuple(p for p in valid if p in wrt)  # a canonical order: one compiled program per set
@@ -225,21 +260,28 @@ def local_sensitivity(
         n_times = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
 
     ball_arrays = ball.as_arrays()
-    theta = {row.name: jnp.asarray(row.value, dtype=jnp.float64) for row in parameter_table(1.0, ball, model)}
+    theta = {
+        row.name: jnp.asarray(row.value, dtype=jnp.float64)
+        for row in parameter_table(1.0, ball, model)
+    }
     theta["height_m"] = jnp.asarray(heights)
     fn = _local_jacobian_fn(valid, wrt, solver, n_times, n_total, float(rate_Hz))
     values, tangents, status = fn(theta, ball_arrays, model)
 
     status = np.asarray(status).astype(int)
     bad = status != 0
-    mask = lambda x: np.where(bad, np.nan, np.broadcast_to(np.asarray(x, dtype=float), heights.shape))  # noqa: E731
+    mask = lambda x: np.where(  # noqa: E731
+        bad, np.nan, np.broadcast_to(np.asarray(x, dtype=float), heights.shape)
+    )
     outputs = SCALAR_OUTPUTS + (lfe_output_names() if lfe else ())
     return Sensitivity(
         height_m=heights,
         parameters=wrt,
         outputs=outputs,
         values={o: mask(values[o]) for o in outputs},
-        parameter_values={p: np.broadcast_to(np.asarray(theta[p], dtype=float), heights.shape).copy() for p in wrt},
+        parameter_values={
+            p: np.broadcast_to(np.asarray(theta[p], dtype=float), heights.shape).copy() for p in wrt
+        },
         jacobian={o: {p: mask(tangents[o][j]) for j, p in enumerate(wrt)} for o in outputs},
         status=status,
     )

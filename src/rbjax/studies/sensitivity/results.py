@@ -111,10 +111,18 @@ class IndexResult:
         outputs = tuple(self.outputs if outputs is None else outputs)
         unknown = [o for o in outputs if o not in self.outputs]
         if unknown or not outputs:
-            raise ValueError(f"outputs={list(outputs)!r}: unknown {unknown}; valid: {', '.join(self.outputs)}")
+            raise ValueError(
+                f"outputs={list(outputs)!r}: unknown {unknown}; valid: {', '.join(self.outputs)}"
+            )
         ncols = min(4, len(outputs))
         nrows = -(-len(outputs) // ncols)
-        fig, axes = plt.subplots(nrows, ncols, figsize=figsize or (3.4 * ncols + 0.6, 3.4 * nrows), squeeze=False, layout="constrained")
+        fig, axes = plt.subplots(
+            nrows,
+            ncols,
+            figsize=figsize or (3.4 * ncols + 0.6, 3.4 * nrows),
+            squeeze=False,
+            layout="constrained",
+        )
         x = np.arange(len(self.parameters))
         plotted = self._PLOTTED or self._INDICES
         width = 0.8 / len(plotted)
@@ -122,7 +130,14 @@ class IndexResult:
             for k, (label, attr, ci) in enumerate(plotted):
                 value = np.asarray(getattr(self, attr)[o], dtype=float)
                 err = np.abs(np.asarray(getattr(self, ci)[o]).T - value) if ci else None
-                ax.bar(x + (k - (len(plotted) - 1) / 2) * width, value, width, yerr=err, capsize=2, label=label)
+                ax.bar(
+                    x + (k - (len(plotted) - 1) / 2) * width,
+                    value,
+                    width,
+                    yerr=err,
+                    capsize=2,
+                    label=label,
+                )
             ax.set_xticks(x, self.parameters, rotation=60, fontsize=8)
             ax.set_title(o, fontsize=9)
             ax.grid(alpha=0.3, axis="y")
@@ -174,16 +189,29 @@ class SobolResult(IndexResult):
         return f"Sobol indices, {self.n_evaluations} evaluations (N = {self.n_base}, {self.design} design), {self.confidence:.0%} bootstrap CI"
 
     def _extra(self, output: str) -> dict:
-        return super()._extra(output) | {"mean": self.mean[output], "variance": self.variance[output]}
+        return super()._extra(output) | {
+            "mean": self.mean[output],
+            "variance": self.variance[output],
+        }
 
     def _extra_indices(self, output: str) -> dict:
         if self.second_order is None or self.second_order_ci is None:
             return {}
         s2, ci = np.asarray(self.second_order[output]), np.asarray(self.second_order_ci[output])
-        pairs = [(i, j) for i in range(len(self.parameters)) for j in range(i + 1, len(self.parameters))]
+        pairs = [
+            (i, j) for i in range(len(self.parameters)) for j in range(i + 1, len(self.parameters))
+        ]
         return {
-            "second_order": {f"{self.parameters[i]},{self.parameters[j]}": float(s2[i, j]) for i, j in pairs},
-            "second_order_ci": {f"{self.parameters[i]},{self.parameters[j]}": [float(s2[i, j] - ci[i, j]), float(s2[i, j] + ci[i, j])] for i, j in pairs},
+            "second_order": {
+                f"{self.parameters[i]},{self.parameters[j]}": float(s2[i, j]) for i, j in pairs
+            },
+            "second_order_ci": {
+                f"{self.parameters[i]},{self.parameters[j]}": [
+                    float(s2[i, j] - ci[i, j]),
+                    float(s2[i, j] + ci[i, j]),
+                ]
+                for i, j in pairs
+            },
         }
 
 
@@ -276,7 +304,10 @@ class PawnResult(IndexResult):
     _DESIGN = ("n_samples", "n_conditioning")
 
     def _extra_indices(self, output: str) -> dict:
-        return {k: dict(zip(self.parameters, np.asarray(getattr(self, k)[output]).tolist())) for k in ("mean", "cv")}
+        return {
+            k: dict(zip(self.parameters, np.asarray(getattr(self, k)[output]).tolist()))
+            for k in ("mean", "cv")
+        }
 
     def _title(self) -> str:
         return f"PAWN indices (KS statistics), {self.n_evaluations} evaluations, {self.n_conditioning} slices"

@@ -32,19 +32,31 @@ from .results import FastResult, MorrisResult, PawnResult, SobolResult
 #: The methods of ``global_sensitivity`` and the function that runs each (``n`` is its first
 #: size argument: Sobol and DGSM base points, Morris trajectories, eFAST samples per parameter,
 #: PAWN samples).
-METHODS: dict[str, Callable] = {"sobol": sobol_indices, "morris": morris_screening, "fast": fast_indices, "pawn": pawn_indices, "dgsm": dgsm_measures}
+METHODS: dict[str, Callable] = {
+    "sobol": sobol_indices,
+    "morris": morris_screening,
+    "fast": fast_indices,
+    "pawn": pawn_indices,
+    "dgsm": dgsm_measures,
+}
 
 
 def _signature(method: str) -> inspect.Signature:
     if method not in METHODS:
-        raise ValueError(f"method={method!r} is not a known sensitivity method; valid: {', '.join(map(repr, METHODS))}")
+        raise ValueError(
+            f"method={method!r} is not a known sensitivity method; valid: {', '.join(map(repr, METHODS))}"
+        )
     return inspect.signature(METHODS[method])
 
 
 def method_options(method: str) -> tuple[str, ...]:
     """The keyword options of ``method`` (e.g. ``second_order``, ``n_levels``)."""
     parameters = _signature(method).parameters
-    return tuple(k for k, p in parameters.items() if p.kind is p.KEYWORD_ONLY and k not in ("seed", "jacobian"))
+    return tuple(
+        k
+        for k, p in parameters.items()
+        if p.kind is p.KEYWORD_ONLY and k not in ("seed", "jacobian")
+    )
 
 
 def size_name(method: str) -> str:
@@ -60,7 +72,9 @@ def impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
         expanded.extend(lfe_output_names() if o == "lfe" else [o])
     unknown = [o for o in expanded if o not in valid]
     if unknown or not expanded:
-        raise ValueError(f"outputs={list(outputs)!r}: unknown {unknown}; valid: 'lfe', {', '.join(valid)}")
+        raise ValueError(
+            f"outputs={list(outputs)!r}: unknown {unknown}; valid: 'lfe', {', '.join(valid)}"
+        )
     names = tuple(dict.fromkeys(expanded))
     return names, any(_is_lfe(o) for o in names)
 
@@ -116,9 +130,13 @@ def global_sensitivity(
     valid = method_options(method)
     unknown = sorted(set(options) - set(valid))
     if unknown:
-        raise ValueError(f"options {unknown} are not known for method={method!r}; valid: {', '.join(valid)}")
+        raise ValueError(
+            f"options {unknown} are not known for method={method!r}; valid: {', '.join(valid)}"
+        )
     if model is None:
-        model = make_model(gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening)
+        model = make_model(
+            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
+        )
     ranges = check_ranges(ranges, lambda name: canonical_name(name, model))
     names, lfe = impact_outputs(outputs)
     for name, (lo, hi) in ranges.items():  # bounds must be valid parameter values (named errors)
@@ -126,7 +144,17 @@ def global_sensitivity(
         assemble(bounds, height_m, ball, model)
         if name == "height_m":
             check_range("height_m", bounds[name], lower=0.0)
-    common = dict(height_m=height_m, ball=ball, model=model, solver=solver, method=path, lfe=lfe, chunk_size=chunk_size, devices=devices, progress=progress)
+    common = dict(
+        height_m=height_m,
+        ball=ball,
+        model=model,
+        solver=solver,
+        method=path,
+        lfe=lfe,
+        chunk_size=chunk_size,
+        devices=devices,
+        progress=progress,
+    )
 
     def func(inputs):
         out = evaluate(inputs, **common)

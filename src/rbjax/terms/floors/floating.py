@@ -83,14 +83,28 @@ class FloatingFloor(AbstractModalFloor):
     base_loss_factor: ArrayLike = 0.02
     name = "floating"
     PARAMETERS = {
-        "screed_thickness_m": Parameter("m", **POSITIVE, description="screed thickness t (m₁ = ρtA)"),
+        "screed_thickness_m": Parameter(
+            "m", **POSITIVE, description="screed thickness t (m₁ = ρtA)"
+        ),
         "screed_density_kg_per_m3": Parameter("kg/m^3", **POSITIVE, description="screed density ρ"),
         "area_m2": Parameter("m^2", **POSITIVE, description="screed area A moving with the ball"),
-        "dynamic_stiffness_N_per_m3": Parameter("N/m^3", **POSITIVE, description="dynamic stiffness s′ of the resilient layer (k₁ = s′A)"),
-        "base_mass_kg": Parameter("kg", **POSITIVE, description="modal mass m₂ of the base at the drive point"),
-        "base_frequency_Hz": Parameter("Hz", **NON_NEGATIVE, description="frequency f₂ of the base's mode (0: a free mass)"),
-        "layer_loss_factor": Parameter("1", **NON_NEGATIVE, description="loss factor of the resilient layer"),
-        "base_loss_factor": Parameter("1", **NON_NEGATIVE, description="loss factor of the base's spring"),
+        "dynamic_stiffness_N_per_m3": Parameter(
+            "N/m^3",
+            **POSITIVE,
+            description="dynamic stiffness s′ of the resilient layer (k₁ = s′A)",
+        ),
+        "base_mass_kg": Parameter(
+            "kg", **POSITIVE, description="modal mass m₂ of the base at the drive point"
+        ),
+        "base_frequency_Hz": Parameter(
+            "Hz", **NON_NEGATIVE, description="frequency f₂ of the base's mode (0: a free mass)"
+        ),
+        "layer_loss_factor": Parameter(
+            "1", **NON_NEGATIVE, description="loss factor of the resilient layer"
+        ),
+        "base_loss_factor": Parameter(
+            "1", **NON_NEGATIVE, description="loss factor of the base's spring"
+        ),
     }
 
     @property
@@ -102,7 +116,10 @@ class FloatingFloor(AbstractModalFloor):
         return self.screed_density_kg_per_m3 * self.screed_thickness_m * self.area_m2
 
     def modes(self):
-        m1, m2 = jnp.asarray(self.screed_mass_kg, dtype=jnp.float64), jnp.asarray(self.base_mass_kg, dtype=jnp.float64)
+        m1, m2 = (
+            jnp.asarray(self.screed_mass_kg, dtype=jnp.float64),
+            jnp.asarray(self.base_mass_kg, dtype=jnp.float64),
+        )
         k1 = jnp.asarray(self.dynamic_stiffness_N_per_m3 * self.area_m2, dtype=jnp.float64)
         k2 = m2 * (2.0 * jnp.pi * self.base_frequency_Hz) ** 2
         a, b, c = k1 / m1, -k1 / jnp.sqrt(m1 * m2), (k1 + k2) / m2
@@ -113,7 +130,9 @@ class FloatingFloor(AbstractModalFloor):
         phi1, phi2 = v1 / norm / jnp.sqrt(m1), v2 / norm / jnp.sqrt(m2)
         free = lam <= 0.0
         safe = jnp.where(free, 1.0, lam)
-        strain = self.layer_loss_factor * k1 * (phi1 - phi2) ** 2 + self.base_loss_factor * k2 * phi2**2
+        strain = (
+            self.layer_loss_factor * k1 * (phi1 - phi2) ** 2 + self.base_loss_factor * k2 * phi2**2
+        )
         omega = jnp.where(free, 0.0, jnp.sqrt(safe))
         return 1.0 / phi1**2, omega, jnp.where(free, 0.0, strain / safe)
 
@@ -135,7 +154,10 @@ class FloatingFloor(AbstractModalFloor):
     @property
     def layer_resonance_Hz(self):
         """f₀ = (1/2π)√(s′/m″), m″ = ρt: the screed on the layer over a rigid base (EN 12354-2 Annex C)."""
-        return jnp.sqrt(self.dynamic_stiffness_N_per_m3 / (self.screed_density_kg_per_m3 * self.screed_thickness_m)) / (2.0 * jnp.pi)
+        return jnp.sqrt(
+            self.dynamic_stiffness_N_per_m3
+            / (self.screed_density_kg_per_m3 * self.screed_thickness_m)
+        ) / (2.0 * jnp.pi)
 
     def force_transmissibility(self, freq_Hz):
         """T(f) = F_slab/F = 1/(1 − (f/f₀)²/(1 + jη)) of a locally reacting screed (module docstring); complex."""
@@ -144,5 +166,9 @@ class FloatingFloor(AbstractModalFloor):
 
     def modal_floor(self) -> ModalFloor:
         """The same modes as a ``ModalFloor`` of static values (concrete parameters only)."""
-        return ModalFloor(*(np.asarray(x, dtype=np.float64) for x in (self.mass_kg, self.frequency_Hz, self.loss_factor)))
-
+        return ModalFloor(
+            *(
+                np.asarray(x, dtype=np.float64)
+                for x in (self.mass_kg, self.frequency_Hz, self.loss_factor)
+            )
+        )

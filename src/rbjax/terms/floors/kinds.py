@@ -137,7 +137,11 @@ class Dashpot(_Impedance):
 
     floor_impedance_Ns_per_m: ArrayLike
     name = "dashpot"
-    PARAMETERS = {"floor_impedance_Ns_per_m": Parameter("N s/m", **POSITIVE, description="point impedance Z of the floor, u̇ = F/Z")}
+    PARAMETERS = {
+        "floor_impedance_Ns_per_m": Parameter(
+            "N s/m", **POSITIVE, description="point impedance Z of the floor, u̇ = F/Z"
+        )
+    }
 
     @property
     def impedance_Ns_per_m(self):
@@ -176,13 +180,23 @@ class InfinitePlate(_Impedance):
         "plate_youngs_Pa": Parameter("Pa", **POSITIVE, description="plate Young's modulus E"),
         "plate_density_kg_per_m3": Parameter("kg/m^3", **POSITIVE, description="plate density ρ"),
         "plate_poisson": Parameter(
-            "1", lower=-1.0, upper=0.5, upper_open=False, transform="interval", description="plate Poisson's ratio ν"
+            "1",
+            lower=-1.0,
+            upper=0.5,
+            upper_open=False,
+            transform="interval",
+            description="plate Poisson's ratio ν",
         ),
     }
 
     @property
     def impedance_Ns_per_m(self):
-        return plate_impedance_Ns_per_m(self.plate_thickness_m, self.plate_youngs_Pa, self.plate_density_kg_per_m3, self.plate_poisson)
+        return plate_impedance_Ns_per_m(
+            self.plate_thickness_m,
+            self.plate_youngs_Pa,
+            self.plate_density_kg_per_m3,
+            self.plate_poisson,
+        )
 
 
 def _static_tuple(name: str, values) -> tuple[float, ...]:
@@ -268,7 +282,9 @@ class ModalFloor(AbstractModalFloor):
             )
         for k, (m, f, eta) in enumerate(zip(self.mass_kg, self.frequency_Hz, self.loss_factor)):
             if not m > 0.0:
-                raise ValueError(f"mass_kg[{k}]={m!r} is outside the valid range (0, inf): a mode needs a positive mass")
+                raise ValueError(
+                    f"mass_kg[{k}]={m!r} is outside the valid range (0, inf): a mode needs a positive mass"
+                )
             if not f >= 0.0:
                 raise ValueError(f"frequency_Hz[{k}]={f!r} is outside the valid range [0, inf)")
             if not eta >= 0.0:
@@ -279,4 +295,8 @@ class ModalFloor(AbstractModalFloor):
         return len(self.mass_kg)
 
     def modes(self):
-        return jnp.asarray(self.mass_kg), 2.0 * jnp.pi * jnp.asarray(self.frequency_Hz), jnp.asarray(self.loss_factor)
+        return (
+            jnp.asarray(self.mass_kg),
+            2.0 * jnp.pi * jnp.asarray(self.frequency_Hz),
+            jnp.asarray(self.loss_factor),
+        )

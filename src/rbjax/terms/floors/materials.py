@@ -102,11 +102,37 @@ _C24_PERPENDICULAR_PA = 0.37e9
 MATERIALS: dict[str, Material] = {
     m.name: m
     for m in (
-        Material("concrete", 33.0e9, 2300.0, 0.2, "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 (reinforced, 1 % steel)"),
-        Material("steel", 210.0e9, 7850.0, 0.3, "EN 1993-1-1 §3.2.6 (E, ν); EN 1991-1-1 Table A.4 (ρ)"),
-        Material("osb", math.sqrt(3500.0e6 * 1400.0e6), 650.0, 0.3, "OSB/3: √(E_major E_minor), EN 300 Table 3 minima; ρ EN ISO 10456 Table 3; ν assumed"),
-        Material("chipboard", 2.5e9, 650.0, 0.3, "particleboard P4/P5 20–25 mm: E of the EN 312 bending-modulus requirement; ρ EN ISO 10456 / declared; ν assumed"),
-        Material("timber-c24", _C24_PARALLEL_PA, 420.0, 0.3, "C24 along the grain: E_0,mean and ρ_mean, EN 338 Table 1; ν assumed"),
+        Material(
+            "concrete",
+            33.0e9,
+            2300.0,
+            0.2,
+            "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 (reinforced, 1 % steel)",
+        ),
+        Material(
+            "steel", 210.0e9, 7850.0, 0.3, "EN 1993-1-1 §3.2.6 (E, ν); EN 1991-1-1 Table A.4 (ρ)"
+        ),
+        Material(
+            "osb",
+            math.sqrt(3500.0e6 * 1400.0e6),
+            650.0,
+            0.3,
+            "OSB/3: √(E_major E_minor), EN 300 Table 3 minima; ρ EN ISO 10456 Table 3; ν assumed",
+        ),
+        Material(
+            "chipboard",
+            2.5e9,
+            650.0,
+            0.3,
+            "particleboard P4/P5 20–25 mm: E of the EN 312 bending-modulus requirement; ρ EN ISO 10456 / declared; ν assumed",
+        ),
+        Material(
+            "timber-c24",
+            _C24_PARALLEL_PA,
+            420.0,
+            0.3,
+            "C24 along the grain: E_0,mean and ρ_mean, EN 338 Table 1; ν assumed",
+        ),
         Material(
             "clt",
             cross_laminated_youngs_Pa(_C24_PARALLEL_PA, _C24_PERPENDICULAR_PA, 5),
@@ -123,4 +149,6 @@ def material(name: str) -> Material:
     try:
         return MATERIALS[name]
     except KeyError:
-        raise ValueError(f"material={name!r} is not a known material; valid: {', '.join(MATERIALS)}") from None
+        raise ValueError(
+            f"material={name!r} is not a known material; valid: {', '.join(MATERIALS)}"
+        ) from None

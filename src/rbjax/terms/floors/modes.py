@@ -98,7 +98,9 @@ def simply_supported_plate_modes(
     shape = np.sin(m * math.pi * x / lx) * np.sin(n * math.pi * y / ly)
     keep = (freq <= f_max) & (np.abs(shape) >= 1e-9)
     if not np.any(keep):
-        raise ValueError(f"no mode up to max_frequency_Hz={f_max!r} moves at the drive point ({x!r}, {y!r}); valid: a point off the nodal lines")
+        raise ValueError(
+            f"no mode up to max_frequency_Hz={f_max!r} moves at the drive point ({x!r}, {y!r}); valid: a point off the nodal lines"
+        )
     order = np.argsort(freq[keep], kind="stable")
     generalised = rho * t * lx * ly / 4.0
     masses = generalised / shape[keep][order] ** 2
@@ -134,4 +136,6 @@ def floating_floor(
     eta1 = _loss("layer_loss_factor", layer_loss_factor)
     eta2 = _loss("base_loss_factor", base_loss_factor)
 
-    return FloatingFloor(t, rho, area, s, m2, f2, layer_loss_factor=eta1, base_loss_factor=eta2).modal_floor()
+    return FloatingFloor(
+        t, rho, area, s, m2, f2, layer_loss_factor=eta1, base_loss_factor=eta2
+    ).modal_floor()

@@ -60,7 +60,14 @@ FLOOR_FILE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "dashpot": (("impedance_Ns_per_m",), ()),
     "modal": (("mass_kg", "frequency_Hz", "loss_factor"), ()),
     "floating": (
-        ("screed_thickness_m", "screed_density_kg_per_m3", "area_m2", "dynamic_stiffness_N_per_m3", "base_mass_kg", "base_frequency_Hz"),
+        (
+            "screed_thickness_m",
+            "screed_density_kg_per_m3",
+            "area_m2",
+            "dynamic_stiffness_N_per_m3",
+            "base_mass_kg",
+            "base_frequency_Hz",
+        ),
         ("layer_loss_factor", "base_loss_factor"),
     ),
 }
@@ -71,7 +78,10 @@ def plate(material_name: str, thickness_m: float) -> InfinitePlate:
     """The infinite plate of the named material (``rbjax.terms.floors.materials``) and thickness."""
     m = material(material_name)
     return InfinitePlate(
-        plate_thickness_m=thickness_m, plate_youngs_Pa=m.youngs_Pa, plate_density_kg_per_m3=m.density_kg_per_m3, plate_poisson=m.poisson
+        plate_thickness_m=thickness_m,
+        plate_youngs_Pa=m.youngs_Pa,
+        plate_density_kg_per_m3=m.density_kg_per_m3,
+        plate_poisson=m.poisson,
     )
 
 
@@ -80,7 +90,9 @@ def floor_preset(name: str) -> AbstractFloor:
     if name == "rigid":
         return Rigid()
     if name not in PLATE_PRESETS:
-        raise ValueError(f"floor={name!r} is not a floor preset; valid: {', '.join(FLOOR_PRESETS)} (or a .toml/.json floor file)")
+        raise ValueError(
+            f"floor={name!r} is not a floor preset; valid: {', '.join(FLOOR_PRESETS)} (or a .toml/.json floor file)"
+        )
     return plate(*PLATE_PRESETS[name])
 
 
@@ -98,7 +110,9 @@ def load_named_floor(name_or_path: str | Path) -> tuple[str, AbstractFloor]:
     if not path.is_file():
         if path.suffix.lower() in (".toml", ".json"):
             raise ValueError(f"floor file {text!r} does not exist")
-        raise ValueError(f"floor={text!r} is neither a floor preset nor a floor file; valid: {', '.join(FLOOR_PRESETS)} or a .toml/.json file")
+        raise ValueError(
+            f"floor={text!r} is neither a floor preset nor a floor file; valid: {', '.join(FLOOR_PRESETS)} or a .toml/.json file"
+        )
     table = _read(path)
     try:
         return str(table.get("name", path.stem)), floor_from_mapping(table)
@@ -115,15 +129,27 @@ def _read(path: Path) -> dict:
         elif suffix == ".json":
             table = json.loads(path.read_text())
         else:
-            raise ValueError(f"floor file {str(path)!r} has the suffix {suffix!r}; valid: .toml, .json")
+            raise ValueError(
+                f"floor file {str(path)!r} has the suffix {suffix!r}; valid: .toml, .json"
+            )
     except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as err:
         raise ValueError(f"floor file {str(path)!r} cannot be parsed: {err}") from err
     if not isinstance(table, dict):
-        raise ValueError(f"floor file {str(path)!r} must hold one table (a JSON object), not {type(table).__name__}")
+        raise ValueError(
+            f"floor file {str(path)!r} must hold one table (a JSON object), not {type(table).__name__}"
+        )
     return table
 
 
-def _number(key: str, value, *, lower: float, lower_open: bool = True, upper: float = math.inf, upper_open: bool = True) -> float:
+def _number(
+    key: str,
+    value,
+    *,
+    lower: float,
+    lower_open: bool = True,
+    upper: float = math.inf,
+    upper_open: bool = True,
+) -> float:
     lo, hi = "(" if lower_open else "[", ")" if upper_open else "]"
     valid = f"{lo}{lower:g}, {upper:g}{hi}"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -140,36 +166,56 @@ def _numbers(key: str, value, **bounds) -> list[float]:
     values = value if isinstance(value, list) else [value]
     if not values:
         raise ValueError(f"{key}=[] is empty; give one value per mode")
-    return [_number(f"{key}[{i}]" if isinstance(value, list) else key, v, **bounds) for i, v in enumerate(values)]
+    return [
+        _number(f"{key}[{i}]" if isinstance(value, list) else key, v, **bounds)
+        for i, v in enumerate(values)
+    ]
 
 
 def floor_from_mapping(table: Mapping) -> AbstractFloor:
     """The floor a parsed floor file describes (see the module docstring)."""
     kind = table.get("type")
     if kind not in FLOOR_FILE_KEYS:
-        raise ValueError(f"type={kind!r} is not a floor type; valid: {', '.join(repr(k) for k in FLOOR_FILE_KEYS)}")
+        raise ValueError(
+            f"type={kind!r} is not a floor type; valid: {', '.join(repr(k) for k in FLOOR_FILE_KEYS)}"
+        )
     required, optional = FLOOR_FILE_KEYS[kind]
     allowed = (*_COMMON_KEYS, *required, *optional)
     for key in table:
         if key not in allowed:
-            raise ValueError(f"key {key!r} is not known for type={kind!r}; valid keys: {', '.join(allowed)}")
+            raise ValueError(
+                f"key {key!r} is not known for type={kind!r}; valid keys: {', '.join(allowed)}"
+            )
     for key in required:
         if key not in table:
             raise ValueError(f"type={kind!r} needs the key {key!r}")
     if kind == "rigid":
         return Rigid()
     if kind == "dashpot":
-        return Dashpot(floor_impedance_Ns_per_m=_number("impedance_Ns_per_m", table["impedance_Ns_per_m"], lower=0.0))
+        return Dashpot(
+            floor_impedance_Ns_per_m=_number(
+                "impedance_Ns_per_m", table["impedance_Ns_per_m"], lower=0.0
+            )
+        )
     if kind == "modal":
         return ModalFloor(
             mass_kg=_numbers("mass_kg", table["mass_kg"], lower=0.0),
-            frequency_Hz=_numbers("frequency_Hz", table["frequency_Hz"], lower=0.0, lower_open=False),
+            frequency_Hz=_numbers(
+                "frequency_Hz", table["frequency_Hz"], lower=0.0, lower_open=False
+            ),
             loss_factor=_numbers("loss_factor", table["loss_factor"], lower=0.0, lower_open=False),
         )
     if kind == "floating":
         bounds = FloatingFloor.PARAMETERS
         values = {
-            key: _number(key, table[key], lower=bounds[key].lower, lower_open=bounds[key].lower_open, upper=bounds[key].upper, upper_open=bounds[key].upper_open)
+            key: _number(
+                key,
+                table[key],
+                lower=bounds[key].lower,
+                lower_open=bounds[key].lower_open,
+                upper=bounds[key].upper,
+                upper_open=bounds[key].upper_open,
+            )
             for key in (*required, *optional)
             if key in table
         }
@@ -182,9 +228,15 @@ def _plate_from_mapping(table: Mapping) -> InfinitePlate:
     if "material" in table:
         name = table["material"]
         if name not in MATERIALS:
-            raise ValueError(f"material={name!r} is not a known material; valid: {', '.join(MATERIALS)}")
+            raise ValueError(
+                f"material={name!r} is not a known material; valid: {', '.join(MATERIALS)}"
+            )
         m = MATERIALS[name]
-        values = {"youngs_Pa": m.youngs_Pa, "density_kg_per_m3": m.density_kg_per_m3, "poisson": m.poisson}
+        values = {
+            "youngs_Pa": m.youngs_Pa,
+            "density_kg_per_m3": m.density_kg_per_m3,
+            "poisson": m.poisson,
+        }
     bounds: dict[str, dict[str, Any]] = {
         "youngs_Pa": dict(lower=0.0),
         "density_kg_per_m3": dict(lower=0.0),
@@ -195,7 +247,9 @@ def _plate_from_mapping(table: Mapping) -> InfinitePlate:
             values[key] = _number(key, table[key], **bound)
     missing = [k for k in bounds if k not in values]
     if missing:
-        raise ValueError(f"type='infinite-plate' needs 'material' or the keys {', '.join(repr(k) for k in missing)}")
+        raise ValueError(
+            f"type='infinite-plate' needs 'material' or the keys {', '.join(repr(k) for k in missing)}"
+        )
     return InfinitePlate(
         plate_thickness_m=_number("thickness_m", table["thickness_m"], lower=0.0),
         plate_youngs_Pa=values["youngs_Pa"],
