@@ -18,6 +18,7 @@ package-private helper module can live here too. Helpers for the commands: :func
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .._progress import progress  # noqa: F401  (re-exported for the commands)
@@ -65,6 +66,26 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
         )
     except argparse.ArgumentError:
         pass  # the command defined its own --json
+
+
+def use_cpu_devices(count: int | None = None) -> None:
+    """Give JAX ``count`` CPU devices (default: one per usable core) before it starts, so that
+    forward batches are split over every core (:func:`rbjax.solve.simulate` and
+    :func:`rbjax.solve.batch.evaluate` do so when there are several devices). Left alone where
+    ``XLA_FLAGS`` already sets a count or JAX's backend is running (a second command in one
+    process): its devices are used as they are."""
+    import jax
+
+    from ..studies.executors import usable_cores
+
+    if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
+        raise ValueError(f"--cpu-devices={count!r} must be an integer ≥ 1")
+    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
+        return
+    try:
+        jax.config.update("jax_num_cpu_devices", count or usable_cores())
+    except RuntimeError:  # the backend is running
+        pass
 
 
 def emit_json(obj, file=None) -> None:

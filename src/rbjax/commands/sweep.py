@@ -3,7 +3,7 @@ conformance probability."""
 
 from __future__ import annotations
 
-from . import add_command, emit_json, progress
+from . import add_command, emit_json, progress, use_cpu_devices
 
 DESCRIPTION = """\
 Run a batched study of the rubber-ball impact described by a TOML file: a SALib design,
@@ -62,19 +62,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _cpu_devices(jax, n: int | None) -> None:
-    """Ask JAX for ``n`` CPU devices (default: one per core) unless XLA_FLAGS sets a count or
-    the backend already started (then its devices are used as they are)."""
-    import os
-
-    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
-        return
-    try:
-        jax.config.update("jax_num_cpu_devices", n or len(os.sched_getaffinity(0)))
-    except RuntimeError:  # the backend is running (e.g. a second command in one process)
-        pass
-
-
 def run(args) -> int:
     import time
 
@@ -82,9 +69,7 @@ def run(args) -> int:
 
     from ..studies.sweep import load_config, run_sweep, write_outputs
 
-    if args.cpu_devices is not None and args.cpu_devices < 1:
-        raise ValueError(f"--cpu-devices={args.cpu_devices!r} must be an integer ≥ 1")
-    _cpu_devices(jax, args.cpu_devices)
+    use_cpu_devices(args.cpu_devices)
     if args.distributed:
         jax.distributed.initialize()
     config = load_config(args.config)

@@ -1,0 +1,269 @@
+"""Where independent work runs: one executor interface for fits, sweep chunks and studies.
+
+The heavy studies are made of independent tasks: the full fits and the leave-one-height-out
+folds of a model selection, the chunks of a sweep's design. Each is a picklable call
+``fn(*args)`` handed to a :class:`concurrent.futures.Executor`:
+
+* ``Parallel(workers=1)``: in this process, one task after another (no start-up cost; the
+  reference every other way is compared with).
+* ``Parallel(workers=N)`` (default: the cores this process may use, ``os.sched_getaffinity``):
+  a local pool of N worker processes (``spawn``), each with one JAX CPU device and the same
+  persistent compilation cache and fit program store as this process
+  (:mod:`rbjax.fit.program_store`), so a program compiles once per machine, not once per
+  worker. Workers see this process's environment (``JAX_*``, ``XLA_FLAGS``), so they build
+  the same programs and the results are the in-process ones, bit for bit.
+* ``Parallel(scheduler="tcp://host:8786")``: the tasks go to a running Dask distributed
+  cluster (``pip install 'rbjax[cluster]'``); dask-jobqueue starts such a cluster on SLURM,
+  PBS, SGE or LSF (``SLURMCluster(...).scheduler_address``). Dask runs a task again on
+  another worker when its worker dies.
+* ``Parallel(executor=ex)``: any executor the caller made (closed by the caller).
+
+A task that raises is reported with its name (the candidate and fold, the chunk's rows); a
+local worker that dies has its unfinished tasks run again in a new pool (``retries`` times),
+then the run fails naming the task: never a silently missing result.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import dataclasses
+import heapq
+import multiprocessing
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from .._progress import progress as say
+
+__all__ = ["Parallel", "Task", "TaskError", "usable_cores", "run_tasks", "open_executor"]
+
+#: Seconds to wait for a Dask scheduler to answer before the run fails.
+CONNECT_TIMEOUT_S = 5.0
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity; ``os.cpu_count()`` elsewhere)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+class TaskError(RuntimeError):
+    """A task failed (it raised, or its worker died more often than allowed); names the task."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Task:
+    """One independent call ``fn(*args)``; ``name`` says what it is in errors and progress
+    (e.g. ``"hunt-crossley/momentum without 0.4 m"``); larger ``cost`` runs first."""
+
+    name: str
+    fn: Callable
+    args: tuple = ()
+    cost: float = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Parallel:
+    """Where a study's independent tasks run (see the module docstring).
+
+    Args:
+        workers: local worker processes; ``None``: the usable cores; ``1``: in this process.
+        scheduler: address of a Dask scheduler (``tcp://host:port``) instead of local workers.
+        executor: an executor made by the caller, used as it is (and not closed here).
+        retries: how often the unfinished tasks of a local pool whose worker died are run
+            again in a new pool before the run fails.
+    """
+
+    workers: int | None = None
+    scheduler: str | None = None
+    executor: cf.Executor | None = None
+    retries: int = 1
+
+    def __post_init__(self):
+        given = [x is not None for x in (self.scheduler, self.executor)]
+        if sum(given) > 1:
+            raise ValueError("Parallel: give a scheduler or an executor, not both")
+        if self.workers is not None and (
+            isinstance(self.workers, bool) or not isinstance(self.workers, int) or self.workers < 1
+        ):
+            raise ValueError(
+                f"workers={self.workers!r} is outside the valid range: an integer ≥ 1 "
+                f"(this machine lets this process use {usable_cores()} cores)"
+            )
+        if not (isinstance(self.retries, int) and self.retries >= 0):
+            raise ValueError(f"retries={self.retries!r} must be an integer ≥ 0")
+
+    @property
+    def local_workers(self) -> int:
+        """Local worker processes this runs with: ``workers`` clamped to the usable cores."""
+        return min(self.workers or usable_cores(), usable_cores())
+
+    @property
+    def in_process(self) -> bool:
+        return self.scheduler is None and self.executor is None and self.local_workers == 1
+
+    def describe(self) -> str:
+        if self.scheduler is not None:
+            return f"the Dask cluster at {self.scheduler}"
+        if self.executor is not None:
+            return f"the given executor ({type(self.executor).__name__})"
+        n = self.local_workers
+        return "this process" if n == 1 else f"{n} local worker processes"
+
+
+def as_parallel(parallel: Parallel | int | None) -> Parallel:
+    """A :class:`Parallel` from itself, a worker count, or ``None`` (every usable core)."""
+    if isinstance(parallel, Parallel):
+        return parallel
+    return Parallel(workers=parallel)
+
+
+class _InProcess(cf.Executor):
+    """Runs each task when it is submitted, in this process."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        future: cf.Future = cf.Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as err:  # noqa: BLE001  (handed to the caller through the future)
+            future.set_exception(err)
+        return future
+
+
+def _worker_start(cache_dir: str | None) -> None:
+    """A worker process's JAX: one CPU device, float64, the parent's compilation cache."""
+    import jax
+
+    jax.config.update("jax_platforms", "cpu")
+    jax.config.update("jax_num_cpu_devices", 1)
+    jax.config.update("jax_enable_x64", True)
+    if cache_dir:
+        jax.config.update("jax_compilation_cache_dir", cache_dir)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+
+
+def _local_pool(n: int) -> cf.Executor:
+    import jax
+
+    cache = jax.config.jax_compilation_cache_dir  # type: ignore[attr-defined]
+    return cf.ProcessPoolExecutor(
+        max_workers=n,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_worker_start,
+        initargs=(cache,),
+    )
+
+
+def _dask_client(address: str):
+    try:
+        from distributed import Client
+    except ImportError as err:
+        raise ValueError(
+            f"scheduler={address!r}: sending work to a Dask cluster needs the 'distributed' "
+            "package: pip install 'rbjax[cluster]'"
+        ) from err
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError) as err:
+        raise ValueError(
+            f"scheduler={address!r}: no Dask scheduler answered within {CONNECT_TIMEOUT_S:g} s "
+            f"({type(err).__name__}: {err})"
+        ) from None
+
+
+@contextlib.contextmanager
+def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
+    """The executor ``parallel`` describes, closed on leaving (unless the caller gave it)."""
+    if parallel.executor is not None:
+        yield parallel.executor
+    elif parallel.scheduler is not None:
+        client = _dask_client(parallel.scheduler)
+        try:
+            client.run(_worker_start, None)  # x64 and one CPU device on every worker
+            yield client.get_executor(pure=False)
+        finally:
+            client.close()
+    elif parallel.in_process:
+        yield _InProcess()
+    else:
+        pool = _local_pool(parallel.local_workers)
+        try:
+            yield pool
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def run_tasks(
+    parallel: Parallel | int | None,
+    tasks: Sequence[Task],
+    *,
+    then: Callable[[int, Any], Sequence[Task]] | None = None,
+    label: str = "tasks",
+) -> list:
+    """Run ``tasks`` where ``parallel`` says; the results in the tasks' order.
+
+    Ready tasks start costliest first, at most as many at once as there are workers.
+    ``then(i, result)``, called in this process when task ``i`` is done, may return further
+    tasks (e.g. the folds warm-started from a full fit); their results follow the given tasks'
+    in the order they were added. A task that raises fails the run with a :class:`TaskError`
+    naming it.
+    """
+    parallel = as_parallel(parallel)
+    all_tasks: list[Task] = list(tasks)
+    results: dict[int, Any] = {}
+    attempts = 0
+    while True:
+        try:
+            with open_executor(parallel) as executor:
+                _drive(executor, parallel, all_tasks, results, then, label)
+            break
+        except cf.process.BrokenProcessPool:
+            attempts += 1
+            missing = [all_tasks[i].name for i in range(len(all_tasks)) if i not in results]
+            if attempts > parallel.retries:
+                raise TaskError(
+                    f"{label}: a worker process died {attempts} times; not finished: "
+                    + "; ".join(missing)
+                ) from None
+            say(
+                f"{label}: a worker process died; running {len(missing)} unfinished task(s) "
+                "again in a new pool",
+                enabled=True,
+            )
+    return [results[i] for i in range(len(all_tasks))]
+
+
+def _drive(executor, parallel, all_tasks, results, then, label) -> None:
+    """Submit ready tasks costliest first (as many in flight as workers), collect results,
+    add the tasks ``then`` makes; the tasks already in ``results`` are not run again."""
+    width = 1 if parallel.in_process else max(parallel.local_workers, 1)
+    if parallel.scheduler is not None or parallel.executor is not None:
+        width = max(len(all_tasks), 1) * 4  # the cluster has its own queue
+    ready: list[tuple[float, int]] = []
+    for i, task in enumerate(all_tasks):
+        if i not in results:
+            heapq.heappush(ready, (-task.cost, i))
+    running: dict[cf.Future, int] = {}
+    while ready or running:
+        while ready and len(running) < width:
+            _, i = heapq.heappop(ready)
+            task = all_tasks[i]
+            running[executor.submit(task.fn, *task.args)] = i
+        done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+        for future in sorted(done, key=lambda f: running[f]):
+            i = running.pop(future)
+            try:
+                result = future.result()
+            except cf.process.BrokenProcessPool:
+                raise
+            except Exception as err:
+                raise TaskError(
+                    f"{label}: {all_tasks[i].name} failed: {type(err).__name__}: {err}"
+                ) from err
+            results[i] = result
+            for new in then(i, result) if then is not None else ():
+                all_tasks.append(new)
+                heapq.heappush(ready, (-new.cost, len(all_tasks) - 1))
