@@ -28,6 +28,7 @@ from .._progress import progress as say
 from .._x64 import require_x64
 from ..fit import MODEL_NAMES, FitResult, fit, parse_model_terms, predict, prepare_data
 from ..terms.model import Model, superset_model
+from .executors import Parallel, Task, run_tasks
 
 __all__ = [
     "HeldOut",
@@ -87,6 +88,55 @@ def held_out_rows(result, heights) -> list[HeldOut]:
     return rows
 
 
+def fit_task(data, model, blocked_force, fit_heights, start, fit_kwargs) -> FitResult:
+    """One fit of a selection as a task of its own (a module-level function, so that a worker
+    process or a Dask worker can run it): :func:`rbjax.fit.fit` without progress lines."""
+    return fit(
+        data,
+        model,
+        blocked_force=blocked_force,
+        fit_heights=fit_heights,
+        start=start,
+        progress=False,
+        **fit_kwargs,
+    )
+
+
+def _without(data, height_m: float) -> list[float]:
+    return [x for x in data.heights_m if abs(x - height_m) > 5e-4]
+
+
+def _fold_tasks(data, model, blocked_force, base: FitResult, heights, fit_kwargs, cost=1.0):
+    """The leave-one-height-out refits of one candidate, warm-started from ``base``, one task a
+    fold (the base fit's evaluations times ``cost`` estimate each fold's work)."""
+    return [
+        Task(
+            f"{model}/{blocked_force} without {h:g} m",
+            fit_task,
+            (data, model, blocked_force, _without(data, h), base, fit_kwargs),
+            cost=cost * max(base.iterations, 1),
+        )
+        for h in heights
+    ]
+
+
+def _fold_row(model, blocked_force, h, res: FitResult, progress: bool) -> HeldOut:
+    row = held_out_rows(res, [h])[0]
+    say(
+        f"cv {model}/{blocked_force}: without {h:g} m: held-out error "
+        f"{row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)",
+        enabled=progress,
+    )
+    return row
+
+
+def _check_folds(data) -> None:
+    if len(data.heights_m) < 2:
+        raise ValueError(
+            f"cross-validation needs at least 2 drop heights; the data have {len(data.heights_m)}"
+        )
+
+
 def cross_validate(
     data,
     model: str,
@@ -94,40 +144,26 @@ def cross_validate(
     blocked_force: str = "paper",
     base: FitResult | None = None,
     heights: Sequence[float] | None = None,
+    workers: int | Parallel | None = 1,
     progress: bool = True,
     **fit_kwargs,
 ) -> tuple[HeldOut, ...]:
     """Leave-one-height-out: refit without each height (warm start from ``base``), predict it.
 
-    Returns one :class:`HeldOut` per held-out height (default: every height in the data).
+    Returns one :class:`HeldOut` per held-out height (default: every height in the data). The
+    folds are independent tasks: ``workers`` (default 1: in this process; ``None``: every
+    usable core; or a :class:`~rbjax.studies.executors.Parallel`) runs them in parallel.
     """
     data = prepare_data(data)
-    if len(data.heights_m) < 2:
-        raise ValueError(
-            f"cross-validation needs at least 2 drop heights; the data have {len(data.heights_m)}"
-        )
+    _check_folds(data)
     if base is None:
         base = fit(data, model, blocked_force=blocked_force, progress=False, **fit_kwargs)
     folds = data.heights_m if heights is None else np.atleast_1d(np.asarray(heights, dtype=float))
-    rows = []
-    for h in folds:
-        keep = [x for x in data.heights_m if abs(x - h) > 5e-4]
-        res = fit(
-            data,
-            model,
-            blocked_force=blocked_force,
-            fit_heights=keep,
-            start=base,
-            progress=False,
-            **fit_kwargs,
-        )
-        row = held_out_rows(res, [h])[0]
-        say(
-            f"cv {model}/{blocked_force}: without {h:g} m: held-out error {row.history_error_pct:.2f} % of peak ({res.iterations} evaluations)",
-            enabled=progress,
-        )
-        rows.append(row)
-    return tuple(rows)
+    tasks = _fold_tasks(data, model, blocked_force, base, folds, fit_kwargs)
+    results = run_tasks(workers, tasks, label=f"cv {model}/{blocked_force}")
+    return tuple(
+        _fold_row(model, blocked_force, h, res, progress) for h, res in zip(folds, results)
+    )
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -385,56 +421,117 @@ def candidate_pairs(
     return list(dict.fromkeys(pairs))
 
 
+def _baseline_task(data, superset: Model):
+    """The unfitted paper model's held-out rows at every height (a task, see :func:`fit_task`)."""
+    return tuple(held_out_rows(predict(data, superset=superset), data.heights_m))
+
+
+def _structure_cost(name: str) -> float:
+    """A candidate's relative cost per evaluation (the order in which work starts, nothing
+    else): the ball mode and the series element make every solve several times dearer."""
+    terms = parse_model_terms(name)
+    return 1.0 + 3.0 * terms.ball_mode + 2.0 * terms.series + 0.5 * len(terms.laws)
+
+
 def select_model(
     data,
     candidates: Sequence[str] = MODEL_NAMES,
     *,
     blocked_forces: Sequence[str] = BLOCKED_FORCES,
+    workers: int | Parallel | None = None,
+    scheduler: str | None = None,
     progress: bool = True,
     **fit_kwargs,
 ) -> Selection:
     """Fit every candidate, cross-validate it over the heights, and recommend one (see the
-    module docstring for the rule). ``candidates``: model names of :mod:`rbjax.fit`, each
-    tried with every one of ``blocked_forces`` (``paper``, ``momentum``), or ``"name/paper"``,
-    ``"name/momentum"`` for one pairing; ``fit_kwargs`` go to :func:`rbjax.fit.fit`."""
+    module docstring for the rule).
+
+    Args:
+        data: a :class:`~rbjax.fit.FitData`, recordings or paths (see
+            :func:`rbjax.fit.prepare_data`).
+        candidates: model names of :mod:`rbjax.fit`, each tried with every one of
+            ``blocked_forces`` (``paper``, ``momentum``), or ``"name/paper"``,
+            ``"name/momentum"`` for one pairing.
+        workers: worker processes the fits run in (default: every core this process may use;
+            1: one fit after another in this process; or a
+            :class:`~rbjax.studies.executors.Parallel`). The full fits are tasks, and each
+            fold, warm-started from its candidate's full fit, is a task of its own as soon as
+            that fit is done, the costliest first; the results are those of ``workers=1``,
+            bit for bit (the same programs on the same inputs).
+        scheduler: address of a Dask scheduler to send the fits to instead (``rbjax[cluster]``;
+            see :mod:`rbjax.studies.executors`).
+        progress: one line per full fit and per fold on stderr.
+        fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``optimizer``, ``method``, …).
+
+    Returns:
+        The :class:`Selection`.
+
+    Raises:
+        ValueError: bad candidates, data or worker count.
+        rbjax.studies.executors.TaskError: a fit failed on a worker (named: candidate, fold).
+    """
     require_x64()
     t0 = time.perf_counter()
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
+    _check_folds(data)
+    parallel = workers if isinstance(workers, Parallel) else Parallel(workers, scheduler)
     structures = shared_structures(
         [name for name, _ in pairs],
         fit_kwargs.get("gas", "adiabatic"),
         fit_kwargs.pop("superset", None),
     )
-    out = []
-    for name, bf in pairs:
-        say(f"select: fitting {name}/{bf} to all heights", enabled=progress)
-        base = fit(
-            data, name, blocked_force=bf, progress=False, superset=structures[name], **fit_kwargs
+    costs = {name: _structure_cost(name) for name, _ in pairs}
+    # The first fit of each shared structure starts first: workers then trace different
+    # programs at the same time instead of the same one twice.
+    first = {id(structures[name]): (name, bf) for name, bf in reversed(pairs)}
+    tasks = [
+        Task(
+            f"{name}/{bf} (all heights)",
+            fit_task,
+            (data, name, bf, None, None, {**fit_kwargs, "superset": structures[name]}),
+            cost=costs[name] * (1e6 if first[id(structures[name])] == (name, bf) else 1.0),
         )
+        for name, bf in pairs
+    ]
+    tasks.append(
+        Task("the unfitted paper model", _baseline_task, (data, structures[pairs[0][0]]), 0.0)
+    )
+    folds_of: dict[int, tuple[int, float]] = {}  # task index → (pair index, held-out height)
+
+    def then(i: int, result):
+        if i == len(pairs):
+            return []
+        if i > len(pairs):
+            k, h = folds_of[i]
+            _fold_row(*pairs[k], h, result, progress)
+            return []
+        name, bf = pairs[i]
         say(
-            f"select: {name}/{bf}: rms {base.residual_rms_N:.2f} N, {base.message}",
+            f"select: {name}/{bf}: rms {result.residual_rms_N:.2f} N, {result.message}",
             enabled=progress,
         )
-        folds = cross_validate(
-            data,
-            name,
-            blocked_force=bf,
-            base=base,
-            progress=progress,
-            superset=structures[name],
-            **fit_kwargs,
-        )
-        out.append(Candidate(name, bf, base, folds))
+        kwargs = {**fit_kwargs, "superset": structures[name]}
+        new = _fold_tasks(data, name, bf, result, data.heights_m, kwargs, costs[name])
+        start = len(tasks) + len(folds_of)
+        folds_of.update({start + j: (i, h) for j, h in enumerate(data.heights_m)})
+        return new
+
+    say(f"select: {len(pairs)} candidates, fitted in {parallel.describe()}", enabled=progress)
+    results = run_tasks(parallel, tasks, then=then, label="select")
+    out = []
+    for k, (name, bf) in enumerate(pairs):
+        mine = sorted((j, h) for j, (kk, h) in folds_of.items() if kk == k)
+        folds = tuple(held_out_rows(results[j], [h])[0] for j, h in mine)
+        out.append(Candidate(name, bf, results[k], folds))
     chosen, within = recommend(out)
-    baseline = tuple(held_out_rows(predict(data, superset=structures[pairs[0][0]]), data.heights_m))
     return Selection(
         candidates=tuple(out),
         recommended=chosen,
         within_noise=within,
         rule=RULE,
         blocked_force_note=_blocked_force_note(out, chosen),
-        baseline=baseline,
+        baseline=results[len(pairs)],
         elapsed_s=time.perf_counter() - t0,
     )
 
