@@ -68,6 +68,42 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
         pass  # the command defined its own --json
 
 
+def add_parallel_options(parser: argparse.ArgumentParser, what: str = "fits") -> None:
+    """``--workers N`` and ``--scheduler ADDRESS``: where independent tasks run
+    (:mod:`rbjax.studies.executors`)."""
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"worker processes to run the {what} in (default: the cores this process may use; "
+        "1: one after another in this process)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help=f"send the {what} to the Dask scheduler at ADDRESS (tcp://host:port) instead; needs "
+        "pip install 'rbjax[cluster]' (dask-jobqueue starts such a cluster on SLURM/PBS)",
+    )
+
+
+def parallel_of(args):
+    """The :class:`~rbjax.studies.executors.Parallel` of ``--workers`` and ``--scheduler``
+    (a worker count above the usable cores is clamped, and said so)."""
+    from ..studies.executors import Parallel, usable_cores
+
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers={args.workers!r} is outside the valid range: an integer ≥ 1")
+    if args.scheduler is not None and args.workers is not None:
+        raise ValueError("--workers and --scheduler exclude each other: the cluster has its own")
+    cores = usable_cores()
+    if args.workers is not None and args.workers > cores:
+        progress(f"--workers={args.workers}: this process may use {cores} cores; using {cores}")
+        return Parallel(workers=cores)
+    return Parallel(workers=args.workers, scheduler=args.scheduler)
+
+
 def use_cpu_devices(count: int | None = None) -> None:
     """Give JAX ``count`` CPU devices (default: one per usable core) before it starts, so that
     forward batches are split over every core (:func:`rbjax.solve.simulate` and

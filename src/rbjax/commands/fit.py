@@ -6,7 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
-from . import add_command, progress
+from . import add_command, add_parallel_options, parallel_of, progress
 from ._fit_output import finish
 
 DESCRIPTION = """\
@@ -127,6 +127,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p, paths="*")
+    add_parallel_options(p, what="fits of the model selection (without --model)")
     p.add_argument(
         "--summary",
         default=None,
@@ -218,6 +219,7 @@ def run(args) -> int:
             fix=fix,
             optimizer=args.optimizer,
             method=args.method,
+            workers=parallel_of(args),
             progress=not args.quiet,
         )
         result = selection.recommended.fit

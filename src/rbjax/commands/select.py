@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import add_command, emit_json, progress, write_json_file
+from . import add_command, add_parallel_options, emit_json, parallel_of, progress, write_json_file
 from .fit import add_data_options, load_fit_data
 
 DESCRIPTION = """\
@@ -33,6 +33,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p)
+    add_parallel_options(p)
     p.add_argument(
         "--candidates",
         default=None,
@@ -101,8 +102,14 @@ def run(args) -> int:
             raise ValueError(
                 f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: {', '.join(f'{h:g}' for h in data.heights_m)}"
             )
+    parallel = parallel_of(args)
     selection = select_model(
-        data, candidates, blocked_forces=forces, gas=args.gas, progress=not args.quiet
+        data,
+        candidates,
+        blocked_forces=forces,
+        workers=parallel,
+        gas=args.gas,
+        progress=not args.quiet,
     )
     comparison = None
     if held is not None:
@@ -116,6 +123,7 @@ def run(args) -> int:
             candidates,
             blocked_forces=forces,
             starts=starts,
+            workers=parallel,
             gas=args.gas,
             progress=not args.quiet,
         )

@@ -585,12 +585,14 @@ def held_out_comparison(
     *,
     blocked_forces: Sequence[str] = BLOCKED_FORCES,
     starts: dict | None = None,
+    workers: int | Parallel | None = None,
     progress: bool = True,
     **fit_kwargs,
 ) -> HoldOutComparison:
     """Fit each candidate to ``fit_heights`` only and predict the other heights; the unfitted
     paper model (``JIS_RUBBER_BALL``, adiabatic gas, ``paper`` blocked force) is the baseline.
-    ``starts``: optional {(model, blocked_force): FitResult} warm starts."""
+    ``starts``: optional {(model, blocked_force): FitResult} warm starts; ``workers`` as in
+    :func:`select_model` (each candidate's fit is a task)."""
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
     structures = shared_structures(
@@ -604,24 +606,30 @@ def held_out_comparison(
     )
     if not rest:
         raise ValueError("held_out_comparison: every height is in fit_heights; nothing is held out")
-    rows = {}
-    for name, bf in pairs:
-        start = (starts or {}).get((name, bf))
-        res = fit(
-            data,
-            name,
-            blocked_force=bf,
-            fit_heights=fit_heights,
-            start=start,
-            progress=False,
-            superset=structures[name],
-            **fit_kwargs,
+    tasks = [
+        Task(
+            f"{name}/{bf} fitted to {len(fit_heights)} heights",
+            fit_task,
+            (
+                data,
+                name,
+                bf,
+                fit_heights,
+                (starts or {}).get((name, bf)),
+                {**fit_kwargs, "superset": structures[name]},
+            ),
+            cost=_structure_cost(name),
         )
-        rows[f"{name}/{bf}"] = tuple(held_out_rows(res, rest))
-        say(
-            f"held-out: {name}/{bf} fitted to {len(fit_heights)} heights ({res.message})",
-            enabled=progress,
-        )
+        for name, bf in pairs
+    ]
+
+    def then(i: int, res: FitResult):
+        if i < len(pairs):
+            say(f"held-out: {tasks[i].name} ({res.message})", enabled=progress)
+        return []
+
+    results = run_tasks(workers, tasks, then=then, label="held-out comparison")
+    rows = {f"{name}/{bf}": tuple(held_out_rows(r, rest)) for (name, bf), r in zip(pairs, results)}
     rows["paper (unfitted)"] = tuple(
         held_out_rows(predict(data, superset=structures[pairs[0][0]]), rest)
     )
