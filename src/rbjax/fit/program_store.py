@@ -140,17 +140,46 @@ def load_or_export(description, make: Callable[[], Callable], args) -> Callable:
     if key in _LOADED:
         return _LOADED[key]
     path = folder / f"{key}.jaxexport"
-    try:
-        exported = jax.export.deserialize(bytearray(path.read_bytes()))
-    except Exception:  # missing, truncated or foreign: any failure to read means export anew
-        exported = None
+    exported = _read(path)
     if exported is None:
-        exported = _export(make(), args)
-        if exported is None:
-            return make()
-        try:
-            _write_atomic(path, exported.serialize())
-        except OSError:
-            pass  # a read-only cache: this process still runs the exported program
+        # One process a machine traces a program: the others (worker processes of a model
+        # selection, started together) wait for its export instead of tracing it too.
+        with _exclusive(folder / f"{key}.lock"):
+            exported = _read(path)
+            if exported is None:
+                exported = _export(make(), args)
+                if exported is None:
+                    return make()
+                try:
+                    _write_atomic(path, exported.serialize())
+                except OSError:
+                    pass  # a read-only cache: this process still runs the exported program
     _LOADED[key] = jax.jit(exported.call)
     return _LOADED[key]
+
+
+def _read(path: Path):
+    """The stored export at ``path``, or ``None`` (missing, truncated or foreign)."""
+    try:
+        return jax.export.deserialize(bytearray(path.read_bytes()))
+    except Exception:  # any failure to read means export anew
+        return None
+
+
+@contextlib.contextmanager
+def _exclusive(lock: Path):
+    """An exclusive lock on the file ``lock`` (``fcntl.flock``; released when the process
+    dies); where locking is not possible (no ``fcntl``, a read-only store), no lock."""
+    try:
+        import fcntl
+
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        handle = open(lock, "a+b")  # noqa: SIM115  (closed below)
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
+    finally:
+        handle.close()
