@@ -133,27 +133,36 @@ class _InProcess(cf.Executor):
         return future
 
 
-def _worker_start(cache_dir: str | None) -> None:
-    """A worker process's JAX: one CPU device, float64, the parent's compilation cache."""
+#: JAX options a local worker takes from the process that starts it, so that it builds the
+#: same programs (the compilation cache's folder among them: one compile a machine).
+INHERITED_OPTIONS = (
+    "jax_compilation_cache_dir",
+    "jax_persistent_cache_min_compile_time_secs",
+    "jax_disable_most_optimizations",
+    "jax_default_matmul_precision",
+)
+
+
+def _worker_start(options: dict) -> None:
+    """A worker process's JAX: one CPU device, float64, the parent's options."""
     import jax
 
     jax.config.update("jax_platforms", "cpu")
     jax.config.update("jax_num_cpu_devices", 1)
     jax.config.update("jax_enable_x64", True)
-    if cache_dir:
-        jax.config.update("jax_compilation_cache_dir", cache_dir)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    for name, value in options.items():
+        jax.config.update(name, value)
 
 
 def _local_pool(n: int) -> cf.Executor:
     import jax
 
-    cache = jax.config.jax_compilation_cache_dir  # type: ignore[attr-defined]
+    options = {k: jax.config.values[k] for k in INHERITED_OPTIONS if k in jax.config.values}
     return cf.ProcessPoolExecutor(
         max_workers=n,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_worker_start,
-        initargs=(cache,),
+        initargs=(options,),
     )
 
 
@@ -182,7 +191,7 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     elif parallel.scheduler is not None:
         client = _dask_client(parallel.scheduler)
         try:
-            client.run(_worker_start, None)  # x64 and one CPU device on every worker
+            client.run(_worker_start, {})  # x64 and one CPU device on every worker
             yield client.get_executor(pure=False)
         finally:
             client.close()

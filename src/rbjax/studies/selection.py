@@ -472,10 +472,10 @@ def select_model(
     """
     require_x64()
     t0 = time.perf_counter()
+    parallel = workers if isinstance(workers, Parallel) else Parallel(workers, scheduler)
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
     _check_folds(data)
-    parallel = workers if isinstance(workers, Parallel) else Parallel(workers, scheduler)
     structures = shared_structures(
         [name for name, _ in pairs],
         fit_kwargs.get("gas", "adiabatic"),

@@ -1,0 +1,114 @@
+"""A model selection in worker processes equals the one in this process, bit for bit; the
+executor under it reruns the tasks of a worker that died and names a task that failed.
+
+The reference is the same selection run one fit after another in this process
+(``workers=1``, the code path every other test of the selection uses): the worker processes
+must give the same held-out errors, fitted parameters and recommendation exactly (same
+programs on the same inputs), not merely close ones.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from rbjax.data import examples_dir
+from rbjax.fit import load_data, prepare_data
+from rbjax.studies import select_model
+from rbjax.studies.executors import Parallel, Task, TaskError, run_tasks
+
+CANDIDATES = ["paper", "kelvin-voigt"]
+
+
+@pytest.fixture(scope="module")
+def data():
+    # three heights, one drop each: three folds a candidate, cheap fits
+    files = [examples_dir() / f"h{h:03d}_d1.csv" for h in (10, 40, 100)]
+    return prepare_data(load_data(files))
+
+
+@pytest.fixture(scope="module")
+def in_process(data):
+    return select_model(data, CANDIDATES, blocked_forces=("paper",), workers=1, progress=False)
+
+
+@pytest.fixture(scope="module")
+def in_workers(data):
+    return select_model(data, CANDIDATES, blocked_forces=("paper",), workers=2, progress=False)
+
+
+def test_worker_processes_give_the_in_process_selection_bit_for_bit(in_process, in_workers):
+    assert [c.label for c in in_workers.candidates] == [c.label for c in in_process.candidates]
+    assert in_workers.recommended.label == in_process.recommended.label
+    for a, b in zip(in_process.candidates, in_workers.candidates):
+        assert [f.height_m for f in b.folds] == [f.height_m for f in a.folds]
+        np.testing.assert_array_equal(b.fold_errors_pct, a.fold_errors_pct)
+        np.testing.assert_array_equal(b.fit.theta, a.fit.theta)
+        np.testing.assert_array_equal(b.fit.predicted_N, a.fit.predicted_N)
+        assert b.fit.iterations == a.fit.iterations
+    base_a = [r.history_error_pct for r in in_process.baseline]
+    assert [r.history_error_pct for r in in_workers.baseline] == base_a
+
+
+def test_every_fold_of_every_candidate_is_there(in_workers, data):
+    for c in in_workers.candidates:
+        assert len(c.folds) == len(data.heights_m)
+        assert np.all(np.isfinite(c.fold_errors_pct))
+
+
+def test_a_bad_worker_count_is_named():
+    with pytest.raises(ValueError, match=r"workers=0 .*valid range"):
+        Parallel(workers=0)
+    with pytest.raises(ValueError, match=r"workers=-2"):
+        select_model(object(), workers=-2)
+
+
+def _square(x):
+    return x * x
+
+
+def _die_once(marker, x):
+    """Kills its worker process the first time it runs (the marker file tells)."""
+    if not os.path.exists(marker):
+        open(marker, "w").close()
+        os._exit(17)
+    return x + 1
+
+
+def _always_die(x):
+    os._exit(17)
+
+
+def _raise(x):
+    raise ValueError(f"bad input {x}")
+
+
+def test_follow_up_tasks_come_after_the_given_ones_in_order():
+    def then(i, result):
+        return [Task(f"child of {i}", _square, (result,))] if i < 2 else []
+
+    out = run_tasks(1, [Task("a", _square, (2,)), Task("b", _square, (3,), cost=5)], then=then)
+    assert out == [4, 9, 81, 16]  # b runs first (costlier): its child is added first
+
+
+def test_a_worker_that_dies_costs_time_not_results(tmp_path):
+    tasks = [Task("dies once", _die_once, (str(tmp_path / "died"), 1))]
+    tasks += [Task(f"square {k}", _square, (k,)) for k in range(4)]
+    assert run_tasks(Parallel(workers=2), tasks) == [2, 0, 1, 4, 9]
+
+
+def test_a_task_whose_worker_always_dies_is_named():
+    start = time.perf_counter()
+    with pytest.raises(TaskError, match="died 2 times; not finished: fatal fit"):
+        run_tasks(Parallel(workers=2, retries=1), [Task("fatal fit", _always_die, (0,))])
+    assert time.perf_counter() - start < 60
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_task_that_raises_is_named_with_its_error(workers):
+    tasks = [Task("chunk rows 0–9 (E = 1.6 MPa)", _raise, (3,))]
+    with pytest.raises(TaskError, match=r"chunk rows 0–9 \(E = 1.6 MPa\) failed: ValueError"):
+        run_tasks(Parallel(workers=workers), tasks)
