@@ -87,7 +87,8 @@ def held_out(data, superset, quick: bool):
             cost = float(np.sum(((res.predicted_N - res.measured_N)[res.in_fit]) ** 2))
             tried.append((cost, res, start, elapsed))
             print(
-                f"fit {name}/momentum start {start}: rms {res.residual_rms_N:.2f} N, {res.message}, {elapsed:.0f} s",
+                f"fit {name}/momentum start {start}: rms {res.residual_rms_N:.2f} N, "
+                f"{res.message}, {elapsed:.0f} s",
                 flush=True,
             )
         cost, res, start, elapsed = min(tried, key=lambda x: x[0])
@@ -240,7 +241,8 @@ def main() -> None:
     for name, rec in ho.items():
         for r in rec["held_out"]:
             print(
-                f"| {name}/momentum | {r['height_m']:.1f} | {r['history_error_pct']:.2f} | {r['contact_time_pct']:+.2f} | {r['peak_force_pct']:+.2f} | "
+                f"| {name}/momentum | {r['height_m']:.1f} | {r['history_error_pct']:.2f} | "
+                f"{r['contact_time_pct']:+.2f} | {r['peak_force_pct']:+.2f} | "
                 + " | ".join(f"{x:+.2f}" for x in r["lfe_octave_dB"])
                 + " |"
             )
@@ -249,12 +251,14 @@ def main() -> None:
     peaks = peak_check(fits["hunt-crossley+ball-mode"])
     for p in peaks:
         print(
-            f"peak check h={p['height_m']:.1f}: peak_force_N {p['peak_force_N']:.1f} N, history max {p['history_max_N']:.1f} N ({p['difference_pct']:+.3f} %)"
+            f"peak check h={p['height_m']:.1f}: peak_force_N {p['peak_force_N']:.1f} N, history "
+            f"max {p['history_max_N']:.1f} N ({p['difference_pct']:+.3f} %)"
         )
     cost = cost_per_impact(fits)
     for name, c in cost.items():
         print(
-            f"cost {name}: {c['per_impact_us']:.0f} µs/impact (batch 1000, median {c['median_s']:.2f} s, {c['mean_steps']:.0f} steps)"
+            f"cost {name}: {c['per_impact_us']:.0f} µs/impact (batch 1000, median "
+            f"{c['median_s']:.2f} s, {c['mean_steps']:.0f} steps)"
         )
     out = {
         "machine": None,

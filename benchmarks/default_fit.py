@@ -70,7 +70,8 @@ def main() -> None:
     t_ode = time.perf_counter() - t1
     compare = {}
     print(
-        f"\nall heights, sampled path ({t_sampled:.1f} s, rms {sampled.residual_rms_N:.3f} N) vs ODE path ({t_ode:.1f} s, rms {ode.residual_rms_N:.3f} N):"
+        f"\nall heights, sampled path ({t_sampled:.1f} s, rms {sampled.residual_rms_N:.3f} N) vs "
+        f"ODE path ({t_ode:.1f} s, rms {ode.residual_rms_N:.3f} N):"
     )
     for name, est in sampled.parameters.items():
         if est.fixed:
@@ -85,7 +86,8 @@ def main() -> None:
             "within_2_sigma": within,
         }
         print(
-            f"  {name:22s} {est.value:.6g} ± {est.std:.2g} | ODE {other:.6g} | {abs(est.value - other) / est.std:.3f} σ {'ok' if within else 'MISSED'}"
+            f"  {name:22s} {est.value:.6g} ± {est.std:.2g} | ODE {other:.6g} | "
+            f"{abs(est.value - other) / est.std:.3f} σ {'ok' if within else 'MISSED'}"
         )
     write_json(
         "default_fit",

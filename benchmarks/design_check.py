@@ -23,7 +23,8 @@ def main() -> None:
     info = machine_info()
     rows = []
     print(
-        f"{'model':<14} {'geom':<5} {'smallest':>9} {'blocking':<16} {'|opt − check|':>13} {'32-start best':>13} {'bar':>5}  parameters   time (8 / 32 starts)"
+        f"{'model':<14} {'geom':<5} {'smallest':>9} {'blocking':<16} {'|opt − check|':>13} "
+        f"{'32-start best':>13} {'bar':>5}  parameters   time (8 / 32 starts)"
     )
     for model, geometry in CASES:
         t0 = time.perf_counter()
@@ -51,7 +52,9 @@ def main() -> None:
         )
         params = ", ".join(f"{k}={v:.4g}" for k, v in result.parameters.items())
         print(
-            f"{model:<14} {geometry:<5} {result.smallest_margin:>+9.3f} {result.blocking:<16} {agreement:>13.1e} {best32:>+13.3f} {'met' if ok else 'MISS':>5}  {params}   {t8:.0f} / {t32:.0f} s"
+            f"{model:<14} {geometry:<5} {result.smallest_margin:>+9.3f} {result.blocking:<16} "
+            f"{agreement:>13.1e} {best32:>+13.3f} {'met' if ok else 'MISS':>5}  {params}   "
+            f"{t8:.0f} / {t32:.0f} s"
         )
         print(f"    {result.verdict()}")
     path = write_json(

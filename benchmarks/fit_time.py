@@ -70,7 +70,8 @@ def selection_markdown(sel: dict) -> str:
     """The README's selection table from ``rbjax fit --json``'s ``selection``."""
     bands = "31.5 | 63 | 125 | 250 | 500 | 1000 Hz (dB)"
     lines = [
-        f"| model | blocked force | fitted params | history rms (N) | held-out history err (%) | \\|Δt_c\\| (%) | \\|Δpeak\\| (%) | \\|ΔL\\| {bands} |",
+        "| model | blocked force | fitted params | history rms (N) | held-out history err (%) | "
+        f"\\|Δt_c\\| (%) | \\|Δpeak\\| (%) | \\|ΔL\\| {bands} |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     rec = (sel["recommended"]["model_name"], sel["recommended"]["blocked_force"])
@@ -232,7 +233,8 @@ def main() -> None:
             }
         )
         print(
-            f"{label:34s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}   rms {out.get('residual_rms_N')}",
+            f"{label:34s} cold {cold:7.1f} s   warm {warm:7.1f} s   exit {rc1}/{rc2}   rms "
+            f"{out.get('residual_rms_N')}",
             flush=True,
         )
     anchors = []
@@ -243,14 +245,17 @@ def main() -> None:
         a["speedup_warm"] = a["time_s"] / warm
         anchors.append(a)
         print(
-            f"scipy {model:26s} {a['time_s']:7.1f} s ({a['evaluations']} evaluations + FD Jacobians), cost {a['cost']:.6g}, rms {a['rms_N']:.2f} N; "
-            f"rbjax's optimum under the same residuals: cost {a['rbjax_cost_under_scipy_residuals']:.6g}; rbjax warm {warm:.1f} s: {a['speedup_warm']:.1f}×",
+            f"scipy {model:26s} {a['time_s']:7.1f} s ({a['evaluations']} evaluations + FD "
+            f"Jacobians), cost {a['cost']:.6g}, rms {a['rms_N']:.2f} N; rbjax's optimum under the "
+            f"same residuals: cost {a['rbjax_cost_under_scipy_residuals']:.6g}; rbjax warm "
+            f"{warm:.1f} s: {a['speedup_warm']:.1f}×",
             flush=True,
         )
     ratios = [lm_evaluation_ratio(m) for m in ("hunt-crossley", "hunt-crossley+ball-mode")]
     for r in ratios:
         print(
-            f"one LM evaluation, {r['model']}: {r['evaluation_ms']:.1f} ms vs forward histories {r['forward_ms']:.1f} ms: {r['ratio']:.2f}×",
+            f"one LM evaluation, {r['model']}: {r['evaluation_ms']:.1f} ms vs forward histories "
+            f"{r['forward_ms']:.1f} ms: {r['ratio']:.2f}×",
             flush=True,
         )
     for row in rows:

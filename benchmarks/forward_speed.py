@@ -11,9 +11,9 @@ The targets (the project's "forward speed" goal), each measured here in one run:
   the forward, at batch 1, 1000 and 10 000, of the default paths: the quadrature (elastic) w.r.t.
   (E, ν), the phase-angle path (Zener) w.r.t. (E, ν, relaxation time);
 * the damped models (Zener, Hunt–Crossley; ``simulate`` default: the phase-angle path
-  ``rbjax.solve.angle``) at batch 10 000: ≥ 300 000 impacts/s; histories (44.1 kHz × 1 s force record:
-  its contact samples, ``history(pad=False)``, the rest being zero, and its octave-band L_FE with
-  ``n_record=44 100``) ≥ 20 000/s.
+  ``rbjax.solve.angle``) at batch 10 000: ≥ 300 000 impacts/s; histories (44.1 kHz × 1 s force
+  record: its contact samples, ``history(pad=False)``, the rest being zero, and its octave-band
+  L_FE with ``n_record=44 100``) ≥ 20 000/s.
 
 Accuracy rides along: the scalar outputs of every timed variant are compared with the independent
 scipy reference (``tests/scipy_reference.py``, DOP853 at rtol 1e-12) at 16 heights of the batch.
@@ -91,8 +91,8 @@ def row(rows, workload, variant, n, timing, **extra):
         if not isinstance(v, (dict, list))
     )
     print(
-        f"{workload:9s} {variant:58s} B={n:<6d} {r['impacts_per_s']:12,.0f}/s  first {timing['first_s']:6.2f} s  "
-        f"median {timing['median_s'] * 1e3:9.3f} ms  {notes}",
+        f"{workload:9s} {variant:58s} B={n:<6d} {r['impacts_per_s']:12,.0f}/s  first "
+        f"{timing['first_s']:6.2f} s  median {timing['median_s'] * 1e3:9.3f} ms  {notes}",
         flush=True,
     )
     return r
@@ -297,7 +297,7 @@ t2 = time.perf_counter()
 r = rbjax.simulate(h, **kw); jax.block_until_ready(r.contact_time_s)
 t3 = time.perf_counter()
 print(t1 - t0, t2 - t1, t3 - t2, r.method)
-"""
+"""  # noqa: E501
 
 
 def first_calls(n):
@@ -357,7 +357,8 @@ def targets(data) -> list[list]:
             "default simulate, elastic + gas, batch 10 000, scalars: ≥ 1 000 000 impacts/s",
             f"{auto['impacts_per_s']:,.0f}/s",
             auto["impacts_per_s"] >= 1e6,
-            f"path {auto['path']}; contact time within {fmt(auto['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
+            f"path {auto['path']}; contact time within "
+            f"{fmt(auto['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
         )
         speedup = scipy / (auto["median_s"] / n)
         add(
@@ -370,7 +371,8 @@ def targets(data) -> list[list]:
         c = compile_.get(kind)
         if c:
             add(
-                f"first-call compile of the default simulate ≤ 5 s ({kind}, batch {data['first_call_batch']})",
+                f"first-call compile of the default simulate ≤ 5 s ({kind}, batch "
+                f"{data['first_call_batch']})",
                 f"{c['compile_s']:.1f} s",
                 c["compile_s"] <= 5.0,
                 f"path {c['path']}; fresh process, first − second call",
@@ -394,7 +396,8 @@ def targets(data) -> list[list]:
                 f"damped model ({name}), batch 10 000: ≥ 300 000 impacts/s",
                 f"{r['impacts_per_s']:,.0f}/s",
                 r["impacts_per_s"] >= 3e5,
-                f"path {r['path']}, {r['mean_steps']:.0f} steps/impact; contact time within {fmt(r['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
+                f"path {r['path']}, {r['mean_steps']:.0f} steps/impact; contact time within "
+                f"{fmt(r['max_rel_err_vs_scipy']['contact_time_s'], '.1e')} of scipy",
             )
     best = max(
         (r for r in rows if r["workload"] == "history"),
@@ -415,8 +418,8 @@ def render(data) -> str:
     m = data["machine"]
     head = (
         f"{m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}; load average (1/5/15 min) "
-        f"{'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, {'/'.join(f'{x:.1f}' for x in m['loadavg_end'])} at end; "
-        f"{data['wall_s']:.0f} s"
+        f"{'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, "
+        f"{'/'.join(f'{x:.1f}' for x in m['loadavg_end'])} at end; {data['wall_s']:.0f} s"
     )
     lines = [head, "", table(["target", "measured", "", "how"], targets(data)), ""]
     body = []

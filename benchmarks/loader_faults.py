@@ -1,4 +1,5 @@
-"""The fit on faulty recordings and at other sample rates against the fit on the clean set (issue 21).
+"""The fit on faulty recordings and at other sample rates against the fit on the clean set
+(issue 21).
 
 The six simulated 1 s drops of ``tests/synthetic_records.py`` (Kelvin–Voigt, momentum blocked
 force, E = 1.9 MPa, c = 40 N s/m, 0.8 N noise through the 1250 Hz chain) are fitted:

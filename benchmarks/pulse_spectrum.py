@@ -86,7 +86,8 @@ def main() -> None:
     out["machine"] = finish_machine_info(info)
     m = out["machine"]
     print(
-        f"machine: {m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}, load {m['loadavg_start']} → {m['loadavg_end']}"
+        f"machine: {m['date']}, {m['cpu_model']} ×{m['nproc']}, jax {m['jax']}, load "
+        f"{m['loadavg_start']} → {m['loadavg_end']}"
     )
     print(f"wrote {write_json('pulse_spectrum', out)}")
 

@@ -76,7 +76,8 @@ def main() -> None:
     args = ap.parse_args()
     rows = measure()
     print(
-        "| model | gas | blocked force | contact time | peak force | restitution | history (of peak) |"
+        "| model | gas | blocked force | contact time | peak force | restitution | history (of "
+        "peak) |"
     )
     print("|---|---|---|---|---|---|---|")
     for r in rows:

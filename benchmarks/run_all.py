@@ -4,8 +4,9 @@
     .venv/bin/python benchmarks/run_all.py --quick    # smoke run (writes *_quick.json / .png)
     .venv/bin/python benchmarks/run_all.py --render   # only re-render RESULTS.md from the JSON
 
-Runs work_precision.py, throughput.py, stability_map.py, multicore.py and forward_speed.py one after the other (each in its own
-process, so compile caches do not leak between them), then replaces the text between the
+Runs work_precision.py, throughput.py, stability_map.py, multicore.py and forward_speed.py one
+after the other (each in its own process, so compile caches do not leak between them), then
+replaces the text between the
 ``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` markers of RESULTS.md (the prose
 around them is written by hand and states the conclusions).
 """
@@ -49,9 +50,10 @@ def run(quick: bool, only=None) -> dict:
 def _machine(data):
     m = data["machine"]
     return (
-        f"{m['date']}, {m['cpu_model']} ×{m['nproc']} (nproc), {m['platform']}, Python {m['python']}, "
-        f"jax {m['jax']} / jaxlib {m['jaxlib']}, diffrax {m['diffrax']}, equinox {m['equinox']}, scipy {m['scipy']}; "
-        f"load average (1/5/15 min) {'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, "
+        f"{m['date']}, {m['cpu_model']} ×{m['nproc']} (nproc), {m['platform']}, Python "
+        f"{m['python']}, jax {m['jax']} / jaxlib {m['jaxlib']}, diffrax {m['diffrax']}, equinox "
+        f"{m['equinox']}, scipy {m['scipy']}; load average (1/5/15 min) "
+        f"{'/'.join(f'{x:.1f}' for x in m['loadavg_start'])} at start, "
         f"{'/'.join(f'{x:.1f}' for x in m['loadavg_end'])} at end; {data['wall_s']:.0f} s"
     )
 
@@ -233,9 +235,11 @@ def render_throughput(tp):
     vf = tp["vector_field_eval_s_per_impact"]
     vf = vf if isinstance(vf, dict) else {"adiabatic": vf, "none": float("nan")}
     out.append(
-        f"First `rbjax.simulate(linspace(0.1, 1.6, 1000))` call in a fresh process: {fmt(c.get('cold cache'), '.1f')} s with an empty "
-        f"JAX persistent compilation cache, {fmt(c.get('warm cache'), '.1f')} s with it warm. One vector-field evaluation of Eq. 7, vmapped over "
-        f"10 000 impacts (min of repeats): {vf['adiabatic'] * 1e9:.1f} ns per impact with the gas force, {vf['none'] * 1e9:.1f} ns without. scipy loop: "
+        "First `rbjax.simulate(linspace(0.1, 1.6, 1000))` call in a fresh process: "
+        f"{fmt(c.get('cold cache'), '.1f')} s with an empty JAX persistent compilation cache, "
+        f"{fmt(c.get('warm cache'), '.1f')} s with it warm. One vector-field evaluation of Eq. 7, "
+        f"vmapped over 10 000 impacts (min of repeats): {vf['adiabatic'] * 1e9:.1f} ns per impact "
+        f"with the gas force, {vf['none'] * 1e9:.1f} ns without. scipy loop: "
         f"{tp['scipy_per_impact_s'] * 1e3:.2f} ms per impact."
     )
     return "\n".join(out)
@@ -318,7 +322,8 @@ def render_targets(tp):
             "(ODE path only) ≥ 500 000 impacts/s",
             f"{best_ode['impacts_per_s']:,.0f}/s",
             best_ode["impacts_per_s"] >= 5e5,
-            f"{best_ode['variant']}, batch {best_ode['batch']}; {scipy / best_ode['per_impact_s']:,.0f}× scipy",
+            f"{best_ode['variant']}, batch {best_ode['batch']}; "
+            f"{scipy / best_ode['per_impact_s']:,.0f}× scipy",
         )
     if best_hist:
         line(
@@ -370,8 +375,8 @@ def render_stability(sm):
         rows.append(row)
     head = ["method"] + [f"{sm['slices'][k]['title']}" for k in keys]
     return (
-        "Counts per slice: correct / WRONG / flagged (deflection_limit or mass_singularity, agreeing with the reference) / "
-        "false flag / step_limit / solver_failed / NaN (of "
+        "Counts per slice: correct / WRONG / flagged (deflection_limit or mass_singularity, "
+        "agreeing with the reference) / false flag / step_limit / solver_failed / NaN (of "
         + str(len(sm["slices"][keys[0]]["height_m"]) ** 2)
         + " points).\n\n"
         + table(head, rows)

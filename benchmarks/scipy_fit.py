@@ -136,5 +136,6 @@ if __name__ == "__main__":
     for name in sys.argv[1:] or ["kelvin-voigt"]:
         out = fit(name, data)
         print(
-            f"{name}: {out['time_s']:.1f} s, {out['evaluations']} evaluations, rms {out['rms_N']:.2f} N, cost {out['cost']:.6g}, {out['parameters']}"
+            f"{name}: {out['time_s']:.1f} s, {out['evaluations']} evaluations, rms "
+            f"{out['rms_N']:.2f} N, cost {out['cost']:.6g}, {out['parameters']}"
         )

@@ -26,7 +26,8 @@ Parts (all by default; ``--part NAME`` repeats to pick):
 * ``million`` (only when asked): a 2^17 × 8 = 1 048 576-impact Sobol study with L_FE in one
   command (``rbjax sweep``), wall time.
 
-Prints tables, writes ``results/sensitivity_study.json`` and ``results/sensitivity_convergence.png``.
+Prints tables, writes ``results/sensitivity_study.json`` and
+``results/sensitivity_convergence.png``.
 """
 
 from __future__ import annotations
@@ -249,7 +250,8 @@ def part_convergence(out: dict, quick: bool) -> None:
                 )
                 entry["mean_total_order"][o].append(totals.mean(axis=0).tolist())
             print(
-                f"{design} N={n}: {replicates} × {n * (len(RANGES) + 2)} impacts in {time.perf_counter() - start:.1f} s",
+                f"{design} N={n}: {replicates} × {n * (len(RANGES) + 2)} impacts in "
+                f"{time.perf_counter() - start:.1f} s",
                 flush=True,
             )
         res["designs"][design] = entry
@@ -284,7 +286,8 @@ def _summarize_convergence(res: dict) -> None:
         rows.append([o, f"{b_r:.2f}", f"{b_s:.2f}", *(f"{f:,.0f}×" for f in factors)])
     headers = ["output", "slope, pseudo-random", "slope, Sobol'", *(f"{n:,.0f}" for n in evals)]
     print(
-        "pseudo-random evaluations needed per Sobol' evaluation for the same S_T interval width, by evaluations:"
+        "pseudo-random evaluations needed per Sobol' evaluation for the same S_T interval width, "
+        "by evaluations:"
     )
     print(table(headers, rows))
 
@@ -364,8 +367,10 @@ def part_dgsm(out: dict, quick: bool) -> None:
         rows.append([o, "yes" if within else "no", f"{rel:.1e}"])
     out["dgsm"] = entry
     print(
-        f"DGSM, N = {n}: exact {res.seconds_exact:.2f} s ({per_exact * 1e3:.2f} ms per base point), SALib finite differences {res.seconds_fd:.2f} s "
-        f"({d + 1} impacts per base point, {per_fd * 1e3:.2f} ms): finite differences cost {per_fd / per_exact:.2f}× the exact gradient"
+        f"DGSM, N = {n}: exact {res.seconds_exact:.2f} s ({per_exact * 1e3:.2f} ms per base "
+        f"point), SALib finite differences {res.seconds_fd:.2f} s ({d + 1} impacts per base "
+        f"point, {per_fd * 1e3:.2f} ms): finite differences cost {per_fd / per_exact:.2f}× the "
+        "exact gradient"
     )
     print(
         table(
@@ -379,7 +384,8 @@ def part_dgsm(out: dict, quick: bool) -> None:
     )
     if bound_rows:
         print(
-            "bound ν_i (b−a)²/(π² V) over the Sobol S_Ti (12/π² = 1.22 for a response linear in x_i):"
+            "bound ν_i (b−a)²/(π² V) over the Sobol S_Ti (12/π² = 1.22 for a response linear in "
+            "x_i):"
         )
         print(table(["output", *res.parameters], bound_rows))
 
@@ -395,7 +401,8 @@ def part_million(out: dict) -> None:
         n = json.loads(open(f"{tmp}/million.json").read())["n_evaluations"]
     out["million"] = {"n_evaluations": n, **run}
     print(
-        f"{n:,} impacts with L_FE in one command: {run['wall_s']:.0f} s wall, {run['cpu_user_s'] + run['cpu_sys_s']:.0f} s CPU"
+        f"{n:,} impacts with L_FE in one command: {run['wall_s']:.0f} s wall, "
+        f"{run['cpu_user_s'] + run['cpu_sys_s']:.0f} s CPU"
     )
 
 

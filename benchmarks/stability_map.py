@@ -221,7 +221,8 @@ def main():
                 "wall_s": wall,
             }
             print(
-                f"{label:22s} {key}  {counts}  max steps {int(np.max(out.num_steps))}  ({wall:.1f} s)",
+                f"{label:22s} {key}  {counts}  max steps {int(np.max(out.num_steps))}  "
+                f"({wall:.1f} s)",
                 flush=True,
             )
         results.append(entry)

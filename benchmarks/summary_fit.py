@@ -67,7 +67,8 @@ def main() -> None:
     info = machine_info()
     out = {}
     print(
-        f"{'model':<14} {'parameter':<18} {'truth':>10} {'within 2σ':>10} {'median |z|':>10}  first fit   warm fit (median)"
+        f"{'model':<14} {'parameter':<18} {'truth':>10} {'within 2σ':>10} {'median |z|':>10}  "
+        "first fit   warm fit (median)"
     )
     for name, truth in CASES.items():
         z = {k: [] for k in truth}
@@ -94,7 +95,8 @@ def main() -> None:
         out[name] = row
         for k, v in truth.items():
             print(
-                f"{name:<14} {k:<18} {v:>10.4g} {row['within_2sigma'][k]:>10.0%} {np.median(np.abs(z[k])):>10.2f}  {times[0]:8.1f} s  {warm:8.2f} s"
+                f"{name:<14} {k:<18} {v:>10.4g} {row['within_2sigma'][k]:>10.0%} "
+                f"{np.median(np.abs(z[k])):>10.2f}  {times[0]:8.1f} s  {warm:8.2f} s"
             )
     path = write_json(
         "summary_fit", {"machine": finish_machine_info(info), "draws": args.draws, "cases": out}

@@ -8,8 +8,9 @@ first − median. Workloads:
 (a) scalar outputs (contact time, peak force, restitution): ``rbjax.solve.impact_batch`` after
     ``rbjax.solve.simulate.broadcast_inputs`` (the core of ``rbjax.simulate``), with the library's
     default ``Solver()`` and with the recommended one; the quadrature path
-    ``impact_quadrature_batch`` (default 12 interpolation points, and 10 and 16); a batch of mixed difficulty with
-    and without bucketing; and the scipy loop (DOP853, rtol 1e-10, one terminal event per phase).
+    ``impact_quadrature_batch`` (default 12 interpolation points, and 10 and 16); a batch of mixed
+    difficulty with and without bucketing; and the scipy loop (DOP853, rtol 1e-10, one terminal
+    event per phase).
 (b) the 44.1 kHz force history over the contact window (``rbjax.trajectory``) and the octave-band
     L_FE of the 1 s record (``rbjax.spectrum.lfe_octave_dB`` on the zero-padded record, paper §2.4),
     and the same L_FE from only the DFT bins the octave bands use (a matrix product on the window).
@@ -96,8 +97,9 @@ def record(rows, workload, variant, n, timing, **extra):
     }
     rows.append(row)
     print(
-        f"{workload:10s} {variant:44s} B={n:<7d} {row['impacts_per_s']:12.0f} /s   first {timing['first_s']:6.2f} s  "
-        f"compile {timing['compile_s']:6.2f} s  median {timing['median_s'] * 1e3:9.2f} ms  "
+        f"{workload:10s} {variant:44s} B={n:<7d} {row['impacts_per_s']:12.0f} /s   first "
+        f"{timing['first_s']:6.2f} s  compile {timing['compile_s']:6.2f} s  median "
+        f"{timing['median_s'] * 1e3:9.2f} ms  "
         + " ".join(
             f"{k}={fmt(v, '.3g')}" for k, v in extra.items() if not isinstance(v, (dict, list))
         ),
@@ -271,7 +273,8 @@ def _bin_matrix():
 def lfe_octave_from_window(force_window):
     """The octave L_FE of the 1 s record from its contact window alone: the rfft bins of the
     zero-padded record that the bands use, as one matrix product (equal to lfe_octave_dB on the
-    padded record up to round-off; the weight 2 of the one-sided spectrum, none of DC/Nyquist used)."""
+    padded record up to round-off; the weight 2 of the one-sided spectrum, none of DC/Nyquist
+    used)."""
     bins, mask = _bin_matrix()
     n_w = force_window.shape[-1]
     phase = 2.0 * np.pi * np.outer(np.arange(n_w), bins) / N_RECORD
@@ -443,7 +446,8 @@ def compile_breakdown(n=1000, quick=False):
     }
     for k, v in out.items():
         print(
-            f"compile  {k:32s} trace+lower {v['trace_lower_s']:6.2f} s  XLA {v['xla_compile_s']:6.2f} s  HLO lines {v['hlo_lines_optimized']}"
+            f"compile  {k:32s} trace+lower {v['trace_lower_s']:6.2f} s  XLA "
+            f"{v['xla_compile_s']:6.2f} s  HLO lines {v['hlo_lines_optimized']}"
         )
     return out
 
@@ -454,9 +458,12 @@ def persistent_cache_probe(quick):
     import tempfile
 
     code = (
-        "import time,sys; t=time.perf_counter(); import jax; jax.config.update('jax_compilation_cache_dir', sys.argv[1]);"
-        "jax.config.update('jax_persistent_cache_min_compile_time_secs', 0.0); import rbjax, numpy as np;"
-        "t1=time.perf_counter(); r=rbjax.simulate(np.linspace(0.1,1.6,1000)); jax.block_until_ready(r.contact_time_s);"
+        "import time,sys; t=time.perf_counter(); import jax; "
+        "jax.config.update('jax_compilation_cache_dir', sys.argv[1]);"
+        "jax.config.update('jax_persistent_cache_min_compile_time_secs', 0.0); "
+        "import rbjax, numpy as np;"
+        "t1=time.perf_counter(); r=rbjax.simulate(np.linspace(0.1,1.6,1000)); "
+        "jax.block_until_ready(r.contact_time_s);"
         "print(time.perf_counter()-t1)"
     )
     out = {}

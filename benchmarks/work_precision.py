@@ -6,9 +6,10 @@ Eq. 7 with the adiabatic gas force, paper blocked force) at drop heights 0.1, 1.
 * Adaptive methods (bosh3, tsit5, dopri5, dopri8, kvaerno5): rtol 1e-3 … 1e-12, atol = 1e-3·rtol
   (the state is δ in m, ~0.03, and δ̇ in m/s, ~1–5; the library default pair 1e-9/1e-12 has the
   same ratio). Fixed-step methods (euler, heun, midpoint): step_s swept.
-* Reference: the quadrature path (rbjax.solve.quadrature, Eq. 7 integrated in δ by Gauss–Legendre rules,
-  64 nodes) for the scalars and its force history (48 nodes); cross-checked against scipy DOP853 at
-  rtol 1e-13 and diffrax Dopri8 at rtol 1e-13 (the reference floor, printed).
+* Reference: the quadrature path (rbjax.solve.quadrature, Eq. 7 integrated in δ by
+  Gauss–Legendre rules, 64 nodes) for the scalars and its force history (48 nodes); cross-checked
+  against scipy DOP853 at rtol 1e-13 and diffrax Dopri8 at rtol 1e-13 (the reference floor,
+  printed).
 * Errors (maximum over the three heights): relative contact time, peak force and restitution; the
   force history on the 44.1 kHz grid over the contact (relative L2, paper §2.4); the octave-band
   force exposure level L_FE (paper Eq. 11) of the 1 s record, max |ΔL| over 31.5 Hz–1 kHz, dB.
@@ -189,10 +190,12 @@ def main():
         }
         rows.append(row)
         print(
-            f"{row['series']:26s} {c.get('rtol', c.get('step_s')):8.0e}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  "
-            f"steps {row['mean_steps']:7.1f}  ok {row['ok_fraction']:.2f}  tc {err['contact_time_s']:.1e}  "
-            f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}  L2 {err['force_L2']:.1e}  "
-            f"LFE {err['lfe_dB']:.1e} dB  (first call {timing['first_s']:.1f} s) {row['status_counts']}",
+            f"{row['series']:26s} {c.get('rtol', c.get('step_s')):8.0e}  "
+            f"{row['per_solve_s'] * 1e6:9.2f} µs/solve  steps {row['mean_steps']:7.1f}  ok "
+            f"{row['ok_fraction']:.2f}  tc {err['contact_time_s']:.1e}  F "
+            f"{err['peak_force_N']:.1e}  e {err['restitution']:.1e}  L2 {err['force_L2']:.1e}  "
+            f"LFE {err['lfe_dB']:.1e} dB  (first call {timing['first_s']:.1f} s) "
+            f"{row['status_counts']}",
             flush=True,
         )
 
@@ -216,8 +219,8 @@ def main():
         }
         rows.append(row)
         print(
-            f"{'quadrature':26s} n={n:<6d}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  tc {err['contact_time_s']:.1e}  "
-            f"F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}",
+            f"{'quadrature':26s} n={n:<6d}  {row['per_solve_s'] * 1e6:9.2f} µs/solve  tc "
+            f"{err['contact_time_s']:.1e}  F {err['peak_force_N']:.1e}  e {err['restitution']:.1e}",
             flush=True,
         )
 
@@ -229,7 +232,10 @@ def main():
         "heights_m": HEIGHTS_M,
         "timing_batch": batch,
         "atol_over_rtol": 1e-3,
-        "reference": "rbjax.solve.quadrature n_nodes=64 (scalars), force_history_quadrature n_nodes=48 (history)",
+        "reference": (
+            "rbjax.solve.quadrature n_nodes=64 (scalars), force_history_quadrature n_nodes=48 "
+            "(history)"
+        ),
         "reference_floor": floor,
         "target_rel": TARGET_REL,
         "rows": rows,
@@ -429,8 +435,9 @@ def plot(rows, floor, quick):
     ax.set_title("cost per step", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(
-        "Work–precision, JIS ball at 0.1, 1.0, 1.6 m (max error over heights); dashed: 1e-6 target; dotted grey: scipy 1e-13 vs "
-        "reference; red x: step_limit / solver_failed in the batch"
+        "Work–precision, JIS ball at 0.1, 1.0, 1.6 m (max error over heights); dashed: 1e-6 "
+        "target; dotted grey: scipy 1e-13 vs reference; red x: step_limit / solver_failed in the "
+        "batch"
     )
     fig.tight_layout()
     RESULTS_DIR.mkdir(exist_ok=True)

@@ -46,7 +46,8 @@ program_store.store_dir = _store_dir_but_not_the_session_cache
 def pytest_configure(config):
     config.addinivalue_line(
         "markers",
-        "xla_optimised: compile this module's programs with XLA's full optimisation (programs that run many times)",
+        "xla_optimised: compile this module's programs with XLA's full optimisation (programs "
+        "that run many times)",
     )
 
 

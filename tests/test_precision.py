@@ -73,7 +73,7 @@ SCRIPT = textwrap.dedent(
         except Exception as err:  # report the type and the message, judged by the parent
             outcome[name] = f"{type(err).__name__}: {err}"
     print(json.dumps(outcome))
-    """
+    """  # noqa: E501
 )
 
 ENTRY_POINTS = [

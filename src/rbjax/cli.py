@@ -31,8 +31,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = ArgumentParser(
         prog="rbjax",
-        description="Blocked force of the JIS A 1418-2 / ISO 10140-5 Annex F rubber-ball impact source "
-        "(Schoenwald, Zeitler & Nightingale 2011).",
+        description=(
+            "Blocked force of the JIS A 1418-2 / ISO 10140-5 Annex F rubber-ball impact source "
+            "(Schoenwald, Zeitler & Nightingale 2011)."
+        ),
     )
     parser.add_argument("--version", action="version", version=f"rbjax {__version__}")
     subparsers = parser.add_subparsers(

@@ -1,4 +1,5 @@
-"""Figures (matplotlib): force histories, L_FE bands with the tolerance band, and the paper's Figs. 3–12.
+"""Figures (matplotlib): force histories, L_FE bands with the tolerance band, and the paper's
+Figs. 3–12.
 
 Every function takes an optional ``ax`` (a new figure is made without one) and returns the
 figure. Without a display (no ``DISPLAY``/``MPLBACKEND``, pyplot not yet imported) the Agg
@@ -68,7 +69,8 @@ def _finish(fig, ax, xlabel: str, ylabel: str, title=None, *, legend=None, grid=
 
 
 def _contact_window(t_ms, values, contact_time_s, margin=1.1):
-    """Only the samples up to ``margin`` × the longest contact (the rest of a 1 s record is zeros)."""
+    """Only the samples up to ``margin`` × the longest contact (the rest of a 1 s record is
+    zeros)."""
     if contact_time_s is None or not np.any(np.isfinite(contact_time_s)):
         return t_ms, values
     keep = t_ms <= margin * 1e3 * float(np.nanmax(contact_time_s))
@@ -160,7 +162,8 @@ def plot_lfe_bands(lfe_octave_dB, ax=None, tolerances=True, label=None, **line_k
 
     ``lfe_octave_dB``: a mapping band label → dB (as ``rbjax simulate --json``) or a sequence
     over ``spectrum.OCTAVE_BANDS``. The tolerance band is the rubber ball's L_FE range at the
-    standard drop height of 1 m (JIS A 1418-2 / ISO 10140-5 Annex F, via ``rbjax.spectrum.standards``).
+    standard drop height of 1 m (JIS A 1418-2 / ISO 10140-5 Annex F, via
+    ``rbjax.spectrum.standards``).
     """
     from .spectrum.bands import OCTAVE_BANDS
 
@@ -467,7 +470,8 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
         rigid = [r for r in results.values() if r.model.floor.rigid]  # type: ignore[attr-defined]
         if not rigid:
             raise ValueError(
-                "plot_floors: no result on the rigid floor; pass blocked=rbjax.simulate(h) (the blocked force)"
+                "plot_floors: no result on the rigid floor; pass blocked=rbjax.simulate(h) (the "
+                "blocked force)"
             )
         blocked = rigid[0]
     if axes is None:

@@ -78,7 +78,9 @@ def test_channels_by_name_or_number_units_and_calibration(tmp_path, forces):
     )
     with pytest.raises(
         D.DataError,
-        match=r"3 channels \(0: 'plate/force', 1: 'plate/amplifier', 2: 'plate/raw'\): pass channel=",
+        match=(
+            r"3 channels \(0: 'plate/force', 1: 'plate/amplifier', 2: 'plate/raw'\): pass channel="
+        ),
     ):
         D.read_tdms(p)
     with pytest.raises(
@@ -172,6 +174,9 @@ def test_bad_files_and_missing_extras_are_named(tmp_path, forces, monkeypatch):
     write_tdms(tmp_path / "h100.tdms", [("force", x, {"wf_increment": 1 / RATE_HZ})])
     with pytest.raises(
         D.MissingFormatError,
-        match=r"reading TDMS \(\.tdms\) files needs the package 'nptdms'.*pip install 'rbjax\[formats\]'",
+        match=(
+            r"reading TDMS \(\.tdms\) files needs the package 'nptdms'.*pip install "
+            r"'rbjax\[formats\]'"
+        ),
     ):
         D.read_tdms(tmp_path / "h100.tdms")

@@ -59,7 +59,8 @@ def test_fitted_models_predict_history_peak_and_bands_better_than_the_paper(comp
             np.abs(p.lfe_octave_dB[TOLERANCE_BANDS])
         ), (f, p)
         assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.5), f  # measured ≤ 2.3 dB
-        # README "Where they fall short": neither model reproduces the 1 kHz band (measured 4.8–11 dB off)
+        # README "Where they fall short": neither model reproduces the 1 kHz band (measured
+        # 4.8–11 dB off)
         assert abs(f.lfe_octave_dB[5]) > 3.0, f
 
 

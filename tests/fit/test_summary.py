@@ -27,7 +27,8 @@ def _write(tmp_path, text, name="t.csv"):
 def test_table_reads_csv_with_comments_and_default_sd(tmp_path):
     path = _write(
         tmp_path,
-        "# quoted from §4.1\nheight_m,contact_time_s,peak_force_N,peak_force_N_sd\n1.0,0.0196,,\n0.1,0.0213,500,7\n",
+        "# quoted from §4.1\nheight_m,contact_time_s,peak_force_N,peak_force_N_sd\n1.0,0.0196,,\n"
+        "0.1,0.0213,500,7\n",
     )
     t = read_summary(path)
     assert t.heights_m.tolist() == [0.1, 1.0]  # sorted
@@ -40,7 +41,8 @@ def test_table_reads_csv_with_comments_and_default_sd(tmp_path):
 def test_table_reads_toml(tmp_path):
     path = _write(
         tmp_path,
-        "[[height]]\nheight_m = 1.0\nlfe_63_dB = 30.1\nlfe_63_dB_sd = 0.3\n[[height]]\nheight_m = 0.5\nrestitution = 0.8\n",
+        "[[height]]\nheight_m = 1.0\nlfe_63_dB = 30.1\nlfe_63_dB_sd = 0.3\n[[height]]\n"
+        "height_m = 0.5\nrestitution = 0.8\n",
         "t.toml",
     )
     t = read_summary(path)

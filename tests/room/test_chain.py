@@ -151,7 +151,8 @@ def test_gradient_in_the_floating_floor_against_finite_differences():
     (rating, injected), (tangent, _) = program(THETA)
     # the primal: the energy the slab receives through the layer, from the scipy reference's
     # force (its own ODE), numpy's FFT on the same grid and the screed's equation written out:
-    # (s̃′ − ω²m″) x = F, F_slab = s̃′ x, s̃′ = s′(1 + jη) (EN 12354-2 Annex C's locally reacting floor)
+    # (s̃′ − ω²m″) x = F, F_slab = s̃′ x, s̃′ = s′(1 + jη) (EN 12354-2 Annex C's locally reacting
+    # floor)
     ref = reference_floor_impact(1.0, JIS_RUBBER_BALL, _floating(THETA))
     assert ref.contact_time_s < (N_FLOAT - 2) / RATE
     spec = np.abs(np.fft.rfft(ref.force_N(np.arange(N_FLOAT) / RATE), n=n_fft) / RATE) ** 2 * 2

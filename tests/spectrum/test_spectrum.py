@@ -300,8 +300,9 @@ def test_nominal_labels_as_in_the_standard():
               "315", "400", "500", "630", "800", "1000", "1250"]  # fmt: skip
     assert S.nominal_centres_Hz(3, 25.0, 1250.0) == thirds
     assert list(S.THIRD_OCTAVE_BANDS) == thirds
-    assert S.nominal_centres_Hz(1, 16.0, 16000.0) == ["16", "31.5", "63", "125", "250", "500",
-                                                      "1000", "2000", "4000", "8000", "16000"]  # fmt: skip
+    assert S.nominal_centres_Hz(1, 16.0, 16000.0) == [
+        "16", "31.5", "63", "125", "250", "500", "1000", "2000", "4000", "8000", "16000"
+    ]  # fmt: skip
     assert S.nominal_centres_Hz(3, 10.0, 20.0) == ["10", "12.5", "16", "20"]
     # selection by nominal frequency: [31.5, 1000] includes 31.62 Hz and 1000 Hz
     assert len(S.band_centres_Hz(1, 40.0, 999.0)) == 4

@@ -162,7 +162,8 @@ def _sample(theta):
 
 @pytest.fixture(scope="module")
 def reference_fd():
-    """Central differences of the scipy reference, relative step 1e-4: (d t_c, d F(t_s)) / d(μ, f, η)."""
+    """Central differences of the scipy reference, relative step 1e-4:
+    (d t_c, d F(t_s)) / d(μ, f, η)."""
     theta = np.array(GRAD[1:])
     rows = []
     for i in range(3):
@@ -201,8 +202,10 @@ class ReverseModeNaN(Exception):
 @pytest.mark.xfail(
     strict=True,
     raises=ReverseModeNaN,
-    reason="reverse mode through the ball-mode ODE's events feeds NaN into the "
-    "event's linear solve (solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses",
+    reason=(
+        "reverse mode through the ball-mode ODE's events feeds NaN into the event's linear solve "
+        "(solve/ode.py); jacfwd with Solver(adjoint='forward') works and is what the fit uses"
+    ),
 )
 def test_grad_of_contact_time_matches_finite_differences(reference_fd):
     # Only that failure is expected: a finite but wrong gradient fails the assertion below, and

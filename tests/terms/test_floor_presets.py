@@ -63,7 +63,8 @@ def test_materials_have_sources_and_valid_values():
 
 def test_clt_modulus():
     # one layer: the board's own orthotropy, √(E_0 E_90); five equal C24 layers (E_0 = 11 GPa,
-    # E_90 = 0.37 GPa): per unit layer thickness the layers along x have I = 3/12 + 2² + 2², across 2/12 + 1 + 1
+    # E_90 = 0.37 GPa): per unit layer thickness the layers along x have I = 3/12 + 2² + 2²,
+    # across 2/12 + 1 + 1
     assert cross_laminated_youngs_Pa(11e9, 0.37e9, 1) == pytest.approx(
         math.sqrt(11e9 * 0.37e9), rel=1e-12
     )

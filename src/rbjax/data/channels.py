@@ -148,7 +148,8 @@ def channel_newtons(ch: Channel, calibration_N_per_FS, source: str) -> np.ndarra
     if unit is not None and unit.lower() in _FORCE_UNITS:
         if calibration_N_per_FS is not None:
             raise DataError(
-                f"{source}: channel {ch.name!r} is already in {unit}: do not pass calibration_N_per_FS"
+                f"{source}: channel {ch.name!r} is already in {unit}: do not pass "
+                "calibration_N_per_FS"
             )
         force = force * _FORCE_UNITS[unit.lower()]
     elif unit is not None and calibration_N_per_FS is None:

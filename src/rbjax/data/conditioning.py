@@ -206,9 +206,9 @@ def condition(
     imps = find_impacts(x, rate, threshold_N=thr, min_separation_s=min_separation_s)
     if not imps:
         raise NoImpactError(
-            f"{src}: no impact found: the largest force {float(np.max(x - level0)):.4g} N above the "
-            f"baseline is below the threshold {thr:.4g} N (noise rms {noise:.3g} N); "
-            "is the force sign compression-positive?"
+            f"{src}: no impact found: the largest force {float(np.max(x - level0)):.4g} N above "
+            f"the baseline is below the threshold {thr:.4g} N (noise rms {noise:.3g} N); is the "
+            "force sign compression-positive?"
         )
     if which == "first":
         k = 0
@@ -303,8 +303,8 @@ def condition(
         )
     if e > i0 + m:
         raise DataError(
-            f"{src}: window_s={window_s * 1e3:.4g} ms cuts the impact (force above {thr:.4g} N until "
-            f"{(e - onset_idx) / rate * 1e3:.4g} ms after the onset); pass a longer window_s"
+            f"{src}: window_s={window_s * 1e3:.4g} ms cuts the impact (force above {thr:.4g} N "
+            f"until {(e - onset_idx) / rate * 1e3:.4g} ms after the onset); pass a longer window_s"
         )
     inside = [imp for imp in others if i0 <= imp.start_index < i0 + m]
     if inside:

@@ -156,8 +156,9 @@ def clean(
        after every impact left out). The hum is removed when its fundamental's amplitude
        exceeds twice the rms of the quiet samples about the fit and ten times its
        standard error, the quiet samples lasting two periods at least; the drift when
-       the line changes by more than three times that rms over the record. The drift is removed as a line through zero at the first impact, so that
-       the offset there is left to :func:`~rbjax.data.condition`'s pre-trigger baseline.
+       the line changes by more than three times that rms over the record. The drift is
+       removed as a line through zero at the first impact, so that the offset there is left
+       to :func:`~rbjax.data.condition`'s pre-trigger baseline.
 
     ``Recording.log`` gains ``polarity`` (``"as recorded"`` or ``"inverted: sign
     flipped"``), ``drift_N_per_s`` (the slope removed, or None) and ``hum`` (``{"frequency_Hz",
@@ -174,8 +175,8 @@ def clean(
     if low >= thr and low > 2.0 * high:
         x, detrended = -x, -detrended
         msg = (
-            f"{recording.source}: the force is negative ({-low:.4g} N at most, +{high:.4g} N the other way): "
-            "recorded with inverted sign; flipped"
+            f"{recording.source}: the force is negative ({-low:.4g} N at most, +{high:.4g} N the "
+            "other way): recorded with inverted sign; flipped"
         )
         warnings.warn(msg, DataWarning, stacklevel=2)
         notes.append(msg)
@@ -204,13 +205,15 @@ def clean(
                 coef, rms = hcoef[:2], hrms
                 hum = {"frequency_Hz": f, "amplitude_N": amplitude}
                 notes.append(
-                    f"mains hum removed: {f:.3f} Hz, {amplitude:.3g} N (with harmonics 2 to {HUM_HARMONICS})"
+                    f"mains hum removed: {f:.3f} Hz, {amplitude:.3g} N (with harmonics 2 to "
+                    f"{HUM_HARMONICS})"
                 )
         if abs(coef[1]) * (n / rate) > DRIFT_FACTOR * rms:
             drift = float(coef[1])
             x = x - drift * (t - t_anchor)
             notes.append(
-                f"baseline drift of {drift:+.4g} N/s removed (zero at the first impact, {t_anchor:.4f} s)"
+                f"baseline drift of {drift:+.4g} N/s removed (zero at the first impact, "
+                f"{t_anchor:.4f} s)"
             )
     log += [("drift_N_per_s", drift), ("hum", hum)]
     return recording.replace(force_N=x, notes=tuple(notes), log=tuple(log))

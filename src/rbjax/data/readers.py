@@ -109,7 +109,8 @@ def read_csv(
         if not f_cols:
             if len(header) == 1 and not t_cols:
                 raise DataError(
-                    f"{source}: column {header[0]!r} is not a force column (expected force_N, force or F)"
+                    f"{source}: column {header[0]!r} is not a force column (expected force_N, "
+                    "force or F)"
                 )
             raise DataError(
                 f"{source}: no force column among {header} (expected force_N, force or F, "
@@ -153,7 +154,8 @@ def read_csv(
             for k, v in enumerate(vals):
                 if not _isnum(v):
                     raise DataError(
-                        f"{source}: line {data_lines[k]}: non-numeric value {v.strip()!r} in column {col + 1}"
+                        f"{source}: line {data_lines[k]}: non-numeric value {v.strip()!r} in "
+                        f"column {col + 1}"
                     ) from None
         raise  # pragma: no cover
     if t is not None:
@@ -179,7 +181,8 @@ def read_csv(
         if rate_Hz is not None:
             if abs(float(rate_Hz) - rate_t) > 1e-4 * rate_t:
                 raise DataError(
-                    f"{source}: rate_Hz={rate_Hz!r} disagrees with the time column ({rate_t:.8g} Hz)"
+                    f"{source}: rate_Hz={rate_Hz!r} disagrees with the time column ({rate_t:.8g} "
+                    "Hz)"
                 )
             rate_t = float(rate_Hz)
         rate = rate_t

@@ -188,7 +188,8 @@ def _check_force(force: np.ndarray, source: str, *, flat_top: bool = True) -> No
     if bad.any():
         i = int(np.argmax(bad))
         raise DataError(
-            f"{source}: {int(bad.sum())} sample(s) are NaN or inf (first at sample {i}: {force[i]!r})"
+            f"{source}: {int(bad.sum())} sample(s) are NaN or inf (first at sample {i}: "
+            f"{force[i]!r})"
         )
     if np.ptp(force) == 0:
         raise DataError(f"{source}: all {n} samples equal {force[0]!r}: no signal")

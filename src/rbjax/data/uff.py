@@ -34,7 +34,8 @@ def _channel(ds: dict, source: str, notes: list[str]) -> Channel:
     name = _label(ds.get("id1")) or f"node {ds.get('rsp_node')} dir {ds.get('rsp_dir')}"
     if ds.get("func_type") != _TIME_RESPONSE:
         raise DataError(
-            f"{source}: dataset 58 {name!r} holds function type {ds.get('func_type')}, not a time response (1)"
+            f"{source}: dataset 58 {name!r} holds function type {ds.get('func_type')}, not a time "
+            "response (1)"
         )
     data = np.asarray(ds["data"])
     if np.iscomplexobj(data):
@@ -99,8 +100,8 @@ def read_uff(
     if not found:
         types = sorted({int(s.get("type", 0)) for s in sets})
         raise DataError(
-            f"{source}: no dataset 58 (a function at a node): not a Universal File Format file of time "
-            f"responses (dataset types found: {types})"
+            f"{source}: no dataset 58 (a function at a node): not a Universal File Format file of "
+            f"time responses (dataset types found: {types})"
         )
     notes: list[str] = []
     channels = [_channel(ds, source, notes) for ds in found]

@@ -32,7 +32,8 @@ def _check_riff_header(path, source: str) -> None:
         declared = struct.unpack("<I" if head[:4] == b"RIFF" else ">I", head[4:8])[0] + 8
         if declared > size + 1:  # + 1: a missing pad byte after an odd-sized last chunk
             raise DataError(
-                f"{source}: truncated file: the header declares {declared} bytes, only {size} are present"
+                f"{source}: truncated file: the header declares {declared} bytes, only {size} are "
+                "present"
             )
 
 
@@ -93,7 +94,8 @@ def read_wav(
         raise DataError(f"{source}: {ch} channels: pass channel= (0 to {ch - 1})")
     if isinstance(channel, str) and not channel.isdigit():
         raise DataError(
-            f"{source}: channel={channel!r}: WAV channels have no names; pass a number 0 to {ch - 1}"
+            f"{source}: channel={channel!r}: WAV channels have no names; pass a number 0 to "
+            f"{ch - 1}"
         )
     c = 0 if channel is None else int(channel)
     if not 0 <= c < ch:

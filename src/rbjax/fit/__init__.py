@@ -8,7 +8,8 @@ measuring chain, residuals and optimistix Levenberg–Marquardt as one compiled 
 (the frozen result); :mod:`~rbjax.fit.problem` holds one problem (records, layout, program,
 onset alignment), :mod:`~rbjax.fit.engine` drives it (:func:`fit`, one step each:
 :mod:`~rbjax.fit.setup` → :mod:`~rbjax.fit.start` → :mod:`~rbjax.fit.freedom` →
-:mod:`~rbjax.fit.rounds` → :mod:`~rbjax.fit.estimates` → the result) and :mod:`~rbjax.fit.prediction` compares given models (:func:`predict`, :func:`model_histories`).
+:mod:`~rbjax.fit.rounds` → :mod:`~rbjax.fit.estimates` → the result) and
+:mod:`~rbjax.fit.prediction` compares given models (:func:`predict`, :func:`model_histories`).
 """
 
 from .engine import fit

@@ -28,8 +28,9 @@ from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 #: The fitted models that model selection compares by default: the paper's elastic model, one
 #: damping law each, Hunt–Crossley with the ball's own mode (the model that meets the held-out
 #: accuracy bars on the bundled recordings; selection, not this list, decides whether it is
-#: worth its parameters) and with the mode's massless limit (one parameter fewer). Any registered damping law's name is a model name too. Append
-#: ``+stiffening`` for the cubic stiffening of the shell, F_B = kδ(1 + β(δ/h)²), and then
+#: worth its parameters) and with the mode's massless limit (one parameter fewer). Any registered
+#: damping law's name is a model name too. Append ``+stiffening`` for the cubic stiffening of the
+#: shell, F_B = kδ(1 + β(δ/h)²), and then
 #: ``+ball-mode`` for one mode of the ball in series with the shell (``rbjax.BallMode``:
 #: μ, f, η fitted), e.g. ``hunt-crossley+stiffening+ball-mode``, and then
 #: ``+series-kelvin-voigt`` for its overdamped, massless limit, a spring and a damper in series
@@ -130,7 +131,8 @@ def parse_model_terms(name: str) -> ModelTerms:
 
 def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
     """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``
-    (a ``+ball-mode`` suffix is accepted; :func:`parse_model_terms` also says whether it is there)."""
+    (a ``+ball-mode`` suffix is accepted; :func:`parse_model_terms` also says whether it is
+    there)."""
     terms = parse_model_terms(name)
     return terms.laws, terms.stiffening
 

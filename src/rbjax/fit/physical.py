@@ -64,7 +64,8 @@ def at_bounds(values: dict) -> str:
         for bound, side in ((lower, "lower"), (upper, "upper")):
             if abs(value - bound) <= BOUND_TOLERANCE * (upper - lower):
                 hits.append(
-                    f"{name} = {value:.4g} (the {side} bound of its fit range ({lower:g}, {upper:g}))"
+                    f"{name} = {value:.4g} (the {side} bound of its fit range ({lower:g}, "
+                    f"{upper:g}))"
                 )
     if not hits:
         return ""

@@ -79,8 +79,9 @@ class Structure(eqx.Module):
     decimate: int = eqx.field(static=True)
     poisson_index: int = eqx.field(static=True)
     solver: object = eqx.field(static=True)
-    #: ``"samples"``: the force at the record's samples by fixed steps (:mod:`rbjax.fit.record_forces`);
-    #: ``"ode"``: the diffrax ODE with its events, every column carried through it (moving floors).
+    #: ``"samples"``: the force at the record's samples by fixed steps
+    #: (:mod:`rbjax.fit.record_forces`); ``"ode"``: the diffrax ODE with its events, every column
+    #: carried through it (moving floors).
     path: str = eqx.field(static=True, default="samples")
     substeps: int = eqx.field(static=True, default=2)
     #: False when no extra weight is given: the feature rows are then 0 and their Jacobian is

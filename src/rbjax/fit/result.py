@@ -116,7 +116,8 @@ class FitResult:
         from ..text import fmt, format_table
 
         lines = [
-            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): {self.message}"
+            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): "
+            f"{self.message}"
         ]
         lines += _parameter_lines(self)
         bands = OCTAVE_BANDS
@@ -156,7 +157,8 @@ class FitResult:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Prediction:
-    """A model's predicted records next to the measured ones (nothing fitted); see :func:`predict`."""
+    """A model's predicted records next to the measured ones (nothing fitted); see
+    :func:`predict`."""
 
     per_height: tuple
     time_s: np.ndarray
@@ -194,7 +196,8 @@ def _parameter_lines(fit) -> list[str]:
             lines.append(f"  {k:22s} {p.value:.6g} {p.unit} (held)")
         else:
             lines.append(
-                f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … {p.ci95[1]:.6g})"
+                f"  {k:22s} {p.value:.6g} ± {p.std:.2g} {p.unit}  (95 %: {p.ci95[0]:.6g} … "
+                f"{p.ci95[1]:.6g})"
             )
     return lines + ["identifiability: " + fit.identifiability]
 

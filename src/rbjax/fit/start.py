@@ -99,7 +99,8 @@ def start_plan(setup: FitSetup, model, start) -> StartPlan:
     for k in start_map:
         if k not in setup.fittable:
             raise ValueError(
-                f"start: unknown parameter {k!r} for model {setup.model_name!r}; valid: {', '.join(setup.fittable)}"
+                f"start: unknown parameter {k!r} for model {setup.model_name!r}; valid: "
+                f"{', '.join(setup.fittable)}"
             )
     if poisson_prior is not None and "poisson" not in start_map:
         # E/√(1−ν²) is all the histories determine, so the optimum has ν at the prior mean:
@@ -132,7 +133,8 @@ def start_plan(setup: FitSetup, model, start) -> StartPlan:
     if warm is not None:
         if warm.model_name != setup.model_name or warm.theta.size != theta.size:
             raise ValueError(
-                f"start: a FitResult of model {setup.model_name!r} cannot start this {setup.model_name!r} fit"
+                f"start: a FitResult of model {setup.model_name!r} cannot start this "
+                f"{setup.model_name!r} fit"
             )
         theta = warm.theta.copy()
         for k, v in fixed.items():

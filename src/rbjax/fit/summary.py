@@ -59,7 +59,8 @@ def _entry_mask(table: SummaryTable, held_out) -> np.ndarray:
         hits = np.flatnonzero(np.isclose(table.heights_m, float(h), atol=5e-4))
         if f not in figures or hits.size == 0 or not mask[hits[0], figures.index(f)]:
             raise ValueError(
-                f"held_out: ({h!r}, {f!r}) is not a figure of {table.source}; it has {', '.join(figures)} at {', '.join(f'{x:g}' for x in table.heights_m)} m"
+                f"held_out: ({h!r}, {f!r}) is not a figure of {table.source}; it has "
+                f"{', '.join(figures)} at {', '.join(f'{x:g}' for x in table.heights_m)} m"
             )
         mask[hits[0], figures.index(f)] = False
     return mask
@@ -118,7 +119,8 @@ def _solve(program: FigureProgram, phi0, measured, sd, mask):
     r0 = residual(phi0)
     if not np.all(np.isfinite(r0)):
         raise RuntimeError(
-            f"the model's figures at the start values are not finite ({program.names} = {phi0}); give start values"
+            f"the model's figures at the start values are not finite ({program.names} = {phi0}); "
+            "give start values"
         )
     sol = least_squares(
         residual,
@@ -183,7 +185,8 @@ def fit_summary(
     for k, v in (start or {}).items():
         if k not in fittable:
             raise ValueError(
-                f"start: unknown parameter {k!r} for model {model_name!r}; valid: {', '.join(fittable)}"
+                f"start: unknown parameter {k!r} for model {model_name!r}; valid: "
+                f"{', '.join(fittable)}"
             )
         values[k] = float(v)
     values.update({k: v for k, v in fixed.items() if k in fittable})
@@ -195,14 +198,16 @@ def fit_summary(
     free = [n for n in fittable if n not in fixed and n != "poisson"]
     if len(free) > n_fit:
         raise SummaryTableError(
-            f"{table.source}: {n_fit} figures in the fit cannot determine {len(free)} parameters of model {model_name!r} "
-            f"({', '.join(free)}); hold some (fix=, --fix NAME=VALUE) or give more figures"
+            f"{table.source}: {n_fit} figures in the fit cannot determine {len(free)} parameters "
+            f"of model {model_name!r} ({', '.join(free)}); hold some (fix=, --fix NAME=VALUE) or "
+            "give more figures"
         )
     notes = list(table.notes)
     notes.append(
         f"ν held at {nu:g}"
         + (" as given" if "poisson" in fixed else (" (the paper's value, §4)" if nu == 0.5 else ""))
-        + ": the figures, like histories, determine only E/√(1−ν²) (Reissner stiffness, Eqs. 1–3; the gas force does not involve E or ν)."
+        + ": the figures, like histories, determine only E/√(1−ν²) (Reissner stiffness, Eqs. "
+        "1–3; the gas force does not involve E or ν)."
     )
     specs_all = {n: fit_declaration(n, ball, candidate) for n in fittable}
     figures = table.figures
@@ -225,7 +230,8 @@ def fit_summary(
                 )
                 continue
             raise RuntimeError(
-                f"summary fit of {model_name!r}: the fitted model's figures are not finite (a failed solve) at {values}"
+                f"summary fit of {model_name!r}: the fitted model's figures are not finite (a "
+                f"failed solve) at {values}"
             )
         jw = (jac / sd[..., None])[mask]
         drop = _undetermined(jw, free, specs, phi)
@@ -237,7 +243,8 @@ def fit_summary(
     _, fitted_ball, fitted_model = replace(values, 1.0, ball, candidate)
     for n, why in held.items():
         notes.append(
-            f"{n} is not pinned down by these figures ({why}); held at {values[n]:.4g} {specs_all[n].unit}."
+            f"{n} is not pinned down by these figures ({why}); held at {values[n]:.4g} "
+            f"{specs_all[n].unit}."
         )
 
     chi2 = float(r @ r)
@@ -246,11 +253,13 @@ def fit_summary(
     cov_phi = np.linalg.pinv(jw.T @ jw, hermitian=True) * birge if free else np.zeros((0, 0))
     if birge > 1.0:
         notes.append(
-            f"χ²/(N − p) = {chi2 / dof:.3g} > 1: the model misses the figures by more than their uncertainties; the covariance is scaled by it."
+            f"χ²/(N − p) = {chi2 / dof:.3g} > 1: the model misses the figures by more than their "
+            "uncertainties; the covariance is scaled by it."
         )
     elif dof == 0 and free:
         notes.append(
-            "As many free parameters as figures: the fit passes through them, and the uncertainties are those of the figures alone."
+            "As many free parameters as figures: the fit passes through them, and the "
+            "uncertainties are those of the figures alone."
         )
     std_phi = np.sqrt(np.clip(np.diag(cov_phi), 0.0, None))
     parameters = {}
@@ -305,7 +314,8 @@ def fit_summary(
                 )
     elapsed = time.perf_counter() - t0
     say(
-        f"fit_summary {model_name}: χ² = {chi2:.3g} on {n_fit} figures, {len(free)} free ({elapsed:.1f} s)",
+        f"fit_summary {model_name}: χ² = {chi2:.3g} on {n_fit} figures, {len(free)} free "
+        f"({elapsed:.1f} s)",
         enabled=progress,
     )
     return SummaryFitResult(
@@ -356,8 +366,9 @@ def _undetermined(jw, free, specs, phi) -> dict[str, str]:
     d = np.abs(np.diag(r))
     if d[-1] * CONDITION_LIMIT < d[0]:
         return {
-            free[
-                piv[-1]
-            ]: f"its Jacobian column depends on the others: condition number {d[0] / max(d[-1], 1e-300):.2g}"
+            free[piv[-1]]: (
+                "its Jacobian column depends on the others: condition number "
+                f"{d[0] / max(d[-1], 1e-300):.2g}"
+            )
         }
     return {}

@@ -109,8 +109,8 @@ def _value_and_jacobian(phi, heights_m, ball, model, names, specs, figures, num_
 
 class FigureProgram:
     """The figures at ``heights_m`` of ``(ball, model)`` with the parameters ``names`` (declared
-    by ``specs``) set from φ: ``value(φ)`` and ``value_and_jacobian(φ)`` (one program for both) (NumPy arrays of shape
-    (heights, figures) and (heights, figures, len(φ)))."""
+    by ``specs``) set from φ: ``value(φ)`` and ``value_and_jacobian(φ)`` (one program for both)
+    (NumPy arrays of shape (heights, figures) and (heights, figures, len(φ)))."""
 
     def __init__(self, heights_m, ball, model: Model, names, specs, figures, contact_time_s=None):
         self.heights_m = np.asarray(heights_m, dtype=float)

@@ -89,8 +89,9 @@ class SummaryFitResult:
         from ..text import fmt, format_table
 
         lines = [
-            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted to {self.n_figures} figures of {self.source}: "
-            f"χ² = {self.chi2:.3g}, {self.n_free} free; {self.message}"
+            f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted "
+            f"to {self.n_figures} figures of {self.source}: χ² = {self.chi2:.3g}, {self.n_free} "
+            f"free; {self.message}"
         ]
         lines += _parameter_lines(self)
         rows = []

@@ -134,7 +134,8 @@ def summary_table(
     valid = (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES)
     if not rows:
         raise SummaryTableError(
-            f"{source}: no rows; give one row per drop height with {HEIGHT_COLUMN} and any of {', '.join(FIGURES[:4])} …"
+            f"{source}: no rows; give one row per drop height with {HEIGHT_COLUMN} and any of "
+            f"{', '.join(FIGURES[:4])} …"
         )
     heights: list[float] = []
     values: dict[str, list[float]] = {f: [] for f in FIGURES}
@@ -144,17 +145,20 @@ def summary_table(
         for col in row:
             if col not in valid:
                 raise SummaryTableError(
-                    f"{where(k, col)}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
+                    f"{where(k, col)}: unknown column; valid: {HEIGHT_COLUMN}, "
+                    f"{', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
                 )
         cells = {col: _number(row[col], where(k, col)) for col in row}
         h = cells.get(HEIGHT_COLUMN)
         if h is None or not h > 0:
             raise SummaryTableError(
-                f"{where(k, HEIGHT_COLUMN)}: a drop height > 0 m is required (got {row.get(HEIGHT_COLUMN)!r}; valid range (0, inf))"
+                f"{where(k, HEIGHT_COLUMN)}: a drop height > 0 m is required (got "
+                f"{row.get(HEIGHT_COLUMN)!r}; valid range (0, inf))"
             )
         if any(math.isclose(h, other, abs_tol=5e-4) for other in heights):
             raise SummaryTableError(
-                f"{where(k, HEIGHT_COLUMN)}: height {h:g} m occurs twice; give one row per drop height"
+                f"{where(k, HEIGHT_COLUMN)}: height {h:g} m occurs twice; give one row per drop "
+                "height"
             )
         heights.append(h)
         measured = 0
@@ -174,7 +178,8 @@ def summary_table(
                 defaulted.add(f)
             if not s > 0:
                 raise SummaryTableError(
-                    f"{where(k, f + SD_SUFFIX)}: uncertainty {s!r} must be positive (valid range (0, inf))"
+                    f"{where(k, f + SD_SUFFIX)}: uncertainty {s!r} must be positive (valid range "
+                    "(0, inf))"
                 )
             if f in SCALAR_FIGURES and not v > 0:
                 raise SummaryTableError(
@@ -188,7 +193,8 @@ def summary_table(
             sds[f].append(s)
         if measured == 0:
             raise SummaryTableError(
-                f"{source}, {labels[k]}: height {h:g} m has no figure; give at least one of {', '.join(FIGURES[:4])} …"
+                f"{source}, {labels[k]}: height {h:g} m has no figure; give at least one of "
+                f"{', '.join(FIGURES[:4])} …"
             )
     order = np.argsort(heights)
     keep = [f for f in FIGURES if np.any(np.isfinite(values[f]))]
@@ -243,7 +249,8 @@ def read_summary(path) -> SummaryTable:
         unknown = sorted(set(doc) - {"height", "source", "note"})
         if unknown or not isinstance(doc.get("height"), list):
             raise SummaryTableError(
-                f"{path}: expected [[height]] tables (and optional 'source', 'note'); found keys {sorted(doc)}"
+                f"{path}: expected [[height]] tables (and optional 'source', 'note'); found keys "
+                f"{sorted(doc)}"
             )
         rows = doc["height"]
         return summary_table(rows, str(path), [f"[[height]] {k + 1}" for k in range(len(rows))])
@@ -268,11 +275,13 @@ def read_summary(path) -> SummaryTable:
         labels.append(f"line {n}")
     if HEIGHT_COLUMN not in header:
         raise SummaryTableError(
-            f"{path}, line {lines[0][0]}, column {HEIGHT_COLUMN!r}: missing; the header needs {HEIGHT_COLUMN} and figure columns"
+            f"{path}, line {lines[0][0]}, column {HEIGHT_COLUMN!r}: missing; the header needs "
+            f"{HEIGHT_COLUMN} and figure columns"
         )
     for col in header:
         if col and col not in (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES):
             raise SummaryTableError(
-                f"{path}, line {lines[0][0]}, column {col!r}: unknown column; valid: {HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
+                f"{path}, line {lines[0][0]}, column {col!r}: unknown column; valid: "
+                f"{HEIGHT_COLUMN}, {', '.join(FIGURES)}, and any of them + {SD_SUFFIX!r}"
             )
     return summary_table(rows, str(path), labels)

@@ -113,7 +113,8 @@ def covariance(
 def fold_in_poisson_prior(
     free_names, physical_free, physical, cov_phi, nu: float, prior, dnu_dphi: float
 ):
-    """Add ν ~ N(mean, std²) to a covariance fitted with ν held at the mean (in φ = (log E, logit ν, …)).
+    """Add ν ~ N(mean, std²) to a covariance fitted with ν held at the mean (in φ = (log E,
+    logit ν, …)).
 
     With ν held, the fitted log E is log E_eff + ½log(1 − ν²) at ν fixed; letting ν vary
     by its prior at fixed E_eff adds a = ∂log E/∂ν = −ν/(1 − ν²) times ν's deviation to log E.

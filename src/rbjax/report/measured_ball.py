@@ -36,7 +36,8 @@ def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
     from ..studies.summary_selection import select_summary
 
     say(
-        f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's figures (§4.1)",
+        f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's "
+        "figures (§4.1)",
         enabled=progress,
     )
     selection = select_summary(EXAMPLE_TABLE, models, held_out=[PREDICTED])
@@ -114,22 +115,29 @@ def report_section(result: dict) -> list[str]:
         "",
         "## The paper's measured ball, fitted to its figures",
         "",
-        f"Fitted on the {result['fitted_on']} (§4.1, bundled as `examples/paper-measured-ball/summary.csv`); each model predicts the "
-        f"{result['predicted']}. Models compared by leave-one-figure-out prediction; recommended: **{result['recommended']}**.",
+        f"Fitted on the {result['fitted_on']} (§4.1, bundled as "
+        "`examples/paper-measured-ball/summary.csv`); each model predicts the "
+        f"{result['predicted']}. Models compared by leave-one-figure-out prediction; recommended: "
+        f"**{result['recommended']}**.",
         "",
-        "| model | E (MPa) | t_c 10 / 100 / 160 cm (ms) | held-out rms (σ) | predicted 160 cm peak | vs 1800 N |",
+        "| model | E (MPa) | t_c 10 / 100 / 160 cm (ms) | held-out rms (σ) | predicted 160 cm "
+        "peak | vs 1800 N |",
         "|---|---|---|---|---|---|",
     ]
     for name, r in result["models"].items():
         tc = " / ".join(f"{1e3 * v:.2f}" for v in r["contact_time_s"].values())
         lines.append(
-            f"| {name} | {r['youngs_Pa'] / 1e6:.3f} | {tc} | {r['held_out_rms_sigma']:.2f} | {r['predicted_peak_1.6m_N']:.0f} ± {r['predicted_sd_N']:.0f} N | {100 * r['relative_error']:+.1f} % |"
+            f"| {name} | {r['youngs_Pa'] / 1e6:.3f} | {tc} | {r['held_out_rms_sigma']:.2f} | "
+            f"{r['predicted_peak_1.6m_N']:.0f} ± {r['predicted_sd_N']:.0f} N | "
+            f"{100 * r['relative_error']:+.1f} % |"
         )
     verdict = "met" if result["bar_met"] else "missed"
     lines += [
         "",
-        f"The bar (the recommended model within 5 % of 1800 N) is **{verdict}**: none of these models makes the peak grow as slowly "
-        "with height as the measured ball while its contact shortens as measured (the measured pulse is not the model's shape: §4.1, ringing and a steep rise)."
+        f"The bar (the recommended model within 5 % of 1800 N) is **{verdict}**: none of these "
+        "models makes the peak grow as slowly with height as the measured ball while its contact "
+        "shortens as measured (the measured pulse is not the model's shape: §4.1, ringing and a "
+        "steep rise)."
         if not result["bar_met"]
         else "",
         f"![measured ball]({result['figure']})",

@@ -201,20 +201,23 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     between = min(r["rbjax"].values()) <= r["paper"] <= max(r["rbjax"].values())
     text["contact_time_1.0m"] = (
         f"At 1 m the corrected gas force (Eq. 4) reaches F_G = {fg1:.0f} N at maximum compression "
-        f"(δ_max = {d1 * 1e3:.1f} mm = {d1 / ball.wall_m:.2f} h), {100 * fg1 / fb1:.1f} % of the shell force F_B = {fb1:.0f} N; "
-        f"this stiffening shortens the contact from {r['rbjax']['none']:.2f} ms (gas off) to {r['rbjax']['adiabatic']:.2f} ms "
-        f"(gas on). "
+        f"(δ_max = {d1 * 1e3:.1f} mm = {d1 / ball.wall_m:.2f} h), {100 * fg1 / fb1:.1f} % of the "
+        f"shell force F_B = {fb1:.0f} N; this stiffening shortens the contact from "
+        f"{r['rbjax']['none']:.2f} ms (gas off) to {r['rbjax']['adiabatic']:.2f} ms (gas on). "
         + (
-            f"The paper's {r['paper']:.1f} ms lies between the two: its gas force was weaker than the corrected Eq. 4 "
-            f"(as printed, Eq. 4 has no real value beyond δ = {printed_limit * 1e3:.1f} mm). "
+            f"The paper's {r['paper']:.1f} ms lies between the two: its gas force was weaker than "
+            "the corrected Eq. 4 (as printed, Eq. 4 has no real value beyond "
+            f"δ = {printed_limit * 1e3:.1f} mm). "
             if between
             else f"The paper's {r['paper']:.1f} ms lies outside both. "
         )
-        + f"The paper took the first sign change of δ on its 44.1 kHz grid (§2.4), which rounds up by less than one sample "
-        f"(0.023 ms): on that grid rbjax gives {on['grid_contact_time_s'][i1] * 1e3:.2f} ms (gas on) and "
-        f"{off['grid_contact_time_s'][i1] * 1e3:.2f} ms (gas off), so the grid accounts for at most 0.023 ms of the "
-        f"{min(abs(v - r['paper']) for v in r['rbjax'].values()):.2f} ms or more between rbjax and the paper; rbjax's contact "
-        f"time is the end-of-contact event located by a root finder."
+        + "The paper took the first sign change of δ on its 44.1 kHz grid (§2.4), which rounds "
+        "up by less than one sample (0.023 ms): on that grid rbjax gives "
+        f"{on['grid_contact_time_s'][i1] * 1e3:.2f} ms (gas on) and "
+        f"{off['grid_contact_time_s'][i1] * 1e3:.2f} ms (gas off), so the grid accounts for at "
+        f"most 0.023 ms of the {min(abs(v - r['paper']) for v in r['rbjax'].values()):.2f} ms or "
+        "more between rbjax and the paper; rbjax's contact time is the end-of-contact event "
+        "located by a root finder."
     )
     for h in PAPER["peak_force_N"]:
         key = f"peak_force_{h}m"
@@ -225,25 +228,29 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
         d, fg, fb = gas_share(on, i)
         share = fg / (fg + fb)
         head = (
-            f"At {float(h) * 100:.0f} cm the peak deflection is {d * 1e3:.1f} mm ({d / ball.wall_m:.2f} h) and the corrected "
-            f"Eq. 4 adds F_G = {fg:.0f} N ({100 * share:.1f} % of the peak) to F_B = {fb:.0f} N: gas on gives "
-            f"{r['rbjax']['adiabatic']:.0f} N ({_pct(r['relative_difference']['adiabatic'])}), gas off {r['rbjax']['none']:.0f} N "
-            f"({_pct(r['relative_difference']['none'])}). "
+            f"At {float(h) * 100:.0f} cm the peak deflection is {d * 1e3:.1f} mm "
+            f"({d / ball.wall_m:.2f} h) and the corrected Eq. 4 adds F_G = {fg:.0f} N "
+            f"({100 * share:.1f} % of the peak) to F_B = {fb:.0f} N: gas on gives "
+            f"{r['rbjax']['adiabatic']:.0f} N ({_pct(r['relative_difference']['adiabatic'])}), "
+            f"gas off {r['rbjax']['none']:.0f} N ({_pct(r['relative_difference']['none'])}). "
         )
         if share < 0.03:
             tail = (
-                f"The gas force hardly matters at this height; the remaining {_pct(r['relative_difference']['adiabatic'])} / "
-                f"{_pct(r['relative_difference']['none'])} (gas on / off) "
-                f"is within the precision of the paper's '{'roughly' if h == '0.1' else 'about'} {r['paper']:.0f} N', "
-                f"a value read from text and figure, not a computed number."
+                "The gas force hardly matters at this height; the remaining "
+                f"{_pct(r['relative_difference']['adiabatic'])} / "
+                f"{_pct(r['relative_difference']['none'])} (gas on / off) is within the precision "
+                f"of the paper's '{'roughly' if h == '0.1' else 'about'} {r['paper']:.0f} N', a "
+                "value read from text and figure, not a computed number."
             )
         else:
             tail = (
-                f"The paper's '{'roughly' if h == '0.1' else 'about'} {r['paper']:.0f} N' is closer to rbjax with {closer(r)}: the "
-                f"corrected Eq. 4 grows steeply with δ (the cavity volume term), while the paper's own gas force must have been "
-                f"much smaller, as its Fig. 3 and its remark that F_G 'might be negligible' suggest"
+                f"The paper's '{'roughly' if h == '0.1' else 'about'} {r['paper']:.0f} N' is "
+                f"closer to rbjax with {closer(r)}: the corrected Eq. 4 grows steeply with δ (the "
+                "cavity volume term), while the paper's own gas force must have been much "
+                "smaller, as its Fig. 3 and its remark that F_G 'might be negligible' suggest"
                 + (
-                    f"; the printed Eq. 4 has no real value beyond δ = {printed_limit * 1e3:.1f} mm, below this δ_max."
+                    f"; the printed Eq. 4 has no real value beyond δ = {printed_limit * 1e3:.1f} "
+                    "mm, below this δ_max."
                     if d > printed_limit
                     else "."
                 )
@@ -254,14 +261,16 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     if meas:
         over = {g: float(np.mean([m["rbjax"][g] - m["paper"] for m in meas])) for g in GAS}
         listing = ", ".join(
-            f"{m['height_m'] * 100:.0f} cm: {m['paper']:.1f} ms vs {m['rbjax']['adiabatic']:.2f} / {m['rbjax']['none']:.2f} ms"
+            f"{m['height_m'] * 100:.0f} cm: {m['paper']:.1f} ms vs {m['rbjax']['adiabatic']:.2f} "
+            f"/ {m['rbjax']['none']:.2f} ms"
             for m in meas
         )
         text["measured_contact_time"] = (
-            f"Measured ({listing}; gas on / gas off): the elastic model is longer by {over['adiabatic']:.2f} ms (gas on) and "
-            f"{over['none']:.2f} ms (gas off) on average; the paper found its own prediction about 1 ms (≈ +6 %) too long. "
-            f"The model has no material damping and no shell modes, while the measured pulse rises faster: the real rubber "
-            f"is stiffer and lossier than E = 1.6 MPa with no damping (§4.1)."
+            f"Measured ({listing}; gas on / gas off): the elastic model is longer by "
+            f"{over['adiabatic']:.2f} ms (gas on) and {over['none']:.2f} ms (gas off) on average; "
+            "the paper found its own prediction about 1 ms (≈ +6 %) too long. The model has no "
+            "material damping and no shell modes, while the measured pulse rises faster: the "
+            "real rubber is stiffer and lossier than E = 1.6 MPa with no damping (§4.1)."
         )
     j63 = OCTAVE_BANDS.index("63")
     others = [j for j in range(len(OCTAVE_BANDS)) if j != j63]
@@ -275,24 +284,26 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     lo63, hi63 = (float(x[0]) for x in band_edges_Hz(1, 63, 63))
     paper63 = PAPER["increase_per_doubling_dB"]["63"]
     text["increase_per_doubling"] = (
-        f"If the pulse kept its shape, F ∝ v0 ∝ √h (Eq. 10) and every band would rise by 10·log10(2) = {ideal:.2f} dB per "
-        f"doubling. In the bands other than 63 Hz rbjax stays within {spread['adiabatic']:.2f} dB (gas on) and "
-        f"{spread['none']:.2f} dB (gas off) of that (paper: about 3 dB). The 63 Hz band ({lo63:.1f}–{hi63:.1f} Hz) holds the "
-        f"contact resonance, the first minimum of the spectrum, which moves up as the contact shortens "
-        f"({_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz gas on, {_f(res['none'][0])} → {_f(res['none'][1])} Hz gas off, "
-        f"{heights[lo] * 100:.0f} → {heights[hi] * 100:.0f} cm), so the band gains energy faster: rbjax gives "
-        f"{slope['adiabatic'][j63]:.2f} dB (gas on) and {slope['none'][j63]:.2f} dB (gas off) at 63 Hz against the paper's "
-        f"about {paper63:.0f} dB. "
+        "If the pulse kept its shape, F ∝ v0 ∝ √h (Eq. 10) and every band would rise by "
+        f"10·log10(2) = {ideal:.2f} dB per doubling. In the bands other than 63 Hz rbjax stays "
+        f"within {spread['adiabatic']:.2f} dB (gas on) and {spread['none']:.2f} dB (gas off) of "
+        f"that (paper: about 3 dB). The 63 Hz band ({lo63:.1f}–{hi63:.1f} Hz) holds the contact "
+        "resonance, the first minimum of the spectrum, which moves up as the contact shortens "
+        f"({_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz gas on, "
+        f"{_f(res['none'][0])} → {_f(res['none'][1])} Hz gas off, {heights[lo] * 100:.0f} → "
+        f"{heights[hi] * 100:.0f} cm), so the band gains energy faster: rbjax gives "
+        f"{slope['adiabatic'][j63]:.2f} dB (gas on) and {slope['none'][j63]:.2f} dB (gas off) at "
+        f"63 Hz against the paper's about {paper63:.0f} dB. "
         + (
             "rbjax reproduces the direction of the 63 Hz excess but not its size; "
             if all(slope[g][j63] > np.nanmax(slope[g][others]) for g in GAS)
             else "rbjax does not reproduce a clear 63 Hz excess; "
         )
-        + "the excess depends "
-        f"on where the notch sits relative to the band edges (ideal base-ten filters on the FFT here; the paper does not "
-        f"specify its band filtering) and on the height range of the least-squares fit ({heights[lo] * 100:.0f}–"
-        f"{heights[hi] * 100:.0f} cm in log2 h), and the paper gives its value only as 'about 5 dB' (§4.2, Fig. 11). We "
-        f"found no cause within the model for the rest of the difference."
+        + "the excess depends on where the notch sits relative to the band edges (ideal base-ten "
+        "filters on the FFT here; the paper does not specify its band filtering) and on the "
+        f"height range of the least-squares fit ({heights[lo] * 100:.0f}–{heights[hi] * 100:.0f} "
+        "cm in log2 h), and the paper gives its value only as 'about 5 dB' (§4.2, Fig. 11). We "
+        "found no cause within the model for the rest of the difference."
     )
     tc = {g: (runs[g]["contact_time_s"][lo], runs[g]["contact_time_s"][hi]) for g in GAS}
     r160 = rows.get(f"contact_resonance_{list(PAPER['contact_resonance_Hz'])[-1]}m")
@@ -302,11 +313,13 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
         else ""
     )
     text["contact_resonance"] = (
-        f"The notch sits near 1.5/t_c, the first zero of a half-sine pulse: 1.5/t_c = {1.5 / tc['adiabatic'][0]:.1f} → "
-        f"{1.5 / tc['adiabatic'][1]:.1f} Hz gas on and {1.5 / tc['none'][0]:.1f} → {1.5 / tc['none'][1]:.1f} Hz gas off, against "
-        f"the located minima {_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz and {_f(res['none'][0])} → "
-        f"{_f(res['none'][1])} Hz. The gas force makes the pulse peakier than a half-sine at large heights, which moves the "
-        f"notch above 1.5/t_c. The paper read 66 → 73 Hz from a 1 Hz FFT of its 1 s record; rbjax refines the minimum on "
-        f"a 0.1 Hz grid.{match}"
+        "The notch sits near 1.5/t_c, the first zero of a half-sine pulse: "
+        f"1.5/t_c = {1.5 / tc['adiabatic'][0]:.1f} → {1.5 / tc['adiabatic'][1]:.1f} Hz gas on and "
+        f"{1.5 / tc['none'][0]:.1f} → {1.5 / tc['none'][1]:.1f} Hz gas off, against the located "
+        f"minima {_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz and "
+        f"{_f(res['none'][0])} → {_f(res['none'][1])} Hz. The gas force makes the pulse peakier "
+        "than a half-sine at large heights, which moves the notch above 1.5/t_c. The paper read "
+        "66 → 73 Hz from a 1 Hz FFT of its 1 s record; rbjax refines the minimum on a 0.1 Hz "
+        f"grid.{match}"
     )
     return text

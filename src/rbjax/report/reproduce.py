@@ -1,14 +1,14 @@
-"""``reproduce``: the paper's predictions (Schoenwald, Zeitler & Nightingale 2011, §4), gas on and off.
+"""``reproduce``: the paper's predictions (Schoenwald, Zeitler & Nightingale 2011, §4), gas on
+and off.
 
 For the JIS ball (§4: R = 89 mm, h = 32 mm, M = 2.5 kg, E = 1.6 MPa, ν = 0.5) dropped from
 10 to 160 cm, with the gas force (corrected Eq. 4) on and off, this computes the blocked
 force (Eq. 7, 44.1 kHz × 1 s records as in §2.4), the contact time, peak force, restitution,
 the octave-band L_FE (Eq. 11) and its increase per doubling of drop height, and the
 contact resonance, the growth of L_FE per doubling of the bundled recordings beside the
-model's (``rbjax.studies.growth``) and the ball's shell modes (``rbjax.terms.shell_modes``); it draws figures
-like the paper's Figs. 3–12 and writes ``report.md``
-(rbjax beside the values the paper reports, with the reason for each difference) and
-``results.json``.
+model's (``rbjax.studies.growth``) and the ball's shell modes (``rbjax.terms.shell_modes``); it
+draws figures like the paper's Figs. 3–12 and writes ``report.md`` (rbjax beside the values the
+paper reports, with the reason for each difference) and ``results.json``.
 
 All heights of one gas option are one batched ``simulate`` call (one compilation).
 """
@@ -334,30 +334,38 @@ def _report(
     lines = [
         "# rbjax: the predictions of Schoenwald, Zeitler & Nightingale (2011), reproduced",
         "",
-        f"rbjax {__version__}. JIS rubber ball (§4): R = {ball.radius_m * 1e3:g} mm, h = {ball.wall_m * 1e3:g} mm, "
-        f"M = {ball.mass_kg:g} kg, E = {ball.youngs_Pa / 1e6:g} MPa, ν = {ball.poisson:g}; elastic model of Eq. 7 with the "
-        f"corrected Eqs. 3 and 4; blocked force F_B + F_G; drop heights {heights[0] * 100:.0f}–{heights[-1] * 100:.0f} cm "
-        f"({len(heights)} heights); 44.1 kHz × 1 s force records (§2.4). Gas on: adiabatic gas force (Eq. 4, corrected); "
-        f"gas off: shell force only. Computed in {elapsed_s:.1f} s.",
+        f"rbjax {__version__}. JIS rubber ball (§4): R = {ball.radius_m * 1e3:g} mm, "
+        f"h = {ball.wall_m * 1e3:g} mm, M = {ball.mass_kg:g} kg, E = {ball.youngs_Pa / 1e6:g} "
+        f"MPa, ν = {ball.poisson:g}; elastic model of Eq. 7 with the corrected Eqs. 3 and 4; "
+        f"blocked force F_B + F_G; drop heights {heights[0] * 100:.0f}–{heights[-1] * 100:.0f} cm "
+        f"({len(heights)} heights); 44.1 kHz × 1 s force records (§2.4). Gas on: adiabatic gas "
+        f"force (Eq. 4, corrected); gas off: shell force only. Computed in {elapsed_s:.1f} s.",
         "",
         "## rbjax beside the paper",
         "",
-        "| quantity | source | paper | rbjax, gas on | rbjax, gas off | difference, gas on | difference, gas off |",
+        "| quantity | source | paper | rbjax, gas on | rbjax, gas off | difference, gas on | "
+        "difference, gas off |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in comparison:
         spec = ".2f" if r["unit"] in ("ms", "dB") else ".1f" if r["unit"] == "Hz" else ".0f"
-        paper = f"{'≈ ' if r['unit'] in ('N', 'dB') else ''}{r['paper']:{'.1f' if r['unit'] in ('ms', 'dB') else '.0f'}} {r['unit']}"
+        paper = (
+            f"{'≈ ' if r['unit'] in ('N', 'dB') else ''}"
+            f"{r['paper']:{'.1f' if r['unit'] in ('ms', 'dB') else '.0f'}} {r['unit']}"
+        )
         lines.append(
-            f"| {r['quantity']} | {r['source']} | {paper} | {_f(r['rbjax']['adiabatic'], spec)} {r['unit']} | "
-            f"{_f(r['rbjax']['none'], spec)} {r['unit']} | {_diff(r, 'adiabatic')} | {_diff(r, 'none')} |"
+            f"| {r['quantity']} | {r['source']} | {paper} | {_f(r['rbjax']['adiabatic'], spec)} "
+            f"{r['unit']} | {_f(r['rbjax']['none'], spec)} {r['unit']} | {_diff(r, 'adiabatic')} "
+            f"| {_diff(r, 'none')} |"
         )
     lines += ["", "## Why they differ", ""]
     titles = {
         "contact_time_1.0m": "Contact time at 1 m (paper's prediction 20.8 ms).",
         "peak_force_0.1m": "Peak force at 10 cm (≈ 500 N).",
         "peak_force_1.6m": "Peak force at 160 cm (≈ 1800 N).",
-        "measured_contact_time": "Measured contact times (21.3 ms at 10 cm, 19.6 ms at 1 m, 19.3 ms at 160 cm).",
+        "measured_contact_time": (
+            "Measured contact times (21.3 ms at 10 cm, 19.6 ms at 1 m, 19.3 ms at 160 cm)."
+        ),
         "increase_per_doubling": "L_FE increase per doubling (≈ 3 dB; ≈ 5 dB at 63 Hz).",
         "contact_resonance": "Contact resonance (66 Hz at 10 cm → 73 Hz at 160 cm).",
     }
@@ -366,15 +374,18 @@ def _report(
     lines += [
         "## Per drop height",
         "",
-        "| height (cm) | t_c on (ms) | t_c off (ms) | F_peak on (N) | F_peak off (N) | e on | e off | L_FE on (dB) | L_FE off (dB) |",
+        "| height (cm) | t_c on (ms) | t_c off (ms) | F_peak on (N) | F_peak off (N) | e on | e "
+        "off | L_FE on (dB) | L_FE off (dB) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     on, off = runs["adiabatic"], runs["none"]
     for i, h in enumerate(heights):
         lines.append(
-            f"| {h * 100:.0f} | {_f(on['contact_time_s'][i] * 1e3, '.2f')} | {_f(off['contact_time_s'][i] * 1e3, '.2f')} | "
-            f"{_f(on['peak_force_N'][i], '.0f')} | {_f(off['peak_force_N'][i], '.0f')} | {_f(on['restitution'][i], '.3f')} | "
-            f"{_f(off['restitution'][i], '.3f')} | {_f(on['lfe_total_dB'][i])} | {_f(off['lfe_total_dB'][i])} |"
+            f"| {h * 100:.0f} | {_f(on['contact_time_s'][i] * 1e3, '.2f')} | "
+            f"{_f(off['contact_time_s'][i] * 1e3, '.2f')} | {_f(on['peak_force_N'][i], '.0f')} | "
+            f"{_f(off['peak_force_N'][i], '.0f')} | {_f(on['restitution'][i], '.3f')} | "
+            f"{_f(off['restitution'][i], '.3f')} | {_f(on['lfe_total_dB'][i])} | "
+            f"{_f(off['lfe_total_dB'][i])} |"
         )
     i1 = int(np.flatnonzero(np.isclose(heights, STANDARD_HEIGHT_M))[0])
     lines += [
@@ -430,9 +441,9 @@ def _report(
         + "; ".join(f"{GAS[g]}: {', '.join(inside[g]) or 'none'} Hz" for g in GAS)
         + ". Below the lower limit: "
         + "; ".join(f"{GAS[g]}: {', '.join(below[g]) or 'none'} Hz" for g in GAS)
-        + ". The paper (§4.2, Fig. 8) likewise finds its prediction within the limits only at 31.5 and 63 Hz and far "
-        "below the measurement above 125 Hz, where the measured force carries the ball's shell modes and a faster rise "
-        "that the elastic model does not contain.",
+        + ". The paper (§4.2, Fig. 8) likewise finds its prediction within the limits only at "
+        "31.5 and 63 Hz and far below the measurement above 125 Hz, where the measured force "
+        "carries the ball's shell modes and a faster rise that the elastic model does not contain.",
         "",
     ]
     lines += _growth_section(growth, modes)
@@ -453,16 +464,19 @@ def _growth_section(growth, modes) -> list[str]:
         lines += [
             "## L_FE growth per doubling of drop height: recordings and the paper's model",
             "",
-            "Least-squares slope of L_FE against log2(h) per octave band, ± its standard error (`rbjax.studies.growth`); "
-            f"a linear source gives {LINEAR_SOURCE_dB:.2f} dB in every band. The paper (§4.2, Fig. 11) reports about 3 dB "
-            "for its model (5 dB at 63 Hz) and, for its measured ball, about 3 dB at 31.5 Hz rising to almost 15 dB at "
-            "1 kHz. The recordings here are the emulated ones bundled with rbjax (one point per drop, heights "
+            "Least-squares slope of L_FE against log2(h) per octave band, ± its standard error "
+            f"(`rbjax.studies.growth`); a linear source gives {LINEAR_SOURCE_dB:.2f} dB in every "
+            "band. The paper (§4.2, Fig. 11) reports about 3 dB for its model (5 dB at 63 Hz) "
+            "and, for its measured ball, about 3 dB at 31.5 Hz rising to almost 15 dB at 1 kHz. "
+            "The recordings here are the emulated ones bundled with rbjax (one point per drop, "
+            "heights "
             + (
                 ", ".join(f"{h * 100:.0f}" for h in growth["recordings"].heights_m) + " cm"
                 if "recordings" in growth
                 else "unavailable"
             )
-            + "); a fitted model's growth is shown by notebook 02 (`rbjax.studies.growth.model_growth(h, fit.ball, fit.model)`).",
+            + "); a fitted model's growth is shown by notebook 02 "
+            "(`rbjax.studies.growth.model_growth(h, fit.ball, fit.model)`).",
             "",
             growth_table(rows, digits=2),
             "",
@@ -473,10 +487,11 @@ def _growth_section(growth, modes) -> list[str]:
         lines += [
             "## The ball's shell modes (not in the model)",
             "",
-            "Fundamental axisymmetric mode (n = 2) of the free, undeformed JIS ball (`rbjax.terms.shell_modes`): "
+            "Fundamental axisymmetric mode (n = 2) of the free, undeformed JIS ball "
+            "(`rbjax.terms.shell_modes`): "
             + ", ".join(f"{t} {f:.1f} Hz" for t, f in modes.items())
-            + "; the paper quotes 'around 60 Hz' from a thin-shell estimate (§4.1), and Park et al. measured 24 and 89 Hz "
-            "on the ball deformed against the floor.",
+            + "; the paper quotes 'around 60 Hz' from a thin-shell estimate (§4.1), and Park et "
+            "al. measured 24 and 89 Hz on the ball deformed against the floor.",
             "",
         ]
     return lines
@@ -556,7 +571,10 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     results = jsonable(
         {
             "rbjax_version": __version__,
-            "paper": "Schoenwald, Zeitler & Nightingale (2011), Acta Acustica united with Acustica 97, 590-598",
+            "paper": (
+                "Schoenwald, Zeitler & Nightingale (2011), Acta Acustica united with Acustica "
+                "97, 590-598"
+            ),
             "ball": {
                 f: getattr(JIS_RUBBER_BALL, f)
                 for f in ("radius_m", "wall_m", "mass_kg", "youngs_Pa", "poisson")
@@ -583,7 +601,8 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     )
     (out / "results.json").write_text(json.dumps(results, indent=2, allow_nan=False))
     say(
-        f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in {out}",
+        f"reproduce: done in {elapsed:.1f} s: {len(files)} figures, report.md and results.json in "
+        f"{out}",
         enabled=progress,
     )
     return results

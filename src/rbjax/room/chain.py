@@ -125,24 +125,28 @@ def _check_floor(floor: AbstractFloor | None, slab: Slab | None) -> None:
     if floor is None:
         if slab is None:
             raise RoomChainError(
-                "give slab= (the radiating slab; the ball then strikes it) or a modal floor with slab="
+                "give slab= (the radiating slab; the ball then strikes it) or a modal floor with "
+                "slab="
             )
         return
     if isinstance(floor, AbstractModalFloor):
         if slab is None:
             raise RoomChainError(
-                "floor=modal needs slab= (the plate that radiates: its mass per area and critical frequency)"
+                "floor=modal needs slab= (the plate that radiates: its mass per area and "
+                "critical frequency)"
             )
         return
     kind = getattr(floor, "name", type(floor).__name__)
     raise RoomChainError(
-        f"floor={kind!r} has no structure that radiates into a room below; valid: floor=None (the ball on the bare slab=), "
-        "a modal floor (ModalFloor, FloatingFloor) with slab=, or an infinite-plate floor turned into a slab with Slab.of_plate"
+        f"floor={kind!r} has no structure that radiates into a room below; valid: floor=None (the "
+        "ball on the bare slab=), a modal floor (ModalFloor, FloatingFloor) with slab=, or an "
+        "infinite-plate floor turned into a slab with Slab.of_plate"
     )
 
 
 def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver) -> int:
-    """How many force samples cover the contact (a concrete pre-solve; ``RuntimeError`` if it fails)."""
+    """How many force samples cover the contact (a concrete pre-solve; ``RuntimeError`` if it
+    fails)."""
     res = simulate(height_m, ball, model, solver=solver).raise_for_status()
     return int(math.ceil(float(np.max(np.asarray(res.contact_time_s))) * rate_Hz)) + 2
 

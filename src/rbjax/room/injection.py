@@ -61,7 +61,8 @@ def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -
     (a shape): under a transformation, compute it first and pass it on as ``n_fft``."""
     if is_traced(floor):
         raise ValueError(
-            "modal_grid_size needs the floor's concrete values; under jit/jvp pass n_fft=modal_grid_size(floor, rate_Hz, n_samples) computed outside"
+            "modal_grid_size needs the floor's concrete values; under jit/jvp pass "
+            "n_fft=modal_grid_size(floor, rate_Hz, n_samples) computed outside"
         )
     _, omega, eta = (np.asarray(x, dtype=np.float64) for x in floor.modes())
     freq = omega / (2.0 * math.pi)

@@ -27,7 +27,8 @@ SHORT_DECAY_SHARE = 0.3
 class ImpactSound:
     """L_i,Fmax per band, normalised, and the ratings L_iA,Fmax (ISO 717-2:2020 Annex D).
 
-    ``warnings`` lists where the prediction is outside the chain's validity (``rbjax.room.chain``)."""
+    ``warnings`` lists where the prediction is outside the chain's validity
+    (``rbjax.room.chain``)."""
 
     bands: tuple[str, ...]
     level_dB: tuple[float, ...]
@@ -58,12 +59,14 @@ class ImpactSound:
             "peak_time_s": list(self.peak_time_s), "LiA_Fmax_dB": self.LiA_Fmax_dB,
             "LiA_Fmax_normalised_dB": self.LiA_Fmax_normalised_dB,
             "LiA_Fmax_unrounded_dB": self.LiA_Fmax_unrounded_dB,
-            "injected_energy_J": self.injected_energy_J, "radiated_energy_J": self.radiated_energy_J,
+            "injected_energy_J": self.injected_energy_J,
+            "radiated_energy_J": self.radiated_energy_J,
             "warnings": list(self.warnings),
         }  # fmt: skip
 
     def fast_levels_dB(self, times_s) -> np.ndarray:
-        """The Fast-weighted level of each band at ``times_s`` (bands × times; ``rbjax.room.chain.fast_levels_dB``)."""
+        """The Fast-weighted level of each band at ``times_s`` (bands × times;
+        ``rbjax.room.chain.fast_levels_dB``)."""
         return np.asarray(fast_levels_dB(self.levels, self.chain, times_s))
 
     def plot(self, path=None):
@@ -168,7 +171,8 @@ def _warnings(
         ]
         if below:
             out.append(
-                f"bands {', '.join(below)} Hz lie below the room's Schroeder frequency: the diffuse-field level is a room average there"
+                f"bands {', '.join(below)} Hz lie below the room's Schroeder frequency: the "
+                "diffuse-field level is a room average there"
             )
     floor_t60 = 6.0 * math.log(10.0) / np.asarray(lv.floor_decay_per_s)
     if not chain.floor_decay and floor is None and np.any(floor_t60 > SHORT_DECAY_SHARE * t_band):
@@ -176,29 +180,34 @@ def _warnings(
             lab for lab, tf, tr in zip(labels, floor_t60, t_band) if tf > SHORT_DECAY_SHARE * tr
         ]
         out.append(
-            f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use Chain(floor_decay=True)"
+            f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use "
+            "Chain(floor_decay=True)"
         )
     if not chain.floor_decay and floor is not None:
         t_room = float(np.min(t_band))
         if np.any(floor_t60 > SHORT_DECAY_SHARE * t_room):
             out.append(
-                "modes of the floor decay slower than 0.3 T: the diffuse-field step (floor_decay=False) is outside its validity"
+                "modes of the floor decay slower than 0.3 T: the diffuse-field step "
+                "(floor_decay=False) is outside its validity"
             )
     if isinstance(floor, FloatingFloor) and chain.floating == "insertion":
         f0 = float(floor.layer_resonance_Hz)
         above = [lab for lab, lo in zip(labels, edges[0]) if lo > 2.0 * f0]
         if above:
             out.append(
-                f"the floating floor passes T = 1/(1 − (f/f0)²/(1 + jη)) to the slab (f0 = {f0:.1f} Hz; a locally reacting screed, "
-                f"40 lg(f/f0)): a wet screed gains ≈ 30 lg(f/f0) (EN 12354-2 Annex C), so bands {', '.join(above)} Hz may be "
+                "the floating floor passes T = 1/(1 − (f/f0)²/(1 + jη)) to the slab "
+                f"(f0 = {f0:.1f} Hz; a locally reacting screed, 40 lg(f/f0)): a wet screed gains "
+                f"≈ 30 lg(f/f0) (EN 12354-2 Annex C), so bands {', '.join(above)} Hz may be "
                 "optimistic by up to 10 lg(f/f0) dB"
             )
     if isinstance(floor, FloatingFloor) and chain.floating == "modes":
         out.append(
-            "floating='modes': the screed's modes radiate with the slab's η_rad, each in its own band only; a rough check, not a prediction (use floating='insertion')"
+            "floating='modes': the screed's modes radiate with the slab's η_rad, each in its own "
+            "band only; a rough check, not a prediction (use floating='insertion')"
         )
     if np.any(np.asarray(lv.radiated_fraction) > 1.0):
         out.append(
-            "a mode radiates more than its loss factor allows (η_rad > η_k): give the modes their radiation loss"
+            "a mode radiates more than its loss factor allows (η_rad > η_k): give the modes "
+            "their radiation loss"
         )
     return out

@@ -58,7 +58,8 @@ class Slab(eqx.Module):
 
     @classmethod
     def of_material(cls, name: str, thickness_m, **sides) -> Slab:
-        """The slab of a material of ``rbjax.terms.floors.materials`` (``sides``: the other fields)."""
+        """The slab of a material of ``rbjax.terms.floors.materials`` (``sides``: the other
+        fields)."""
         m = material(name)
         return cls(thickness_m, m.youngs_Pa, m.density_kg_per_m3, m.poisson, **sides)
 
@@ -104,7 +105,8 @@ class ReceivingRoom(eqx.Module):
             )
         if np.ndim(self.reverberation_s) > 1:
             raise RoomChainError(
-                f"reverberation_s has shape {np.shape(self.reverberation_s)}; valid: one value or one per band"
+                f"reverberation_s has shape {np.shape(self.reverberation_s)}; valid: one value or "
+                "one per band"
             )
 
     def reverberation_per_band(self, labels) -> jnp.ndarray:
@@ -112,8 +114,8 @@ class ReceivingRoom(eqx.Module):
         t = jnp.asarray(self.reverberation_s, dtype=jnp.float64)
         if t.ndim == 1 and t.shape[0] != len(labels):
             raise RoomChainError(
-                f"reverberation_s has {t.shape[0]} values; valid: one value or one per band, {len(labels)} "
-                f"for the bands {', '.join(labels)} Hz"
+                f"reverberation_s has {t.shape[0]} values; valid: one value or one per band, "
+                f"{len(labels)} for the bands {', '.join(labels)} Hz"
             )
         return jnp.broadcast_to(t, (len(labels),))
 

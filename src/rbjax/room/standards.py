@@ -101,7 +101,8 @@ def normalised_level_dB(level_dB, volume_m3, reverberation_s):
 
 
 def a_weights_dB(fraction: int) -> np.ndarray:
-    """The A-weights of the rating bands of ``fraction`` (1: octaves 63–500 Hz, 3: thirds 50–630 Hz)."""
+    """The A-weights of the rating bands of ``fraction`` (1: octaves 63–500 Hz, 3: thirds
+    50–630 Hz)."""
     if fraction not in RATING_BANDS:
         raise ValueError(
             f"fraction={fraction!r} is outside the valid choices 1 (octave), 3 (one-third octave)"
@@ -117,8 +118,8 @@ def a_weighted_sum_dB(levels_dB, fraction: int = 1):
     levels = jnp.asarray(levels_dB, dtype=jnp.float64)
     if levels.shape[-1:] != weights.shape:
         raise ValueError(
-            f"levels_dB has {levels.shape[-1:] or 'no'} bands on its last axis; valid: {len(weights)} "
-            f"(the rating bands {', '.join(RATING_BANDS[fraction])} Hz)"
+            f"levels_dB has {levels.shape[-1:] or 'no'} bands on its last axis; valid: "
+            f"{len(weights)} (the rating bands {', '.join(RATING_BANDS[fraction])} Hz)"
         )
     if not is_traced(levels) and not np.all(np.isfinite(np.asarray(levels))):
         raise ValueError(f"levels_dB={np.asarray(levels).tolist()} has a non-finite level")

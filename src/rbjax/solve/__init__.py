@@ -6,8 +6,8 @@ general path and the reference), the quadrature of the undamped rigid-floor impa
 phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`) and histories
 sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
 :func:`~rbjax.solve.simulate.simulate` choosing among them, the energy balance
-(:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path (:mod:`~rbjax.solve.batch`), sharded over the
-devices (:mod:`~rbjax.solve.sharded`)."""
+(:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
+(:mod:`~rbjax.solve.batch`), sharded over the devices (:mod:`~rbjax.solve.sharded`)."""
 
 from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian

@@ -98,7 +98,8 @@ def energy_balance(
     model = Model() if model is None else model
     if model.ball_mode is not None or model.series is not None:
         raise ValueError(
-            "energy_balance: models with a ball_mode or a series element are not covered; valid: ball_mode=None, series=None"
+            "energy_balance: models with a ball_mode or a series element are not covered; valid: "
+            "ball_mode=None, series=None"
         )
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)

@@ -38,7 +38,8 @@ def _check_record(rate_Hz, duration_s) -> None:
     check_range("duration_s", duration_s, lower=0.0)
     if int(round(rate_Hz * duration_s)) < 1:
         raise ValueError(
-            f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need rate_Hz·duration_s ≥ 1"
+            f"duration_s={duration_s!r} at rate_Hz={rate_Hz!r} gives no sample; need "
+            "rate_Hz·duration_s ≥ 1"
         )
 
 

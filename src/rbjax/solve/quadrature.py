@@ -29,12 +29,13 @@ The scalar outputs (``impact_quadrature``) take n + 3 force evaluations and no l
 force: F is sampled at ``BRACKET_NODES`` Chebyshev–Lobatto points on [0, d0] (F(0) = 0 is not
 evaluated), d0 an upper bound of δ_max in closed form, and the root of the interpolant's
 antiderivative gives d1 ≈ δ_max (a few digits); F is sampled again at n points on [0, d1]. Every
-quantity above is a linear functional of these n samples (integrals and sub-interval averages of the degree-(n − 1)
-interpolant of g and of F(2R − s)), expanded in a short Taylor series in ε = δ_max/d1 − 1, so
-one precomputed matrix product gives them all; δ_max = d1(1 + ε) is the root of a polynomial in
-ε. Accuracy: the interpolant's Chebyshev tail, the φ rule's analyticity ellipse and the Taylor
-remainder give an error estimate; above ``RULE_TOLERANCE`` the impact is flagged
-``solver_failed`` (more nodes, or the ODE, then; ``rbjax.simulate`` falls back to the ODE).
+quantity above is a linear functional of these n samples (integrals and sub-interval averages of
+the degree-(n − 1) interpolant of g and of F(2R − s)), expanded in a short Taylor series in
+ε = δ_max/d1 − 1, so one precomputed matrix product gives them all; δ_max = d1(1 + ε) is the
+root of a polynomial in ε. Accuracy: the interpolant's Chebyshev tail, the φ rule's analyticity
+ellipse and the Taylor remainder give an error estimate; above ``RULE_TOLERANCE`` the impact is
+flagged ``solver_failed`` (more nodes, or the ODE, then; ``rbjax.simulate`` falls back to the
+ODE).
 
 The force histories (:mod:`rbjax.solve.quadrature_history`) invert t(δ) with nested Gauss–Legendre
 rules in σ, δ = δ_max(1 − σ²): W_c(σ) = (4R δ_max/M) ∫₀¹ g(s) dτ and
@@ -114,8 +115,8 @@ def _check(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) 
         raise ValueError(f"model={model!r} must be an rbjax.Model")
     if model.damping:
         raise ValueError(
-            f"model.damping={model.damping!r}: the quadrature path needs a contact force F(δ) of the "
-            "deflection alone; valid: damping=None (use rbjax.simulate for damped models)"
+            f"model.damping={model.damping!r}: the quadrature path needs a contact force F(δ) of "
+            "the deflection alone; valid: damping=None (use rbjax.simulate for damped models)"
         )
     if (
         not isinstance(n_nodes, (int, np.integer))
@@ -167,8 +168,9 @@ def time_nodes(n_nodes: int) -> int:
 
 @functools.cache
 def _legendre_tail(m: int) -> np.ndarray:
-    """Rows giving the two highest Legendre coefficients a_{m−2}, a_{m−1} and a_0 of the degree-(m − 1)
-    interpolant of values at the m Gauss–Legendre points (the discrete projection)."""
+    """Rows giving the two highest Legendre coefficients a_{m−2}, a_{m−1} and a_0 of the
+    degree-(m − 1) interpolant of values at the m Gauss–Legendre points (the discrete
+    projection)."""
     x, w = np.polynomial.legendre.leggauss(m)
     rows = [
         (2 * k + 1) / 2.0 * w * np.polynomial.legendre.legval(x, np.eye(m)[k])
@@ -185,8 +187,9 @@ def _refine_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
 
     * row 0: ∫₀¹ p dt; rows 1..ROOT_TERMS: p^(q)(1)/q! for q = 0..ROOT_TERMS − 1 (the Taylor
       series of ∫₀^λ p dt about λ = 1 has coefficients p^(q)(1)/(q + 1)!, and of p(λ) these);
-    * rows (q, i), q = 0..SUB_TERMS − 1, i over the φ points: (1/q!)(1/μ_i) ∫_{1−μ_i}^1 t^q p^(q)(t) dt,
-      μ_i = 1 − sin φ_i (the Taylor coefficients in λ − 1 of the average of p(λt) over [1 − μ_i, 1]);
+    * rows (q, i), q = 0..SUB_TERMS − 1, i over the φ points:
+      (1/q!)(1/μ_i) ∫_{1−μ_i}^1 t^q p^(q)(t) dt, μ_i = 1 − sin φ_i (the Taylor coefficients in
+      λ − 1 of the average of p(λt) over [1 − μ_i, 1]);
     * the last TAIL_COEFFICIENTS rows: the highest Chebyshev coefficients (the interpolant's tail).
     """
     to_coef = _values_to_coefficients(n)
@@ -262,8 +265,8 @@ def _upper_bound(v0, ball, model, target):
     2Rk·(w − 1 + e^(−w)) with w = −ln(1 − δ/2R): solved for w by Newton steps from the right
     (the function is convex and increasing). (2) g ≥ ks(1 + β(s/h)²)/2R for the shell and, for
     the gas, (V0/V)^γ − 1 ≥ γ(V0/V − 1) ≥ γ(1 − V/V0) = γ s²(3R − s)/4R³ (Bernoulli), so
-    F_G/(2R − s) = p_a π s ((V0/V)^γ − 1) ≥ p_a π γ s³ (3R − s)/4R³ with 3R − s ≥ 3R − min(δ_lin, 2R):
-    G(δ) ≥ a2 δ² + a4 δ⁴, a quadratic in δ².
+    F_G/(2R − s) = p_a π s ((V0/V)^γ − 1) ≥ p_a π γ s³ (3R − s)/4R³ with
+    3R − s ≥ 3R − min(δ_lin, 2R): G(δ) ≥ a2 δ² + a4 δ⁴, a quadratic in δ².
     """
     r = ball.radius_m
     two_r = 2.0 * r
@@ -399,7 +402,8 @@ def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
         _tail_estimate(z_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_c[0]),
         _tail_estimate(z_r_c[-TAIL_COEFFICIENTS:]) / jnp.abs(z_r_c[0]),
     )
-    # the Taylor remainders in ε, and round-off in the rows of the higher Taylor terms (large for large n)
+    # the Taylor remainders in ε, and round-off in the rows of the higher Taylor terms (large for
+    # large n)
     e_c = jnp.abs(jax.lax.stop_gradient(e))
     shift_estimate = (e_c * d1 / jnp.maximum(consts[1].radius_m * 2.0 - d1, 1e-300)) ** k_sub
     shift_estimate = shift_estimate + np.finfo(np.float64).eps * _horner(

@@ -148,7 +148,8 @@ def _solve(height_m, ball, model, n_nodes) -> _Solution:
 def force_history_quadrature(
     height_m, ball: Ball, model: Model, times_s, *, n_nodes: int = HISTORY_NODES
 ) -> Trajectory:
-    """Deflection, velocity and floor force of ONE elastic impact at the given times (0 after contact).
+    """Deflection, velocity and floor force of ONE elastic impact at the given times (0 after
+    contact).
 
     t(δ) is inverted on each phase in the variable σ of δ = δ_max(1 − σ²), where the time from
     maximum compression, τ(σ) = ∫₀^σ (dt/dσ′) dσ′ (n-point rule on [0, σ], each node nested), is

@@ -54,7 +54,10 @@ def record_samples_unsupported(model: Model) -> str | None:
     """Why ``record_samples`` cannot solve ``model``; None if it can (rigid floor, any damping
     law, the ball mode included)."""
     if not model.floor.rigid:
-        return f"the floor ({model.floor.name}) moves under the force: its states need the ODE's events"
+        return (
+            f"the floor ({model.floor.name}) moves under the force: its states need the ODE's "
+            "events"
+        )
     return None
 
 

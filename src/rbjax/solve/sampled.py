@@ -206,7 +206,8 @@ def _count(name: str, value) -> int:
 
 
 def sampled_history_unsupported(model: Model) -> str | None:
-    """Why ``sampled_history`` cannot solve ``model``; None if it can (rigid floor, no ball mode)."""
+    """Why ``sampled_history`` cannot solve ``model``; None if it can (rigid floor, no ball
+    mode)."""
     return model.coupling
 
 

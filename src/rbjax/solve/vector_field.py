@@ -71,11 +71,11 @@ def _vector_field(flux_on: bool, energy: bool = False):
 
         (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
 
-    with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface (``rbjax.terms.floors.kinds``); on
-    the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A massless floor (u̇ = F/Z) has
-    ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; the series element (τẇ = −(w + C F_c),
-    ``rbjax.terms.series_kelvin_voigt``) has ẅ = −(ẇ + C dF_c/dt)/τ, linear in δ̈ too; both are
-    solved for δ̈ in closed form.
+    with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface
+    (``rbjax.terms.floors.kinds``); on the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A
+    massless floor (u̇ = F/Z) has ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; the series
+    element (τẇ = −(w + C F_c), ``rbjax.terms.series_kelvin_voigt``) has
+    ẅ = −(ẇ + C dF_c/dt)/τ, linear in δ̈ too; both are solved for δ̈ in closed form.
     With ``energy`` four accumulators follow the state (see ``energy_balance``).
     """
 

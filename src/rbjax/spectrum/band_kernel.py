@@ -60,7 +60,8 @@ def band_kernel(
     of n samples is Σ_j P_j G_bj, P_j = |rfft(x, n_short)_j|²; None when too large to build.
 
     With N = n_record, L = n_short >= 2n - 1, ω_k = 2πk/N, θ_j = 2πj/L and the bins
-    k of band b (lower_b ≤ k·(rate/N) < upper_b, computed as :func:`rbjax.spectrum.levels._rfft_freq_Hz` does):
+    k of band b (lower_b ≤ k·(rate/N) < upper_b, computed as
+    :func:`rbjax.spectrum.levels._rfft_freq_Hz` does):
     G_bj = v_j/(rate·N·L) Σ_{k∈b} w_k (V(ω_k - θ_j) + V(ω_k + θ_j))/2 where v_j = 1 at
     j = 0 and (even L) j = L/2, whose P_j stands for itself, and 2 elsewhere (P_j and its
     mirror P_{L-j}). V is the de la Vallée-Poussin kernel with h_l = 1 for |l| ≤ m1 - 1,

@@ -24,9 +24,9 @@ tables are plain NumPy. This module knows nothing about solvers.
 Short pulses in a long record: the functions that take a force array accept a keyword
 ``n_record``: the given samples (..., n) are then the first n of a record of ``n_record``
 samples whose other samples are zero (the contact, a few hundred samples, in the paper's
-1 s record of 44 100 samples at 44.1 kHz). The result is that of the explicitly zero-padded record, to
-round-off; the band energies are then computed without the record-long FFT, from a short
-FFT of the pulse and a precomputed band kernel (see :func:`band_energies_N2s`).
+1 s record of 44 100 samples at 44.1 kHz). The result is that of the explicitly zero-padded
+record, to round-off; the band energies are then computed without the record-long FFT, from a
+short FFT of the pulse and a precomputed band kernel (see :func:`band_energies_N2s`).
 """
 
 from __future__ import annotations

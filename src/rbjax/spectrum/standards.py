@@ -91,7 +91,8 @@ class Tolerance:
         return _printed(self.nominal + self.plus)
 
     def margin(self, value: float) -> float:
-        """Signed distance to the nearer limit, in ``unit``: > 0 inside, 0 on a limit, < 0 outside."""
+        """Signed distance to the nearer limit, in ``unit``: > 0 inside, 0 on a limit, < 0
+        outside."""
         return min(value - self.lower, self.upper - value)
 
     def __str__(self) -> str:
@@ -196,7 +197,10 @@ class Conformance:
 
     def table(self) -> str:
         """A readable plain-text table, one line per item, and the verdict."""
-        header = f"{'item':<28} {'value':>10} {'lower':>10} {'upper':>10} {'margin':>10}  {'unit':<10} result"
+        header = (
+            f"{'item':<28} {'value':>10} {'lower':>10} {'upper':>10} {'margin':>10}  {'unit':<10} "
+            "result"
+        )
         lines = [header, "-" * len(header)]
         for it in self.items:
             lines.append(

@@ -177,12 +177,14 @@ class DesignResult:
         label = dict(zip(ITEMS, (t.name for t in _TOLERANCES)))[self.blocking]
         if self.conforms:
             return (
-                f"{self.model_name} on the {self.geometry.upper()} geometry conforms: smallest margin "
-                f"{self.smallest_margin:.3f} of the tolerance ({label}: {self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
+                f"{self.model_name} on the {self.geometry.upper()} geometry conforms: smallest "
+                f"margin {self.smallest_margin:.3f} of the tolerance ({label}: "
+                f"{self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
             )
         return (
-            f"No {self.model_name} ball on the {self.geometry.upper()} geometry conforms in every item: the best smallest margin is "
-            f"{self.smallest_margin:.3f} of the tolerance, blocked by {label} ({self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
+            f"No {self.model_name} ball on the {self.geometry.upper()} geometry conforms in every "
+            f"item: the best smallest margin is {self.smallest_margin:.3f} of the tolerance, "
+            f"blocked by {label} ({self.margins[self.blocking]:+.3g} {self._unit(self.blocking)})."
         )
 
     def _unit(self, item: str) -> str:
@@ -214,10 +216,14 @@ class DesignResult:
 
     def table(self) -> str:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in self.parameters.items())
-        return f"{self.model_name}, {self.geometry.upper()} geometry: {params}\n{self.conformance.table()}\n{self.verdict()}"
+        return (
+            f"{self.model_name}, {self.geometry.upper()} geometry: {params}\n"
+            f"{self.conformance.table()}\n{self.verdict()}"
+        )
 
     def plot(self, out_dir, name: str | None = None) -> Path:
-        """A bar chart of the normalised margin of every item (``design_<model>_<geometry>.png``)."""
+        """A bar chart of the normalised margin of every item
+        (``design_<model>_<geometry>.png``)."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -310,7 +316,8 @@ def design(
         phis = np.asarray(optax.apply_updates(jnp.asarray(phis), updates))
     win = int(np.argmax(best))
     say(
-        f"design {model}/{geometry}: smallest margin {best[win]:.4f} after {steps} steps × {n_starts} starts ({time.perf_counter() - t0:.1f} s)",
+        f"design {model}/{geometry}: smallest margin {best[win]:.4f} after {steps} steps × "
+        f"{n_starts} starts ({time.perf_counter() - t0:.1f} s)",
         enabled=progress,
     )
     return _result(

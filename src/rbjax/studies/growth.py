@@ -156,7 +156,8 @@ def growth_per_doubling_dB(
         y = y[:, None]
     if y.ndim != 2 or y.shape[0] != h.shape[0]:
         raise GrowthError(
-            f"lfe_dB_by_band has shape {y.shape}; expected ({h.shape[0]}, n_bands) to match heights_m {h.shape}"
+            f"lfe_dB_by_band has shape {y.shape}; expected ({h.shape[0]}, n_bands) to match "
+            f"heights_m {h.shape}"
         )
     if not np.all(np.isfinite(h)) or np.any(h <= 0):
         raise GrowthError(f"heights_m={h.tolist()} must all be finite and > 0")
@@ -164,7 +165,8 @@ def growth_per_doubling_dB(
         raise GrowthError(f"ref_height_m={ref_height_m!r} must be finite and > 0")
     if np.unique(h).size < 2:
         raise GrowthError(
-            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights"
+            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two "
+            "distinct drop heights"
         )
     n_bands = y.shape[1]
     if bands_Hz is None:
@@ -259,7 +261,8 @@ def model_lfe_dB(
     else:
         if simulate_kwargs:
             raise ValueError(
-                f"model_lfe_dB: pass either model or simulate options, not both ({sorted(simulate_kwargs)})"
+                "model_lfe_dB: pass either model or simulate options, not both "
+                f"({sorted(simulate_kwargs)})"
             )
         from ..solve.simulate import _simulate, check_inputs, resolve_method
         from ..terms.model import Solver
@@ -295,7 +298,8 @@ def model_growth(
     h = np.asarray(heights_m, dtype=float).reshape(-1)
     if np.unique(h).size < 2:
         raise GrowthError(
-            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two distinct drop heights"
+            f"heights_m={np.unique(h).tolist()}: the growth per doubling needs at least two "
+            "distinct drop heights"
         )
     return growth_per_doubling_dB(
         h,

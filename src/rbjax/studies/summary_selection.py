@@ -100,7 +100,8 @@ def select_summary(
         p = len([n for n in fitted_parameter_names(structure) if n != "poisson" and n not in fix])
         if len(entries) - 1 < p:
             skipped[name] = (
-                f"{p} free parameters need at least {p + 1} figures to leave one out; the fit has {len(entries)}"
+                f"{p} free parameters need at least {p + 1} figures to leave one out; the fit has "
+                f"{len(entries)}"
             )
             continue
         full = fit_summary(table, name, held_out=list(held_out), **options)

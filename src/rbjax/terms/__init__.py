@@ -2,11 +2,11 @@
 (:mod:`~rbjax.terms.ball`, :mod:`~rbjax.terms.forces`: Reissner stiffness, gas force, dynamic
 mass, momentum flux), the damping laws (:mod:`~rbjax.terms.damping`), the ball's own mode
 (:mod:`~rbjax.terms.ball_mode`) and its overdamped limit
-(:mod:`~rbjax.terms.series_kelvin_voigt`), the floors and their builders (:mod:`rbjax.terms.floors`), the
-model that assembles them (:mod:`~rbjax.terms.model`), and the parameter layer: each term's
-declarations (:mod:`~rbjax.terms.declare`) and the walker over a whole impact
-(:mod:`~rbjax.terms.parameters`). :mod:`~rbjax.terms.serialize` writes and reads them;
-:mod:`~rbjax.terms.shell_modes` holds the free shell's eigenfrequencies.
+(:mod:`~rbjax.terms.series_kelvin_voigt`), the floors and their builders
+(:mod:`rbjax.terms.floors`), the model that assembles them (:mod:`~rbjax.terms.model`), and the
+parameter layer: each term's declarations (:mod:`~rbjax.terms.declare`) and the walker over a
+whole impact (:mod:`~rbjax.terms.parameters`). :mod:`~rbjax.terms.serialize` writes and reads
+them; :mod:`~rbjax.terms.shell_modes` holds the free shell's eigenfrequencies.
 
 Nothing here solves an impact: the solvers are :mod:`rbjax.solve`.
 """

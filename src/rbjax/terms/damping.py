@@ -81,7 +81,8 @@ class AbstractDamping(eqx.Module):
 
 
 def damping_ratio(restitution: float) -> float:
-    """ζ of a linear oscillator whose half-period rebound has coefficient e: e = exp(−πζ/√(1−ζ²))."""
+    """ζ of a linear oscillator whose half-period rebound has coefficient e:
+    e = exp(−πζ/√(1−ζ²))."""
     return -math.log(restitution) / math.sqrt(math.pi**2 + math.log(restitution) ** 2)
 
 

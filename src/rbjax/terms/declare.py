@@ -59,7 +59,8 @@ class Parameter:
         )
 
     def to_unconstrained(self, value):
-        """φ with ``from_unconstrained(φ) = value`` (values on a closed bound are moved inside by 1e-12)."""
+        """φ with ``from_unconstrained(φ) = value`` (values on a closed bound are moved inside by
+        1e-12)."""
         xp = _namespace(value)
         value = xp.asarray(value, dtype=xp.float64)
         if self.transform == "log":

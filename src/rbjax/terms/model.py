@@ -57,8 +57,8 @@ class Model(eqx.Module):
         series: ``None`` or a ``SeriesKelvinVoigt``: a massless spring and damper in series
             with the shell, the ball mode's overdamped limit
             (``rbjax.terms.series_kelvin_voigt``; one state).
-        floor: an ``rbjax.terms.floors.kinds.AbstractFloor``; ``Rigid()`` (the default) is the paper's
-            immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
+        floor: an ``rbjax.terms.floors.kinds.AbstractFloor``; ``Rigid()`` (the default) is the
+            paper's immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
 
     ``Model(blocked_force="momentum")`` sets ``momentum_flux_weight=1``.
     """
@@ -118,8 +118,8 @@ class Model(eqx.Module):
             isinstance(d, AbstractDamping) for d in self.damping
         ):
             raise ValueError(
-                f"damping={self.damping!r} is not a damping model; valid: None, an rbjax.AbstractDamping "
-                "(KelvinVoigt, HuntCrossley, Zener, …) or a tuple of them"
+                f"damping={self.damping!r} is not a damping model; valid: None, an "
+                "rbjax.AbstractDamping (KelvinVoigt, HuntCrossley, Zener, …) or a tuple of them"
             )
         names = [d.name for d in self.damping]
         if len(set(names)) != len(names):
@@ -132,7 +132,8 @@ class Model(eqx.Module):
             raise ValueError(f"series={self.series!r} must be None or an rbjax.SeriesKelvinVoigt")
         if not isinstance(self.floor, AbstractFloor):
             raise ValueError(
-                f"floor={self.floor!r} is not a floor; valid: an rbjax.terms.floors.kinds.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)"
+                f"floor={self.floor!r} is not a floor; valid: an "
+                "rbjax.terms.floors.kinds.AbstractFloor (Rigid, InfinitePlate, ModalFloor, …)"
             )
         check_range(
             "max_deflection_ratio",
@@ -235,7 +236,8 @@ class Model(eqx.Module):
     def coupling(self) -> str | None:
         """Why the shell is pressed by more than the ball's rigid motion, δ = X + w − u (a ball
         mode, a moving floor), in words; None on the rigid floor without a ball mode. The paths
-        that solve only δ = X (quadrature, phase angle, sampled histories) give it as their reason."""
+        that solve only δ = X (quadrature, phase angle, sampled histories) give it as their
+        reason."""
         if self.ball_mode is not None:
             return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
         if self.series is not None:

@@ -2,9 +2,9 @@
 
 Each model term (the ``Ball``, every damping law, the stiffening, the blocked-force
 convention) is an equinox Module that declares the parameters of its fields in a class
-attribute ``PARAMETERS = {field: Parameter(...)}`` (the declarations: :mod:`rbjax.terms.declare`) (in the spirit of dynamax's
-``ParameterProperties``, kept beside the pytree rather than inside it). This module walks an
-impact (drop height, ball, model) and gives
+attribute ``PARAMETERS = {field: Parameter(...)}`` (the declarations: :mod:`rbjax.terms.declare`)
+(in the spirit of dynamax's ``ParameterProperties``, kept beside the pytree rather than inside
+it). This module walks an impact (drop height, ball, model) and gives
 
 - :func:`parameter_table`: the names, values and declarations of all its parameters, in one
   fixed order (the order of the pytree's leaves);
@@ -53,8 +53,8 @@ def _leaf_entries(height_m, ball, model):
         spec = declarations(owner).get(key.name)
         if spec is None:
             raise TypeError(
-                f"{type(owner).__name__}.{key.name} is an array field without a declaration: add it to "
-                f"{type(owner).__name__}.PARAMETERS (or make it static)"
+                f"{type(owner).__name__}.{key.name} is an array field without a declaration: add "
+                f"it to {type(owner).__name__}.PARAMETERS (or make it static)"
             )
         out.append((key.name, spec, path))
     names = [n for n, _, _ in out]
@@ -140,7 +140,8 @@ def from_vector(vector, ball, model):
     n = len(leaves)
     if jnp.shape(vector) != (n,):
         raise ValueError(
-            f"parameter vector has shape {jnp.shape(vector)}; expected ({n},) for {parameter_names(1.0, ball, model)}"
+            f"parameter vector has shape {jnp.shape(vector)}; expected ({n},) for "
+            f"{parameter_names(1.0, ball, model)}"
         )
     return jax.tree_util.tree_unflatten(treedef, [vector[i] for i in range(n)])
 

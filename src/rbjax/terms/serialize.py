@@ -174,7 +174,8 @@ def save_params(path, ball: Ball, model: Model, **extra) -> None:
 
 
 def load_params(path) -> tuple[Ball, Model]:
-    """Read a ball and model from a JSON file with ``ball`` and ``model`` keys (e.g. a fit's output)."""
+    """Read a ball and model from a JSON file with ``ball`` and ``model`` keys (e.g. a fit's
+    output)."""
     try:
         d = json.loads(Path(path).read_text())
     except (OSError, json.JSONDecodeError) as err:

@@ -50,7 +50,9 @@ class SeriesKelvinVoigt(eqx.Module):
         "series_compliance_m_per_N": Parameter(
             "m/N",
             **NON_NEGATIVE,
-            description="C = 1/k_b, compliance of the spring in series with the shell (τẇ = −(w + C F_c))",
+            description=(
+                "C = 1/k_b, compliance of the spring in series with the shell (τẇ = −(w + C F_c))"
+            ),
         ),
         "series_time_constant_s": Parameter(
             "s",

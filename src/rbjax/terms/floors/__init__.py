@@ -1,7 +1,7 @@
 """Floors, a family of terms like the damping laws: the kinds of floor the ball can strike
 (:mod:`~rbjax.terms.floors.kinds`: rigid, a dashpot, an infinite plate, modes at the drive
-point, and a floating floor of declared parameters:
-:mod:`~rbjax.terms.floors.floating`), the building materials (:mod:`~rbjax.terms.floors.materials`), the modal builders
+point, and a floating floor of declared parameters: :mod:`~rbjax.terms.floors.floating`), the
+building materials (:mod:`~rbjax.terms.floors.materials`), the modal builders
 (:mod:`~rbjax.terms.floors.modes`: a simply supported plate, a floating floor) and the named
 presets and floor files (:mod:`~rbjax.terms.floors.presets`)."""
 

@@ -37,16 +37,15 @@ s̃′ = s′(1 + jη) over a heavy base passes the force
 
     F_slab(ω) = T(ω) F(ω),   T = s̃′/(s̃′ − ω²m″) = 1/(1 − (f/f₀)²/(1 + jη)),
 
-so |T| = 1 well below f₀, |T|² = (1 + η²)/η² at f₀ and |T|² → (1 + η²)(f₀/f)⁴ above: the
-improvement ΔL = 40 lg(f/f₀) that EN 12354-2:2000 / ISO 12354-2:2017 Annex C gives for
-floating floors of asphalt or dry construction (locally reacting) and of Cremer, Heckl & Petersson's lumped
-floating floor (*Structure-Borne Sound*, 3rd ed., §4.6 on elastic interlayers: the force
-transmissibility of a mass on a spring); Vigran, *Building Acoustics*, §8.3. A screed that
-bends spreads the force over an area that grows towards high frequencies: for wet
-(cement, calcium-sulphate) screeds Annex C gives ΔL = 30 lg(f/f₀) instead, so T above is
-optimistic for them by up to 10 lg(f/f₀) dB. The hysteretic loss (a frequency-independent
-η) is that of resilient materials; the area A and the base mode do not enter T (a heavy base:
-the slab's point impedance ≫ ωm″A over the band).
+so |T| = 1 well below f₀, |T|² = (1 + η²)/η² at f₀ and |T|² → (1 + η²)(f₀/f)⁴ above: the improvement
+ΔL = 40 lg(f/f₀) that EN 12354-2:2000 / ISO 12354-2:2017 Annex C gives for floating floors of
+asphalt or dry construction (locally reacting) and of Cremer, Heckl & Petersson's lumped floating
+floor (*Structure-Borne Sound*, 3rd ed., §4.6 on elastic interlayers: the force transmissibility of
+a mass on a spring); Vigran, *Building Acoustics*, §8.3. A screed that bends spreads the force over
+an area that grows towards high frequencies: for wet (cement, calcium-sulphate) screeds Annex C
+gives ΔL = 30 lg(f/f₀) instead, so T above is optimistic for them by up to 10 lg(f/f₀) dB. The
+hysteretic loss (a frequency-independent η) is that of resilient materials; the area A and the base
+mode do not enter T (a heavy base: the slab's point impedance ≫ ωm″A over the band).
 """
 
 from __future__ import annotations
@@ -153,14 +152,16 @@ class FloatingFloor(AbstractModalFloor):
 
     @property
     def layer_resonance_Hz(self):
-        """f₀ = (1/2π)√(s′/m″), m″ = ρt: the screed on the layer over a rigid base (EN 12354-2 Annex C)."""
+        """f₀ = (1/2π)√(s′/m″), m″ = ρt: the screed on the layer over a rigid base (EN 12354-2
+        Annex C)."""
         return jnp.sqrt(
             self.dynamic_stiffness_N_per_m3
             / (self.screed_density_kg_per_m3 * self.screed_thickness_m)
         ) / (2.0 * jnp.pi)
 
     def force_transmissibility(self, freq_Hz):
-        """T(f) = F_slab/F = 1/(1 − (f/f₀)²/(1 + jη)) of a locally reacting screed (module docstring); complex."""
+        """T(f) = F_slab/F = 1/(1 − (f/f₀)²/(1 + jη)) of a locally reacting screed (module
+        docstring); complex."""
         ratio = (jnp.asarray(freq_Hz, dtype=jnp.float64) / self.layer_resonance_Hz) ** 2
         return 1.0 / (1.0 - ratio / (1.0 + 1j * self.layer_loss_factor))
 

@@ -7,8 +7,8 @@ moving part, downward positive), and the floor receives the force of the coupled
 floor is an equinox Module, a term like the others: ``Rigid`` (the default, today's model
 exactly), ``Dashpot`` (a real point impedance Z: u̇ = F/Z), ``InfinitePlate`` (the thin plate's
 Z = 8√(B′m″)) and the modal floors (modes at the drive point: ``ModalFloor``, values given;
-``rbjax.terms.floors.floating.FloatingFloor``, a floating floor of declared parameters). The coupled equations are derived
-in :mod:`rbjax.solve.ode` and the README ("Floors").
+``rbjax.terms.floors.floating.FloatingFloor``, a floating floor of declared parameters). The
+coupled equations are derived in :mod:`rbjax.solve.ode` and the README ("Floors").
 
 A floor tells the solver three things about its drive point, for a floor force F and the
 floor's states s (all zero at first contact):
@@ -283,7 +283,8 @@ class ModalFloor(AbstractModalFloor):
         for k, (m, f, eta) in enumerate(zip(self.mass_kg, self.frequency_Hz, self.loss_factor)):
             if not m > 0.0:
                 raise ValueError(
-                    f"mass_kg[{k}]={m!r} is outside the valid range (0, inf): a mode needs a positive mass"
+                    f"mass_kg[{k}]={m!r} is outside the valid range (0, inf): a mode needs a "
+                    "positive mass"
                 )
             if not f >= 0.0:
                 raise ValueError(f"frequency_Hz[{k}]={f!r} is outside the valid range [0, inf)")

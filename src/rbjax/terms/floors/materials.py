@@ -1,9 +1,10 @@
 """Material presets for floor plates: Young's modulus, density and Poisson's ratio, with sources.
 
-A thin plate's drive-point impedance Z = 8√(B′m″) (``rbjax.terms.floors.kinds.plate_impedance_Ns_per_m``)
-needs E, ρ and ν; the values below are the standard design values of the codes named in each
-``source``. They are the values of a material grade, not of a given product: take a product's
-declared values where it has them (``rbjax.terms.floors.presets.load_floor`` reads them from a file).
+A thin plate's drive-point impedance Z = 8√(B′m″)
+(``rbjax.terms.floors.kinds.plate_impedance_Ns_per_m``) needs E, ρ and ν; the values below are
+the standard design values of the codes named in each ``source``. They are the values of a
+material grade, not of a given product: take a product's declared values where it has them
+(``rbjax.terms.floors.presets.load_floor`` reads them from a file).
 
 - ``concrete``: normal-weight reinforced concrete, strength class C30/37. E_cm = 33 GPa
   (EN 1992-1-1:2004, Table 3.1), ν = 0.2 (EN 1992-1-1, §3.1.3(4), uncracked concrete),
@@ -31,10 +32,11 @@ declared values where it has them (``rbjax.terms.floors.presets.load_floor`` rea
   (E_90,mean = 0.37 GPa): as an isotropic plate this is the stiff direction only.
 - ``clt``: cross-laminated timber (EN 16351:2015) of five equal C24 layers. The bending
   stiffness per width of the layup is B′_x = (E_0 I_∥ + E_90 I_⊥), B′_y = (E_0 I_⊥ + E_90 I_∥),
-  with I_∥ and I_⊥ the second moments of the layers along and across (``cross_laminated_youngs_Pa``);
-  the isotropic equivalent √(E_x E_y) = 4.76 GPa for five equal layers, any thickness
-  (E_0 = 11 GPa, E_90 = 0.37 GPa from EN 338). ρ = 470 kg/m³: C24 lamellas (ρ_mean 420) with
-  glue lines; CLT manufacturers' European Technical Assessments declare 450–500 kg/m³.
+  with I_∥ and I_⊥ the second moments of the layers along and across
+  (``cross_laminated_youngs_Pa``); the isotropic equivalent √(E_x E_y) = 4.76 GPa for five equal
+  layers, any thickness (E_0 = 11 GPa, E_90 = 0.37 GPa from EN 338). ρ = 470 kg/m³: C24 lamellas
+  (ρ_mean 420) with glue lines; CLT manufacturers' European Technical Assessments declare
+  450–500 kg/m³.
 
 Poisson's ratio of the wood-based panels is taken as 0.3 (no code value; it enters Z as
 1/√(1 − ν²), so ±0.1 changes Z by < 3 %).
@@ -107,7 +109,8 @@ MATERIALS: dict[str, Material] = {
             33.0e9,
             2300.0,
             0.2,
-            "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 (reinforced, 1 % steel)",
+            "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 "
+            "(reinforced, 1 % steel)",
         ),
         Material(
             "steel", 210.0e9, 7850.0, 0.3, "EN 1993-1-1 §3.2.6 (E, ν); EN 1991-1-1 Table A.4 (ρ)"
@@ -124,7 +127,8 @@ MATERIALS: dict[str, Material] = {
             2.5e9,
             650.0,
             0.3,
-            "particleboard P4/P5 20–25 mm: E of the EN 312 bending-modulus requirement; ρ EN ISO 10456 / declared; ν assumed",
+            "particleboard P4/P5 20–25 mm: E of the EN 312 bending-modulus requirement; ρ EN ISO "
+            "10456 / declared; ν assumed",
         ),
         Material(
             "timber-c24",
@@ -138,7 +142,8 @@ MATERIALS: dict[str, Material] = {
             cross_laminated_youngs_Pa(_C24_PARALLEL_PA, _C24_PERPENDICULAR_PA, 5),
             470.0,
             0.3,
-            "CLT (EN 16351), 5 equal C24 layers: √(E_x E_y) by lamination theory from EN 338 E_0/E_90; ρ from ETAs; ν assumed",
+            "CLT (EN 16351), 5 equal C24 layers: √(E_x E_y) by lamination theory from EN 338 "
+            "E_0/E_90; ρ from ETAs; ν assumed",
         ),
     )
 }

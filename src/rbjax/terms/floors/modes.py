@@ -90,8 +90,8 @@ def simply_supported_plate_modes(
     n_max = int(math.floor(ly * math.sqrt(f_max / speed)))
     if m_max < 1 or n_max < 1:
         raise ValueError(
-            f"max_frequency_Hz={f_max!r} is below the first mode f_11={speed * (lx**-2 + ly**-2):.6g} Hz; "
-            "valid: a max_frequency_Hz above it"
+            f"max_frequency_Hz={f_max!r} is below the first mode "
+            f"f_11={speed * (lx**-2 + ly**-2):.6g} Hz; valid: a max_frequency_Hz above it"
         )
     m, n = np.meshgrid(np.arange(1, m_max + 1), np.arange(1, n_max + 1), indexing="ij")
     freq = speed * ((m / lx) ** 2 + (n / ly) ** 2)
@@ -99,7 +99,8 @@ def simply_supported_plate_modes(
     keep = (freq <= f_max) & (np.abs(shape) >= 1e-9)
     if not np.any(keep):
         raise ValueError(
-            f"no mode up to max_frequency_Hz={f_max!r} moves at the drive point ({x!r}, {y!r}); valid: a point off the nodal lines"
+            f"no mode up to max_frequency_Hz={f_max!r} moves at the drive point ({x!r}, {y!r}); "
+            "valid: a point off the nodal lines"
         )
     order = np.argsort(freq[keep], kind="stable")
     generalised = rho * t * lx * ly / 4.0

@@ -1,14 +1,15 @@
 """Floors by name, and floors described in a TOML or JSON file.
 
 ``floor_preset(name)`` gives one of ``FLOOR_PRESETS``: the rigid floor of the paper, or an
-infinite thin plate of a material of :mod:`rbjax.terms.floors.materials` and a thickness (Z = 8√(B′m″),
-``rbjax.terms.floors.kinds.plate_impedance_Ns_per_m``). ``load_floor(name_or_path)`` takes a preset name
-or a file describing a floor (``.toml`` or ``.json``), one table with a ``type``:
+infinite thin plate of a material of :mod:`rbjax.terms.floors.materials` and a thickness
+(Z = 8√(B′m″), ``rbjax.terms.floors.kinds.plate_impedance_Ns_per_m``).
+``load_floor(name_or_path)`` takes a preset name or a file describing a floor (``.toml`` or
+``.json``), one table with a ``type``:
 
 - ``type = "rigid"``: the immobile floor;
 - ``type = "infinite-plate"``: ``thickness_m`` and either ``material`` (a name of
-  ``rbjax.terms.floors.materials.MATERIALS``) or ``youngs_Pa``, ``density_kg_per_m3`` and ``poisson``
-  (explicit values override the material's);
+  ``rbjax.terms.floors.materials.MATERIALS``) or ``youngs_Pa``, ``density_kg_per_m3`` and
+  ``poisson`` (explicit values override the material's);
 - ``type = "dashpot"``: ``impedance_Ns_per_m`` (a real point impedance, u̇ = F/Z);
 - ``type = "modal"``: ``mass_kg``, ``frequency_Hz``, ``loss_factor`` (one value per mode;
   one ``loss_factor`` for all modes is allowed): ``rbjax.terms.floors.kinds.ModalFloor``;
@@ -22,8 +23,8 @@ or a file describing a floor (``.toml`` or ``.json``), one table with a ``type``
 
 An optional ``name`` labels the floor (default: the file's stem); ``description`` is free text.
 Any other key, a missing one or a value out of range raises ``ValueError`` naming the file,
-the key, the value and the valid range. ``src/rbjax/examples/floors/`` has example files (``floating-screed.toml``: modal;
-``floating-screed-70mm.toml``: floating).
+the key, the value and the valid range. ``src/rbjax/examples/floors/`` has example files
+(``floating-screed.toml``: modal; ``floating-screed-70mm.toml``: floating).
 """
 
 from __future__ import annotations
@@ -91,18 +92,21 @@ def floor_preset(name: str) -> AbstractFloor:
         return Rigid()
     if name not in PLATE_PRESETS:
         raise ValueError(
-            f"floor={name!r} is not a floor preset; valid: {', '.join(FLOOR_PRESETS)} (or a .toml/.json floor file)"
+            f"floor={name!r} is not a floor preset; valid: {', '.join(FLOOR_PRESETS)} (or a "
+            ".toml/.json floor file)"
         )
     return plate(*PLATE_PRESETS[name])
 
 
 def load_floor(name_or_path: str | Path) -> AbstractFloor:
-    """A floor preset by name, or the floor a ``.toml``/``.json`` file describes (module docstring)."""
+    """A floor preset by name, or the floor a ``.toml``/``.json`` file describes (module
+    docstring)."""
     return load_named_floor(name_or_path)[1]
 
 
 def load_named_floor(name_or_path: str | Path) -> tuple[str, AbstractFloor]:
-    """(label, floor) of ``load_floor``: the preset name, or the file's ``name`` (default: its stem)."""
+    """(label, floor) of ``load_floor``: the preset name, or the file's ``name`` (default: its
+    stem)."""
     text = str(name_or_path)
     if isinstance(name_or_path, str) and text in FLOOR_PRESETS:
         return text, floor_preset(text)
@@ -111,7 +115,8 @@ def load_named_floor(name_or_path: str | Path) -> tuple[str, AbstractFloor]:
         if path.suffix.lower() in (".toml", ".json"):
             raise ValueError(f"floor file {text!r} does not exist")
         raise ValueError(
-            f"floor={text!r} is neither a floor preset nor a floor file; valid: {', '.join(FLOOR_PRESETS)} or a .toml/.json file"
+            f"floor={text!r} is neither a floor preset nor a floor file; valid: "
+            f"{', '.join(FLOOR_PRESETS)} or a .toml/.json file"
         )
     table = _read(path)
     try:
@@ -136,7 +141,8 @@ def _read(path: Path) -> dict:
         raise ValueError(f"floor file {str(path)!r} cannot be parsed: {err}") from err
     if not isinstance(table, dict):
         raise ValueError(
-            f"floor file {str(path)!r} must hold one table (a JSON object), not {type(table).__name__}"
+            f"floor file {str(path)!r} must hold one table (a JSON object), not "
+            f"{type(table).__name__}"
         )
     return table
 
@@ -177,7 +183,8 @@ def floor_from_mapping(table: Mapping) -> AbstractFloor:
     kind = table.get("type")
     if kind not in FLOOR_FILE_KEYS:
         raise ValueError(
-            f"type={kind!r} is not a floor type; valid: {', '.join(repr(k) for k in FLOOR_FILE_KEYS)}"
+            f"type={kind!r} is not a floor type; valid: "
+            f"{', '.join(repr(k) for k in FLOOR_FILE_KEYS)}"
         )
     required, optional = FLOOR_FILE_KEYS[kind]
     allowed = (*_COMMON_KEYS, *required, *optional)
@@ -248,7 +255,8 @@ def _plate_from_mapping(table: Mapping) -> InfinitePlate:
     missing = [k for k in bounds if k not in values]
     if missing:
         raise ValueError(
-            f"type='infinite-plate' needs 'material' or the keys {', '.join(repr(k) for k in missing)}"
+            "type='infinite-plate' needs 'material' or the keys "
+            f"{', '.join(repr(k) for k in missing)}"
         )
     return InfinitePlate(
         plate_thickness_m=_number("thickness_m", table["thickness_m"], lower=0.0),
