@@ -1,12 +1,16 @@
 """Sharded batched sweeps: padding, agreement with the scipy reference (values on every path,
 L_FE, exact derivatives against central differences), 4 forced CPU devices against 1 (in a
-subprocess), configuration files and the ``rbjax sweep`` command."""
+subprocess), configuration files and the ``rbjax sweep`` command; a sweep in chunks on local
+worker processes or a given executor, and in parts (``--shard``, ``--merge``), against the
+in-process one (the Dask cluster: test_cluster.py)."""
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -22,7 +26,15 @@ import rbjax
 from rbjax.cli import main
 from rbjax.solve.batch import evaluate_jacobian, evaluation_paths
 from rbjax.spectrum.levels import lfe_octave_dB
-from rbjax.studies.sweep import evaluate, load_config, parameter_names, run_sweep, sharded_map
+from rbjax.studies.executors import TaskError
+from rbjax.studies.sweep import (
+    evaluate,
+    load_config,
+    parameter_names,
+    part_rows,
+    run_sweep,
+    sharded_map,
+)
 
 import scipy_reference as ref
 
@@ -296,3 +308,167 @@ def test_dgsm_sweep_of_the_impact_model_exact_gradients_against_salib_finite_dif
         np.testing.assert_allclose(res.nu_fd[o], res.nu[o], rtol=1e-3, err_msg=o)
         np.testing.assert_allclose(res.total_bound_fd[o], res.total_bound[o], rtol=1e-3, err_msg=o)
     assert res.driver("contact_time_s") == "youngs_Pa"
+
+
+# ----------------------------------------------------------------------------------------------
+# The evaluation in chunks (worker processes, an executor) and in parts (job arrays).
+
+#: 64 × (2 + 2) = 256 elastic impacts with L_FE, chunks of 64 as the tests above (one compile).
+CHUNKED = {
+    "kind": "sobol",
+    "seed": 5,
+    "outputs": ["contact_time_s", "restitution", "lfe_125_dB"],
+    "chunk_size": 64,
+    "sobol": {"n_base": 64, "second_order": False, "n_bootstrap": 20},
+    "ranges": {"youngs_Pa": [1.2e6, 2.0e6], "height_m": [0.5, 1.5]},
+}
+
+
+@pytest.fixture(scope="module")
+def in_process():
+    return run_sweep(CHUNKED)
+
+
+def _same_samples(result, reference, rtol=1e-12):
+    assert set(result.samples) == set(reference.samples)
+    for k, v in reference.samples.items():
+        np.testing.assert_allclose(result.samples[k], v, rtol=rtol, atol=0, err_msg=k)
+
+
+def _same_summary(a, b, path="summary"):
+    """Two JSON-like summaries equal, their numbers to rtol 1e-12 (a sharded program's
+    rounding)."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), path
+        for k in a:
+            _same_summary(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, (list, tuple)):
+        assert isinstance(b, (list, tuple)) and len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            _same_summary(x, y, f"{path}[{i}]")
+    elif isinstance(a, float) and not isinstance(b, str):
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=0, err_msg=path)
+    else:
+        assert a == b, path
+
+
+def test_parts_cover_the_rows_once():
+    for n in (0, 1, 7, 100):
+        for parts in (1, 3, 8):
+            spans = [part_rows(n, i, parts) for i in range(1, parts + 1)]
+            assert spans[0][0] == 0 and spans[-1][1] == n
+            assert all(b == c for (_, b), (c, _) in zip(spans, spans[1:]))
+            assert max(b - a for a, b in spans) - min(b - a for a, b in spans) <= 1
+
+
+def test_a_sweep_on_local_worker_processes_equals_the_in_process_sweep(in_process):
+    # 256 rows in chunks of 62 + the rows of the shortest and longest contact: 5 tasks, after a
+    # first pass of contact times (L_FE)
+    result = run_sweep(CHUNKED, workers=2)
+    _same_samples(result, in_process)
+    _same_summary(result.to_dict(), in_process.to_dict())
+    with pytest.raises(ValueError, match="workers=0 is outside the valid range"):
+        run_sweep(CHUNKED, workers=0)
+    with pytest.raises(ValueError, match="workers=-2 is outside the valid range"):
+        run_sweep(CHUNKED, workers=-2)
+
+
+class _FailingExecutor(cf.ThreadPoolExecutor):
+    """Runs the tasks on a thread; the third task raises."""
+
+    def __init__(self):
+        super().__init__(max_workers=1)
+        self.submitted = 0
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.submitted += 1
+        if self.submitted == 3:
+            return super().submit(_broken_disk)
+        return super().submit(fn, *args, **kwargs)
+
+
+def _broken_disk():
+    raise OSError("the worker's disk is full")
+
+
+def test_a_failed_chunk_is_named_with_its_rows_and_no_result_comes_back():
+    with _FailingExecutor() as executor, pytest.raises(TaskError) as caught:
+        run_sweep({**CHUNKED, "outputs": ["contact_time_s"]}, executor=executor)
+    message = str(caught.value)
+    assert "OSError: the worker's disk is full" in message
+    assert re.search(r"rows \d+–\d+ of 256 \(first: youngs_Pa=[\d.e+]+, height_m=[\d.]+\)", message)
+
+
+def test_a_sweep_in_parts_merges_to_the_single_run(tmp_path, capsys, in_process):
+    config = tmp_path / "study.toml"
+    config.write_text(_toml(CHUNKED))
+    parts = [tmp_path / f"part-{i}.npz" for i in (1, 2, 3)]
+    for i, part in enumerate(parts, 1):
+        argv = ["sweep", str(config), "--shard", f"{i}/3", "--out", str(part), "--workers", "1"]
+        assert main([*argv, "--no-progress"]) == 0
+    out = tmp_path / "merged.json"
+    merge = ["sweep", str(config), "--merge", *map(str, parts), "--out", str(out), "--no-progress"]
+    capsys.readouterr()
+    assert main([*merge, "--json"]) == 0
+    merged = json.loads(capsys.readouterr().out)
+    assert merged == json.loads(out.read_text())
+    assert merged["n_evaluations"] == 256 and merged["config"] == CHUNKED
+    summary = {k: v for k, v in merged.items() if k != "config"}
+    _same_summary(summary, json.loads(rbjax.terms.serialize.to_json(in_process.to_dict())))
+    samples = np.load(tmp_path / "merged.samples.npz")
+    _same_samples(types.SimpleNamespace(samples=dict(samples)), in_process)
+
+    def refused(*paths, config=config):
+        code = main(["sweep", str(config), "--merge", *map(str, paths), "--no-progress"])
+        assert code == 2
+        return capsys.readouterr().err.strip().splitlines()[-1]
+
+    assert "parts 2/3 are missing" in refused(parts[0], parts[2])
+    assert "part 1/3 is given twice" in refused(parts[0], parts[0], parts[1], parts[2])
+    other = tmp_path / "other.toml"
+    other.write_text(_toml({**CHUNKED, "seed": 6}))
+    assert "a part of another sweep" in refused(*parts, config=other)
+    (tmp_path / "junk.npz").write_bytes(b"not a zip")
+    assert "is not a part of an rbjax sweep" in refused(tmp_path / "junk.npz")
+    argv = ["sweep", str(config), "--shard", "4/3", "--no-progress"]
+    assert main(argv) == 2
+    assert "--shard '4/3' is not a part" in capsys.readouterr().err
+    assert main(["sweep", str(config), "--workers", "0", "--no-progress"]) == 2
+    assert "workers=0 is outside the valid range" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["study.toml", "other.toml", "junk.npz", "merged.json", "merged.samples.npz"]
+        + [p.name for p in parts]
+    )
+
+
+def test_a_dgsm_sweep_in_parts_merges_to_the_single_run(tmp_path):
+    from rbjax.studies.sweep import merge_parts, run_part
+
+    config = {  # as test_dgsm_sweep_of_the_impact_model... (the same compiled programs)
+        "kind": "dgsm",
+        "outputs": ["contact_time_s", "peak_force_N", "lfe_63_dB"],
+        "chunk_size": 64,
+        "dgsm": {"n_base": 3, "delta": 1e-5},
+        "ranges": {"height_m": [0.99, 1.01], "youngs_Pa": [1.3e6, 1.9e6], "mass_kg": [2.45, 2.55]},
+    }
+    single = run_sweep(config)
+    paths = [run_part(config, i, 2, tmp_path / f"p{i}.npz") for i in (1, 2)]
+    merged = merge_parts(config, paths)
+    for o in single.outputs:
+        for field in ("nu", "nu_fd", "total_bound", "total_bound_fd"):
+            np.testing.assert_allclose(
+                getattr(merged, field)[o], getattr(single, field)[o], rtol=1e-12, err_msg=o
+            )
+    _same_samples(merged, single)
+
+
+def _toml(config: dict) -> str:
+    """A flat TOML text of a sweep configuration (tables of numbers and lists)."""
+    lines, tables = [], []
+    for k, v in config.items():
+        (tables if isinstance(v, dict) else lines).append((k, v))
+    text = [f"{k} = {json.dumps(v)}" for k, v in lines]
+    for name, table in tables:
+        text.append(f"[{name}]")
+        text += [f"{k} = {json.dumps(v)}" for k, v in table.items()]
+    return "\n".join(text) + "\n"

@@ -68,18 +68,23 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
         pass  # the command defined its own --json
 
 
-def add_parallel_options(parser: argparse.ArgumentParser, what: str = "fits") -> None:
-    """``--workers N`` and ``--scheduler ADDRESS``: where independent tasks run
-    (:mod:`rbjax.studies.executors`)."""
-    parser.add_argument(
+def add_parallel_options(
+    parser: argparse.ArgumentParser, what: str = "fits", default: int | None = None
+) -> None:
+    """``--workers N`` or ``--scheduler ADDRESS``: where independent tasks run
+    (:mod:`rbjax.studies.executors`); ``default``: the worker count without ``--workers``
+    (``None``: the usable cores)."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
         "--workers",
         type=int,
-        default=None,
+        default=default,
         metavar="N",
-        help=f"worker processes to run the {what} in (default: the cores this process may use; "
-        "1: one after another in this process)",
+        help=f"worker processes to run the {what} in (default: "
+        + ("the cores this process may use" if default is None else str(default))
+        + "; 1: in this process; at most the usable cores)",
     )
-    parser.add_argument(
+    where.add_argument(
         "--scheduler",
         default=None,
         metavar="ADDRESS",
@@ -95,8 +100,8 @@ def parallel_of(args):
 
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers={args.workers!r} is outside the valid range: an integer ≥ 1")
-    if args.scheduler is not None and args.workers is not None:
-        raise ValueError("--workers and --scheduler exclude each other: the cluster has its own")
+    if args.scheduler is not None:
+        return Parallel(scheduler=args.scheduler)
     cores = usable_cores()
     if args.workers is not None and args.workers > cores:
         progress(f"--workers={args.workers}: this process may use {cores} cores; using {cores}")

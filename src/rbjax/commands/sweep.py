@@ -1,14 +1,16 @@
 """``rbjax sweep CONFIG.toml``: global sensitivity (SALib: Sobol, Morris, eFAST, PAWN, DGSM) and
-conformance probability."""
+conformance probability; in this process, on local worker processes, on a Dask cluster, or in
+parts for a job array (``--shard I/P``, then ``--merge``)."""
 
 from __future__ import annotations
 
-from . import add_command, emit_json, progress, use_cpu_devices
+import sys
+
+from . import add_command, add_parallel_options, emit_json, parallel_of, progress, use_cpu_devices
 
 DESCRIPTION = """\
 Run a batched study of the rubber-ball impact described by a TOML file: a SALib design,
-evaluated on the fastest exact path the model allows and sharded over all JAX devices (on a
-CPU: one device per core, see --cpu-devices; or GPUs), analysed by SALib:
+evaluated on the fastest exact path the model allows, analysed by SALib:
 
   kind = "sobol"        Sobol first-, total- (and second-) order indices on a Sobol'-sequence
                         design, with bootstrap intervals
@@ -25,9 +27,27 @@ rbjax/examples/sweeps/. A progress bar goes to stderr. With --out FILE.json the 
 written as JSON (plain text, readable anywhere) and every evaluated sample beside it as
 FILE.samples.npz (compact float64 arrays with their names, numpy.load).
 
+Where the impacts run: by default (--workers 1), in this process, split over its JAX devices
+(one CPU device per core, --cpu-devices); with --workers N, the design is cut into chunks run
+by N worker processes (one JAX CPU device each); with --scheduler
+ADDRESS, the chunks run on a Dask distributed cluster (pip install 'rbjax[cluster]'; on
+SLURM, PBS, SGE or LSF, dask-jobqueue starts one:
+  from dask_jobqueue import SLURMCluster
+  cluster = SLURMCluster(cores=8, processes=8, memory="16GB"); cluster.scale(jobs=4)
+  then --scheduler cluster.scheduler_address). The chunks' outputs are joined here and
+analysed; a failed chunk is reported with its rows, and nothing is written.
+
+A job array without a scheduler: --shard I/P evaluates part I of P of the design (rows cut
+deterministically) and writes it (--out, default CONFIG.part-I-of-P.npz) with the digest of
+the design; --merge PART... joins all P parts of the same configuration (refusing a missing,
+repeated or foreign part), analyses them and writes the result as a single run would.
+
 examples:
   rbjax sweep src/rbjax/examples/sweeps/sobol.toml --out sobol.json
-  rbjax sweep conformance.toml --json
+  rbjax sweep conformance.toml --json --workers 2
+  rbjax sweep study.toml --scheduler tcp://10.0.0.5:8786 --out study.json
+  rbjax sweep study.toml --shard $SLURM_ARRAY_TASK_ID/8       (sbatch --array=1-8)
+  rbjax sweep study.toml --merge study.part-*-of-8.npz --out study.json
 """
 
 
@@ -42,47 +62,82 @@ def register(subparsers) -> None:
     p.add_argument(
         "--out",
         default=None,
-        metavar="FILE.json",
-        help="write the summary (JSON) and the samples (FILE.samples.npz)",
+        metavar="FILE",
+        help="write the summary (FILE.json) and the samples (FILE.samples.npz); with --shard: "
+        "the part (default: CONFIG.part-I-of-P.npz)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--distributed",
-        action="store_true",
-        help="multi-host run: call jax.distributed.initialize() first (SLURM/Open MPI/TPU detected); "
-        "start the same command on every host; process 0 writes the output",
-    )
+    add_parallel_options(p, what="design's chunks", default=1)
     p.add_argument(
         "--cpu-devices",
         type=int,
         default=None,
         metavar="N",
-        help="JAX CPU devices to shard over (default: one per core; each runs its share of the batch on one core)",
+        help="JAX CPU devices of this process's own evaluation (--workers 1, or a design of one "
+        "chunk; default: one per core)",
+    )
+    split = p.add_mutually_exclusive_group()
+    split.add_argument(
+        "--shard",
+        default=None,
+        metavar="I/P",
+        help="evaluate part I of P (1 ≤ I ≤ P) of the design and write it for --merge",
+    )
+    split.add_argument(
+        "--merge",
+        nargs="+",
+        default=None,
+        metavar="PART",
+        help="join the parts written by --shard (all P of them) and analyse the whole",
     )
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     import time
+    from pathlib import Path
 
-    import jax
-
-    from ..studies.sweep import load_config, run_sweep, write_outputs
+    from ..studies.executors import TaskError
+    from ..studies.sweep import (
+        load_config,
+        merge_parts,
+        parse_part,
+        run_part,
+        run_sweep,
+        write_outputs,
+    )
 
     use_cpu_devices(args.cpu_devices)
-    if args.distributed:
-        jax.distributed.initialize()
+    parallel = parallel_of(args)
     config = load_config(args.config)
-    progress(f"running {config.get('kind')!r} sweep from {args.config}")
+    where = dict(workers=parallel.workers, scheduler=parallel.scheduler)
+    show = not args.no_progress
     start = time.perf_counter()
-    result = run_sweep(config, progress=not args.no_progress)
+    try:
+        if args.shard is not None:
+            part, parts = parse_part(args.shard)
+            out = args.out or f"{Path(args.config).stem}.part-{part}-of-{parts}.npz"
+            progress(f"running part {part}/{parts} of the {config.get('kind')!r} sweep")
+            path = run_part(config, part, parts, out, progress=show, **where)
+            seconds = time.perf_counter() - start
+            progress(f"wrote {path} in {seconds:.1f} s")
+            if args.json:
+                emit_json({"part": part, "parts": parts, "path": str(path), "seconds": seconds})
+            return 0
+        if args.merge is not None:
+            progress(f"merging {len(args.merge)} parts of the {config.get('kind')!r} sweep")
+            result = merge_parts(config, args.merge, progress=show)
+        else:
+            progress(f"running {config.get('kind')!r} sweep from {args.config}")
+            result = run_sweep(config, progress=show, **where)
+    except TaskError as err:
+        print(f"rbjax: error: {str(err).splitlines()[0]}", file=sys.stderr)
+        return 1
     seconds = time.perf_counter() - start
     evaluations = result.n_evaluations if hasattr(result, "n_evaluations") else result.n_samples
     progress(
         f"{evaluations} impact evaluations in {seconds:.1f} s ({evaluations / seconds:.0f} per s)"
     )
-    if jax.process_index() != 0:
-        return 0
     if args.out:
         for path in write_outputs(result, args.out, config):
             progress(f"wrote {path}")

@@ -148,7 +148,10 @@ def _worker_start(options: dict) -> None:
     import jax
 
     jax.config.update("jax_platforms", "cpu")
-    jax.config.update("jax_num_cpu_devices", 1)
+    try:
+        jax.config.update("jax_num_cpu_devices", 1)
+    except RuntimeError:  # a Dask worker whose JAX already runs (an earlier run): as it is
+        pass
     jax.config.update("jax_enable_x64", True)
     for name, value in options.items():
         jax.config.update(name, value)

@@ -26,6 +26,7 @@
   contact time, restitution, mass, drop height), with Wilson score confidence intervals.
 """
 
+from ._common import batch_evaluator
 from .conformance import (
     DISTRIBUTION_KINDS,
     ConformanceProbability,
@@ -60,6 +61,7 @@ __all__ = [
     "method_options",
     "size_name",
     "global_sensitivity",
+    "batch_evaluator",
     "DISTRIBUTION_KINDS",
     "draw_samples",
     "wilson_interval",

@@ -13,15 +13,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from ..._validate import as_float, check_range
-from ...solve.batch import canonical_name, evaluate
+from ...solve.batch import canonical_name
 from ...solve.simulate import make_model
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
+from ._common import batch_evaluator
 
 DISTRIBUTION_KINDS = {
     "uniform": ("low", "high"),
@@ -194,6 +195,7 @@ def conformance_probability(
     chunk_size: int = 1024,
     devices=None,
     progress: bool = False,
+    evaluator: Callable | None = None,
 ) -> ConformanceProbability:
     """Probability that the ball meets the rubber-ball tolerances when its parameters vary.
 
@@ -207,7 +209,9 @@ def conformance_probability(
     ``rbjax.spectrum.standards.RUBBER_BALL_TOLERANCES`` (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 =
     JIS A 1418-2 Table A.2), and the pass fractions come with Wilson score intervals. The L_FE
     limits hold for the standard drop height, so vary ``height_m`` around 1 m. Draws whose solve
-    is flagged (status ≠ 0) are left out and counted (``n_valid``).
+    is flagged (status ≠ 0) are left out and counted (``n_valid``). ``evaluator``: as in
+    :func:`~rbjax.studies.sensitivity.global_sensitivity` (default: ``rbjax.solve.batch.evaluate``
+    in this process).
     """
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
@@ -222,8 +226,9 @@ def conformance_probability(
     distributions = {canonical_name(k, model): v for k, v in distributions.items()}
     parsed = {k: _distribution(k, v) for k, v in distributions.items()}
     samples = draw_samples(distributions, int(n_samples), seed)
-    out = evaluate(
+    out = (batch_evaluator if evaluator is None else evaluator)(
         samples,
+        False,
         height_m=height_m,
         ball=ball,
         model=model,

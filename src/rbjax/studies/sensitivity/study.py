@@ -17,14 +17,12 @@ from ...solve.batch import (
     SCALAR_OUTPUTS,
     assemble,
     canonical_name,
-    evaluate,
-    evaluate_jacobian,
     lfe_output_names,
 )
 from ...solve.simulate import make_model
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
-from ._common import _is_lfe, check_ranges
+from ._common import _is_lfe, batch_evaluator, check_ranges
 from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
@@ -98,6 +96,7 @@ def global_sensitivity(
     chunk_size: int = 1024,
     devices=None,
     progress: bool = False,
+    evaluator: Callable | None = None,
     **options,
 ) -> SobolResult | MorrisResult | FastResult | PawnResult | DGSMResult:
     """Global sensitivity of the impact outputs over uniform parameter ranges (SALib).
@@ -118,6 +117,10 @@ def global_sensitivity(
             ``method`` (default: the fastest exact path the model allows).
         seed: of the design and of SALib's bootstrap.
         chunk_size, devices, progress: batching and sharding (``rbjax.solve.sharded``).
+        evaluator: evaluates the design's rows, called as ``evaluator(samples, gradients,
+            **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
+            ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweep`` passes
+            one that splits the rows into tasks for worker processes or a Dask cluster.
         options: the method's keyword options (``method_options(method)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
             ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``.
@@ -156,14 +159,16 @@ def global_sensitivity(
         progress=progress,
     )
 
+    evaluator = batch_evaluator if evaluator is None else evaluator
+
     def func(inputs):
-        out = evaluate(inputs, **common)
+        out = evaluator(inputs, False, **common)
         return {o: out[o] for o in names}
 
     if method == "dgsm":
 
         def jacobian(inputs):
-            _, jac = evaluate_jacobian(inputs, **common)
+            _, jac = evaluator(inputs, True, **common)
             return {o: jac[o] for o in names}
 
         return dgsm_measures(func, ranges, n, jacobian=jacobian, seed=seed, **options)
