@@ -1,6 +1,17 @@
-"""Lever: both CPU cores. XLA:CPU runs a vmapped solve on one core; splitting the batch over two
-host devices (``--xla_force_host_platform_device_count=2``, ``jax.jit`` with a NamedSharding of the batch axis, as ``rbjax.studies.sweep`` does)
-runs the halves in parallel. Scalar outputs at batch 10 000 (quick: 1000), one device vs two.
+"""Lever: both CPU cores. XLA:CPU runs a vmapped solve on about one core; splitting the batch
+over two host devices (``--xla_force_host_platform_device_count=2``) runs the halves in parallel.
+
+Two ways of splitting:
+
+* ``jax.jit`` with a NamedSharding of the batch axis (one partitioned program; a vmapped while
+  loop's condition becomes an all-reduce, so the devices step together): scalar outputs at
+  batch 10 000 (quick: 1000), one device vs two.
+* ``rbjax.simulate``'s engine (``rbjax.solve.devices``): chunks sized for a CPU, round-robin
+  over the devices, each running its own program. Elastic (quadrature) 10⁶, Zener (phase angle,
+  momentum) 2×10⁵ and the Zener ODE 4096 impacts (quick: 10×, 10×, 4× fewer): one call of the
+  whole batch (``simulate`` before the engine), chunks on one device, chunks on two devices.
+  ``contact_rel_err`` of these rows: the largest relative difference to the one call (0: bit for
+  bit); ``bitwise_1_device``: equal to the chunks on one device bit for bit.
 
 The XLA flag must be set before JAX starts, so this script sets it itself; run it on its own:
 ``.venv/bin/python benchmarks/multicore.py [--quick]`` (run_all.py does).
@@ -23,7 +34,7 @@ from jax.sharding import PartitionSpec as P  # noqa: E402
 
 import rbjax  # noqa: E402
 from rbjax.solve import impact_quadrature  # noqa: E402
-from rbjax.solve.ode import impact_ode  # noqa: E402
+from rbjax.solve.ode import impact_batch, impact_ode  # noqa: E402
 from rbjax.solve.simulate import broadcast_inputs, make_model  # noqa: E402
 
 from _common import (  # noqa: E402
@@ -66,8 +77,9 @@ def main():
     ):
         batched = jax.vmap(one)
         single = jax.jit(batched)
-        # as rbjax.studies.sweep shards: jit with the batch axis split over the mesh (GSPMD partitions
-        # the vmapped solve; shard_map trips over the event root finder's lineax solve)
+        # as rbjax.studies.sweep sharded before rbjax.solve.devices (and still does over several
+        # hosts): jit with the batch axis split over the mesh (GSPMD partitions the vmapped
+        # solve; shard_map trips over the event root finder's lineax solve)
         spec = NamedSharding(mesh, P("batch"))
         sharded = jax.jit(batched, in_shardings=(spec, spec), out_shardings=spec)
         hs, bs = jax.device_put(h, spec), jax.device_put(b, spec)
@@ -91,9 +103,11 @@ def main():
                 }
             )
             print(
-                f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best {n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}",
+                f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best "
+                f"{n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}",
                 flush=True,
             )
+    rows += engine_rows(args.quick, devices[:2])
     write_json(
         "multicore" + ("_quick" if args.quick else ""),
         {
@@ -103,6 +117,72 @@ def main():
             "wall_s": time.perf_counter() - t0,
         },
     )
+
+
+ZENER = make_model(
+    damping=rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3), blocked_force="momentum"
+)
+
+
+def engine_rows(quick: bool, devices) -> list[dict]:
+    """``simulate``'s engine: one call of the whole batch, chunks on one device, on two."""
+    from rbjax.solve.inputs import as_arrays
+    from rbjax.solve.simulate import _fast_program, _Rows, _run_rows
+
+    rows = []
+    for name, path, model, n in (
+        ("simulate elastic (quadrature)", "quadrature", make_model(), 1_000_000),
+        ("simulate zener (phase angle)", "angle", ZENER, 200_000),
+        ("simulate zener (ode)", "ode", ZENER, 4096),
+    ):
+        n = n // (4 if path == "ode" else 10) if quick else n
+        heights = np.linspace(0.1, 1.6, n)
+        inputs = as_arrays((heights, rbjax.JIS_RUBBER_BALL, model))
+        batch = _Rows.of(*inputs)
+        if path == "ode":
+            _, h, b, m = broadcast_inputs(*inputs)
+            whole = lambda: impact_batch(h, b, m, rbjax.Solver()).contact_time_s  # noqa: E731
+        else:
+            whole = lambda: _fast_program(path, *inputs)[1].contact_time_s  # noqa: E731
+        variants = {
+            "1 device, one call (before)": whole,
+            "1 device, chunks": lambda: _run_rows(path, batch, rbjax.Solver(), devices[:1]),
+            f"{len(devices)} devices, chunks": lambda: _run_rows(
+                path, batch, rbjax.Solver(), devices
+            ),
+        }
+        results = {}
+        for label, fn in variants.items():
+            t = time_call(fn, min_repeats=3, max_repeats=7)
+            out = t["out"]
+            results[label] = np.asarray(getattr(out, "contact_time_s", out))
+            one = results["1 device, one call (before)"]
+            ok = np.isfinite(one)
+            err = float(np.max(np.abs(results[label][ok] / one[ok] - 1))) if ok.any() else 0.0
+            chunked = results.get("1 device, chunks")
+            rows.append(
+                {
+                    "variant": name,
+                    "devices": label,
+                    "batch": n,
+                    "impacts_per_s": n / t["median_s"],
+                    "best_impacts_per_s": n / t["min_s"],
+                    "first_s": t["first_s"],
+                    "median_s": t["median_s"],
+                    "min_s": t["min_s"],
+                    "contact_rel_err": err,
+                    "bitwise_1_device": None
+                    if chunked is None
+                    else bool(np.array_equal(results[label], chunked, equal_nan=True)),
+                }
+            )
+            print(
+                f"{name:36s} {label:28s} {n / t['median_s']:12,.0f} /s (best "
+                f"{n / t['min_s']:,.0f}/s)  first {t['first_s']:.1f} s  "
+                f"vs one call {err:.1e}  bitwise {rows[-1]['bitwise_1_device']}",
+                flush=True,
+            )
+    return rows
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import add_command, emit_json, progress, write_json_file
+from . import add_command, emit_json, progress, use_cpu_devices, write_json_file
 
 DESCRIPTION = """\
 Find the parameters of a model (E with ν held at 0.5, a damping law's parameters; with
@@ -60,6 +60,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
     from ..studies.design import design
 
     geometries = ("jis", "iso") if args.geometry == "both" else (args.geometry,)

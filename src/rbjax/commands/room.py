@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import add_command, emit_json, format_table, progress
+from . import add_command, emit_json, format_table, progress, use_cpu_devices
 
 DESCRIPTION = """\
 The maximum Fast-weighted sound pressure level L_i,Fmax per band in the room below a floor
@@ -100,6 +100,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
     from ..room import ReceivingRoom, RoomChainError, Slab, impact_sound
     from ..terms.floors.kinds import AbstractModalFloor, InfinitePlate
     from ..terms.floors.presets import load_named_floor

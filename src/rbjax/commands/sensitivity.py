@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import add_command, emit_json, fmt, format_table, progress
+from . import add_command, emit_json, fmt, format_table, progress, use_cpu_devices
 
 DESCRIPTION = """\
 Local sensitivity of the rubber-ball impact (paper §2, Eq. 7) by forward-mode automatic
@@ -109,6 +109,7 @@ def render_table(rows: list[dict]) -> str:
 
 
 def run(args) -> int:
+    use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
     import numpy as np
 
     from .._validate import check_range

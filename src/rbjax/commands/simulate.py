@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from . import add_command, emit_json, fmt, format_table, progress
+from . import add_command, emit_json, fmt, format_table, progress, use_cpu_devices
 
 DESCRIPTION = """\
 Predict the blocked force of the rubber ball dropped on a rigid floor (paper §2, Eq. 7) for
@@ -339,6 +339,7 @@ def render_table(rows: list[dict]) -> str:
 
 
 def run(args) -> int:
+    use_cpu_devices()  # one JAX CPU device per core: the batch of heights split over them
     for i, h in enumerate(args.height_m):  # before any output, so bad input gives one line
         if not (math.isfinite(h) and h > 0.0):
             raise ValueError(

@@ -7,7 +7,9 @@ phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`
 sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
 :func:`~rbjax.solve.simulate.simulate` choosing among them, the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
-(:mod:`~rbjax.solve.batch`), sharded over the devices (:mod:`~rbjax.solve.sharded`)."""
+(:mod:`~rbjax.solve.batch`). Concrete batches of both are cut in chunks split over the local
+devices, each device running its own program (:mod:`~rbjax.solve.devices`; several hosts:
+:mod:`~rbjax.solve.sharded`)."""
 
 from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian

@@ -4,9 +4,12 @@ of sweeps and sensitivities).
 A sweep evaluates the impact model (paper §2, Eq. 7) for N parameter samples: drop height,
 ball parameters (§2.1–2.2) and damping/stiffening parameters; :func:`evaluate` gives the
 outputs, :func:`evaluate_jacobian` the outputs and their exact derivatives with respect to the
-varied parameters (``jax.jacfwd`` per sample, vmapped). The batches are laid out over the
-devices by :func:`rbjax.solve.sharded.sharded_map` (its docstring says how to run on several
-CPU devices, GPUs or hosts).
+varied parameters (``jax.jacfwd`` per sample, vmapped). The batches are split over the local
+devices by :func:`rbjax.solve.devices.device_map`, each device running its own program (several
+hosts: :func:`rbjax.solve.sharded.sharded_map`; the docstrings say how to run on several CPU
+devices, GPUs or hosts).
+
+Only the varied parameters travel as columns; the others are scalars shared by every row.
 
 Paths, as ``rbjax.simulate`` chooses them (``method="auto"``, no ``solver`` given):
 
@@ -45,6 +48,7 @@ from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from .angle import impact_angle
+from .devices import default_chunk_size, local_devices
 from .inputs import padded_rows
 from .ode import _trajectory, impact_ode
 from .outcome import STATUS_CODES
@@ -156,15 +160,18 @@ def _one_impact(row: Mapping, model: Model, spec: _Spec) -> dict:
 
 @functools.lru_cache(maxsize=64)
 def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
-    """The per-device function of ``evaluate`` (cached: one compile per configuration): the
-    outputs of a batch, and with ``wrt`` their derivatives ``d:<output>`` with respect to those
-    parameters (forward mode, one ``jax.jacfwd`` per sample).
+    """The per-device function of ``evaluate`` (cached: one compile per configuration and
+    device): the outputs of a batch, and with ``wrt`` their derivatives ``d:<output>`` with
+    respect to those parameters (forward mode, one ``jax.jacfwd`` per sample).
 
-    ``batch`` holds every parameter of ``parameter_names(model)`` (the varied ones and the
-    nominal ones alike), so the program does not depend on which parameters vary.
+    ``fn(batch, (nominal, model))``: ``batch`` holds a column per varied parameter, ``nominal``
+    the value of every other parameter of ``parameter_names(model)`` (a scalar each, shared by
+    the rows), so the program does not depend on the nominal values.
     """
 
-    def one(row, model):
+    def one(row, shared):
+        nominal, model = shared
+        row = nominal | row
         if not wrt:
             return _one_impact(row, model, spec)
 
@@ -178,9 +185,7 @@ def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
     return jax.vmap(one, in_axes=(0, None))
 
 
-def _redo(
-    out: dict, rows: np.ndarray, fn: Callable, batch: dict, model: Model, run: Callable
-) -> None:
+def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, shared, run: Callable) -> None:
     """Compute the ``rows`` of ``out`` again with ``fn`` (the batch padded by
     ``inputs.padded_rows``, so that few shapes compile) and write them in place."""
     if rows.size == 0:
@@ -189,7 +194,7 @@ def _redo(
     again = run(
         fn,
         {k: v[padded] for k, v in batch.items()},
-        model,
+        shared,
         desc="ODE for flagged impacts",
         chunk_size=len(padded),
     )
@@ -234,16 +239,38 @@ def _evaluate(
     ode_solver = Solver() if solver is None else solver
     if wrt and ode_solver.adjoint != "forward":  # jax.jacfwd through diffrax needs it
         ode_solver = dataclasses.replace(ode_solver, adjoint="forward")
-    (size,) = n
-    batch = {
-        k: np.full(size, v) for k, v in nominal_parameters(height_m, ball, model).items()
-    } | named
-    run = functools.partial(sharded_map, chunk_size=chunk_size, devices=devices, progress=progress)
+    # a column per varied parameter; every other parameter a scalar shared by the rows
+    batch = named
+    nominal = {
+        k: np.float64(v)
+        for k, v in nominal_parameters(height_m, ball, model).items()
+        if k not in named
+    }
+    shared = (nominal, model)
+    devices = local_devices(devices) if jax.process_count() == 1 else devices
 
-    out = run(_impact_fn(_Spec(scalar_path, ode_solver), wrt), batch, model, desc="impacts")
+    def run(path: str, fn: Callable, rows: dict, desc: str, chunk: int | None = None) -> dict:
+        """``fn`` over ``rows`` split over the devices, in chunks sized for ``path``."""
+        if chunk is None:
+            width = 1 + len(wrt)  # a forward Jacobian carries a tangent per parameter
+            chunk = default_chunk_size(path, devices, width) if chunk_size is None else chunk_size
+        return sharded_map(
+            fn,
+            rows,
+            shared,
+            chunk_size=chunk,
+            devices=devices,
+            progress=progress,
+            desc=desc,
+        )
+
+    def redo_ode(fn, rows, _shared, *, desc, chunk_size):  # _redo's runner: the ODE's rows
+        return run("ode", fn, rows, desc, chunk_size)
+
+    out = run(scalar_path, _impact_fn(_Spec(scalar_path, ode_solver), wrt), batch, "impacts")
     if scalar_path != "ode":
         failed = np.flatnonzero(out["status"] == STATUS_CODES["solver_failed"])
-        _redo(out, failed, _impact_fn(_Spec("ode", ode_solver), wrt), batch, model, run)
+        _redo(out, failed, _impact_fn(_Spec("ode", ode_solver), wrt), batch, shared, redo_ode)
     flagged = out["status"] != 0
     for k in SCALAR_OUTPUTS if wrt else ():  # jnp.where gives a flagged output's derivative 0
         out[f"d:{k}"][flagged] = np.nan
@@ -265,7 +292,7 @@ def _evaluate(
         float(rate_Hz),
         substeps_for_contact(tc, rate_Hz),
     )
-    hist = run(_impact_fn(history, wrt), batch, model, desc="L_FE")
+    hist = run(history_path, _impact_fn(history, wrt), batch, "L_FE")
     if history_path == "sampled":  # a history the sampled path flags: the ODE's dense output
         again = np.flatnonzero((hist["history_status"] != 0) & (out["status"] == 0))
         _redo(
@@ -273,8 +300,8 @@ def _evaluate(
             again,
             _impact_fn(history._replace(path="ode", substeps=1), wrt),
             batch,
-            model,
-            run,
+            shared,
+            redo_ode,
         )
     for i, name in enumerate(lfe_output_names()):
         out[name] = np.where(flagged, np.nan, hist["lfe_dB"][:, i])
@@ -294,7 +321,7 @@ def evaluate(
     lfe: bool = False,
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
-    chunk_size: int = 1024,
+    chunk_size: int | None = None,
     devices=None,
     progress: bool = False,
 ) -> dict[str, np.ndarray]:
@@ -307,6 +334,12 @@ def evaluate(
     Outputs of flagged solves (status ≠ 0) are NaN. ``method`` (``"auto"``, ``"ode"``,
     ``"quadrature"``, ``"angle"``) and ``solver`` choose the path as in ``rbjax.simulate`` (see
     the module docstring).
+
+    The samples are cut into chunks of ``chunk_size`` impacts (default: sized for the path and
+    the platform, ``rbjax.solve.devices.default_chunk_size``; 8192 for the fast paths on a CPU)
+    and the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices``
+    for how to give JAX one CPU device per core), each device running its own program: the
+    results are those of a one-device run, bit for bit.
     """
     return _evaluate(
         samples,
@@ -337,7 +370,7 @@ def evaluate_jacobian(
     lfe: bool = False,
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
-    chunk_size: int = 1024,
+    chunk_size: int | None = None,
     devices=None,
     progress: bool = False,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:

@@ -1,23 +1,29 @@
-"""A batched map sharded over every JAX device: the engine under ``rbjax.solve.batch``.
+"""A batched map over every JAX device: the engine under ``rbjax.solve.batch``.
 
-The samples are cut into steps of ``chunk_size × number of devices``; each step is a global
-array laid out over a one-axis ``jax.sharding.Mesh`` (axis ``"batch"``) by a
-``NamedSharding``, and ``jax.jit`` with those in/out shardings lets XLA's SPMD partitioner split
-the vmapped work over the devices, every device computing its own ``chunk_size`` samples. The
-last step is padded with copies of the last sample and the padding is dropped afterwards. The
-same code runs on one CPU, several CPU devices or GPUs; each sample is computed independently,
-so the results agree with a one-device run to the last bits (not bit for bit: XLA compiles the
-partitioned program separately, which can change the rounding of a few operations, ~1e-16
-relative). (``jax.shard_map`` is not used: inside it, the linear solve of the event root finder
-(lineax, via optimistix) rejects its own operands, whose shape structs carry the manual mesh
-axis.)
+In one process, :func:`sharded_map` is :func:`rbjax.solve.devices.device_map`: chunks of
+``chunk_size`` samples go round-robin to the local devices, each device running its own
+program (no collective, no lockstep; the results are those of a one-device run bit for bit).
+
+Over several processes (hosts), the samples are cut into steps of ``chunk_size × number of
+devices``; each step is a global array laid out over a one-axis ``jax.sharding.Mesh`` (axis
+``"batch"``) by a ``NamedSharding``, and ``jax.jit`` with those in/out shardings lets XLA's SPMD
+partitioner split the vmapped work over the devices, every device computing its own
+``chunk_size`` samples. The last step is padded with copies of the last sample and the padding
+is dropped afterwards. Each sample is computed independently, so the results agree with a
+one-device run to the last bits (not bit for bit: XLA compiles the partitioned program
+separately, which can change the rounding of a few operations, ~1e-16 relative), but the
+partitioner turns the condition of a vmapped while loop (the ODE) into an all-reduce, so the
+devices step together. (``jax.shard_map`` is not used: inside it, the linear solve of the event
+root finder (lineax, via optimistix) rejects its own operands, whose shape structs carry the
+manual mesh axis.)
 
 Devices
 -------
-One process, all local devices: nothing to do — ``jax.devices()`` is used. To try several
-devices on a CPU, set the flag before JAX is imported::
+One process, all local devices: nothing to do — ``jax.local_devices()`` is used. JAX gives a
+process one CPU device unless told otherwise; to use several on a CPU, set the count before
+JAX starts (the command line does, one per core)::
 
-    XLA_FLAGS=--xla_force_host_platform_device_count=4 rbjax sweep config.toml
+    JAX_NUM_CPU_DEVICES=4 python my_study.py
 
 Several hosts (e.g. a GPU cluster): run the same program on every host, with the same config
 and seed, and initialise JAX's distributed runtime before any computation. Under SLURM, Open MPI
@@ -56,6 +62,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from .._validate import check_range
+from .devices import device_map
 
 BATCH_AXIS = "batch"
 
@@ -97,15 +104,28 @@ def sharded_map(
     progress: bool = False,
     desc: str | None = None,
 ):
-    """Apply a batched ``fn(inputs_chunk, shared)`` over the leading axis of ``inputs``, sharded.
+    """Apply a batched ``fn(inputs_chunk, shared)`` over the leading axis of ``inputs``, over
+    the devices.
 
     ``inputs`` is a pytree of arrays with a common leading length N; ``shared`` a pytree of
     arrays given whole to every device. ``fn`` must be a pure JAX function of any batch
-    length (e.g. vmapped). Steps of ``chunk_size × len(devices)`` samples are split over a
-    one-axis mesh of ``devices`` (default: ``jax.devices()``, all hosts); the last step is
-    padded with the last sample. Returns ``fn``'s output pytree as NumPy arrays of length N.
-    Pass the same ``fn`` object again to reuse its compiled program.
+    length (e.g. vmapped). In one process: :func:`rbjax.solve.devices.device_map` over
+    ``devices`` (default: ``jax.local_devices()``). Over several processes: steps of
+    ``chunk_size × len(devices)`` samples split over a one-axis mesh of ``devices`` (default:
+    ``jax.devices()``, all hosts); the last step is padded with the last sample. Returns
+    ``fn``'s output pytree as NumPy arrays of length N. Pass the same ``fn`` object again to
+    reuse its compiled program.
     """
+    if jax.process_count() == 1:
+        return device_map(
+            fn,
+            inputs,
+            shared,
+            chunk_size=chunk_size,
+            devices=devices,
+            progress=progress,
+            desc=desc,
+        )
     devices = tuple(jax.devices() if devices is None else devices)
     check_range("chunk_size", chunk_size, lower=0.0)
     chunk_size = int(chunk_size)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import equinox as eqx
 import jax
@@ -271,6 +273,14 @@ def simulate(
     Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
     ``.force_N`` / ``.history()`` compute the histories on request (``rbjax.solve.sampled`` on the
     rigid floor, the ODE otherwise); ``.lfe_octave_dB()`` the band levels from the contact samples.
+
+    Every core: concrete inputs (outside ``jax.jit``) are solved as one batch of impacts, cut in
+    chunks sized for the device and split over the local devices, each device running its own
+    program (``rbjax.solve.devices``); the results are those of one device, bit for bit. JAX
+    gives a Python process one CPU device, so set the count before JAX starts to use them all:
+    ``JAX_NUM_CPU_DEVICES=16 python script.py``, or first thing in the script
+    ``jax.config.update("jax_num_cpu_devices", 16)`` (``rbjax.commands.use_cpu_devices()``: one
+    per usable core). The command line does it for you.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
     options = {
@@ -324,14 +334,10 @@ def _simulate(
     method="ode",
     fallback=False,
 ) -> ImpactResult:
-    if method in ("quadrature", "angle"):
-        height, out, method = _fast_scalars(method, height_m, ball, model, solver, fallback)
+    if is_traced((height_m, ball, model)) or _staged():
+        height, out = _traced_scalars(method, height_m, ball, model, solver)
     else:
-        shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
-        out = jax.tree_util.tree_map(
-            lambda x: x.reshape(shape), impact_batch(flat_height, flat_ball, flat_model, solver)
-        )
-        height = flat_height.reshape(shape)
+        height, out, method = _concrete_scalars(method, height_m, ball, model, solver, fallback)
     return ImpactResult(
         height_m=height,
         contact_time_s=out.contact_time_s,
@@ -350,6 +356,18 @@ def _simulate(
     )
 
 
+def _staged() -> bool:
+    """Inside ``jax.jit``, where even constants are staged: no concrete result to split."""
+    return isinstance(jnp.zeros(()), jax.core.Tracer)
+
+
+def _check_quadrature(path: str, height_m, ball, model) -> None:
+    if path == "quadrature":
+        from .quadrature import DEFAULT_NODES, _check
+
+        _check(height_m, ball, model, DEFAULT_NODES)
+
+
 @eqx.filter_jit
 def _fast_program(path: str, height_m, ball, model):
     """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
@@ -362,29 +380,115 @@ def _fast_program(path: str, height_m, ball, model):
     return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
 
 
-def _fast_scalars(path: str, height_m, ball, model, solver, fallback: bool):
-    """The quadrature or phase-angle path (broadcast height, outputs, path); with ``fallback``
-    (and concrete values) the impacts it flags ``solver_failed`` are solved again by the ODE (the
-    batch padded by ``inputs.padded_rows``, so that few shapes compile)."""
-    if path == "quadrature":
-        from .quadrature import DEFAULT_NODES, _check
+def _traced_scalars(path: str, height_m, ball, model, solver):
+    """Traced inputs, or inside ``jax.jit``: one program, staged like any JAX function (no
+    fallback)."""
+    if path == "ode":
+        shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+        out = impact_batch(flat_height, flat_ball, flat_model, solver)
+        return flat_height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+    _check_quadrature(path, height_m, ball, model)
+    return _fast_program(path, *as_arrays((height_m, ball, model)))
 
-        _check(height_m, ball, model, DEFAULT_NODES)
-    height, out = _fast_program(path, *as_arrays((height_m, ball, model)))
-    if not fallback or is_traced(out.status):
-        return height, out, path
-    failed = np.flatnonzero(np.asarray(out.status).reshape(-1) == STATUS_CODES["solver_failed"])
-    if failed.size == 0:
-        return height, out, path
-    shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
-    padded = padded_rows(failed)
-    pick = lambda x: x[padded] if jnp.ndim(x) else x  # noqa: E731
-    redo = impact_batch(*jax.tree_util.tree_map(pick, (flat_height, flat_ball, flat_model)), solver)
-    index = jnp.asarray(failed)
-    out = jax.tree_util.tree_map(
-        lambda a, b: a.reshape(-1).at[index].set(b[: failed.size]).reshape(shape), out, redo
-    )
-    return height, out, path + "+ode"
+
+class _Rows(NamedTuple):
+    """Concrete (height, ball, model) as one batch axis on the host: the array leaves of the
+    broadcast shape flattened to rows, the scalar leaves shared by every row."""
+
+    shape: tuple
+    spec: tuple  # (treedef, static part, which leaves are rows): hashable, keys the programs
+    rows: tuple
+    shared: tuple
+
+    @classmethod
+    def of(cls, height_m, ball, model) -> _Rows:
+        arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
+        leaves, treedef = jax.tree_util.tree_flatten(arrays)
+        leaves = [np.asarray(x, dtype=np.float64) for x in leaves]
+        shape = np.broadcast_shapes(*(x.shape for x in leaves))
+        is_row = tuple(x.ndim > 0 for x in leaves)
+        rows = tuple(
+            np.ascontiguousarray(np.broadcast_to(x, shape)).reshape(-1)
+            for x, r in zip(leaves, is_row)
+            if r
+        )
+        shared = tuple(x for x, r in zip(leaves, is_row) if not r)
+        if not rows:  # a single impact: one row
+            rows, shared, is_row = tuple(x.reshape(1) for x in leaves), (), (True,) * len(leaves)
+        return cls(shape, (treedef, static, is_row), rows, shared)
+
+    @property
+    def size(self) -> int:
+        return self.rows[0].shape[0]
+
+    def take(self, index: np.ndarray) -> _Rows:
+        return self._replace(shape=index.shape, rows=tuple(x[index] for x in self.rows))
+
+
+@functools.lru_cache(maxsize=64)
+def _rows_program(path: str, spec: tuple, solver: Solver):
+    """The scalar solve of a chunk of rows on ``path`` (one function object per configuration:
+    ``devices.device_map`` jits it once and compiles it once per device and chunk shape)."""
+    from .angle import impact_angle
+    from .quadrature import impact_quadrature
+
+    treedef, static, is_row = spec
+
+    def run(rows, shared):
+        rows, shared = iter(rows), iter(shared)
+        leaves = [next(rows) if r else next(shared) for r in is_row]
+        height, ball, model = eqx.combine(jax.tree_util.tree_unflatten(treedef, leaves), static)
+        _, height, ball, model = broadcast_inputs(height, ball, model)
+        if path == "ode":
+            return impact_batch(height, ball, model, solver)
+        solve = impact_quadrature if path == "quadrature" else impact_angle
+        return jax.vmap(solve)(height, ball, model)
+
+    return run
+
+
+def _run_rows(path: str, batch: _Rows, solver: Solver, devices=None):
+    """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
+    batch fits one chunk of one device (JAX arrays), else chunks split over the local
+    ``devices`` (default: all; NumPy arrays)."""
+    from .devices import _jitted, default_chunk_size, device_map
+
+    fn = _rows_program(path, batch.spec, solver)
+    devices = jax.local_devices() if devices is None else list(devices)
+    chunk_size = default_chunk_size(path, devices)
+    if batch.size <= chunk_size:  # one chunk, whatever the number of devices
+        return _jitted(fn)(batch.rows, batch.shared)
+    return device_map(fn, batch.rows, batch.shared, chunk_size=chunk_size, devices=devices)
+
+
+def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
+    """(broadcast height, outputs, path) of concrete inputs, split over the local devices
+    (``rbjax.solve.devices``: every row as on one device, bit for bit). On a fast path with
+    ``fallback``, the impacts it flags ``solver_failed`` are solved again by the ODE (the rows
+    padded by ``inputs.padded_rows``, so that few shapes compile)."""
+    if path != "ode":
+        _check_quadrature(path, height_m, ball, model)
+    batch = _Rows.of(*as_arrays((height_m, ball, model)))
+    reshape = lambda x: np.reshape(x, batch.shape)  # noqa: E731
+    out = _run_rows(path, batch, solver)
+    failed = np.flatnonzero(np.asarray(out.status) == STATUS_CODES["solver_failed"])
+    if path != "ode" and fallback and failed.size:
+        redo = _run_rows("ode", batch.take(padded_rows(failed)), solver)
+        columns = {f.name: np.array(getattr(out, f.name)) for f in dataclasses.fields(out)}
+        for name, column in columns.items():
+            column[failed] = np.asarray(getattr(redo, name))[: failed.size]
+        out, path = type(out)(**columns), path + "+ode"
+    height = np.broadcast_to(np.asarray(height_m, dtype=np.float64), batch.shape)
+    if isinstance(out.status, jax.Array):  # one call: the outputs are on the default device
+        height, out = jax.device_put(height), _reshaped(out, batch.shape)
+    else:  # NumPy outputs of the devices' chunks, on the default device at once
+        height, out = jax.device_put((height, jax.tree_util.tree_map(reshape, out)))
+    return height, out, path
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _reshaped(tree, shape: tuple):
+    return jax.tree_util.tree_map(lambda x: x.reshape(shape), tree)
 
 
 def trajectory(
