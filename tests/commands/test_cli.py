@@ -188,7 +188,8 @@ def test_method_option_runs_the_ode_and_agrees(json_rows):
 
 
 def test_json_agrees_with_the_scipy_reference(json_rows):
-    """Contact time, peak force and restitution of Eq. 7 solved independently (DOP853, rtol 1e-12)."""
+    """Contact time, peak force and restitution of Eq. 7 solved independently (DOP853,
+    rtol 1e-12)."""
     for row in json_rows:
         ref = reference_impact(row["height_m"], rbjax.JIS_RUBBER_BALL)
         assert row["contact_time_s"] == pytest.approx(ref.contact_time_s, rel=1e-7)
@@ -239,7 +240,8 @@ def test_octave_energy_is_the_sum_of_its_thirds(json_rows):
 def test_failed_solves_are_null_with_the_status_name(json_rows):
     """A 10 m drop goes past δ_max = 2h, the limit of the small-deflection shell model (§2.1):
     that row has no numbers, only its status name, and the JSON has no NaN token; the other rows
-    are those of the normal run. (Same batch shape and longest contact as HEIGHTS_M: no recompile.)"""
+    are those of the normal run. (Same batch shape and longest contact as HEIGHTS_M: no
+    recompile.)"""
     heights = [0.1, 1.0, 10.0]
     code, out, err = run_cli(["simulate", "--height-m", *map(str, heights), "--json"])
     assert code == 0, err
@@ -370,11 +372,13 @@ def test_bad_input_exits_2_with_one_line(argv, words):
         ("{not json", ["cannot read JSON"]),
         ('{"ball": {"radius_m": 0.089}, "model": {}}', ["missing", "wall_m"]),
         (
-            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.9}, "model": {}}',
+            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, '
+            '"poisson": 0.9}, "model": {}}',
             ["poisson", "0.9"],
         ),
         (
-            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, "poisson": 0.5}, "model": {"damping": {"name": "zener", "tau": 1}}}',
+            '{"ball": {"radius_m": 0.089, "wall_m": 0.032, "mass_kg": 2.5, "youngs_Pa": 1.6e6, '
+            '"poisson": 0.5}, "model": {"damping": {"name": "zener", "tau": 1}}}',
             ["params", "tau"],
         ),
     ],

@@ -122,7 +122,8 @@ QUAD = dict(epsabs=0.0, epsrel=1e-13, limit=200)
 
 
 def energy_balance(height_m, ball, gas):
-    """δ_max, contact time, rebound speed by quadrature (the reduction of the module docstring, item 2)."""
+    """δ_max, contact time, rebound speed by quadrature (the reduction of the module docstring,
+    item 2)."""
     r, m = float(ball.radius_m), float(ball.mass_kg)
     k = shell_stiffness(r, float(ball.wall_m), float(ball.youngs_Pa), float(ball.poisson))
 

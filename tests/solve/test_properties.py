@@ -15,8 +15,9 @@ with the same drops from twice the height, with twice the Young's modulus and wi
   flagged, never plausible");
 * energy is never gained: 0 < restitution ≤ 1 (paper §2.3: the momentum flux of Eq. 7 only
   dissipates; damping only dissipates);
-* the elastic model (paper Eq. 7): contact time decreases and peak force increases with drop height
-  (paper Figs. 5–6), contact time decreases with E (stiffer shell, Eqs. 1–3) and increases with mass.
+* the elastic model (paper Eq. 7): contact time decreases and peak force increases with drop
+  height (paper Figs. 5–6), contact time decreases with E (stiffer shell, Eqs. 1–3) and increases
+  with mass.
 
 The monotonic differences are at least 3e-5 relative over this space (a quadrature scan of 20 000
 points), far above the 1e-9 solver error, so the strict comparisons test the model, not round-off.

@@ -3,9 +3,10 @@ references.
 
 References: the scipy solution of Eq. 7 (tests/scipy_reference.py, DOP853 at rtol 1e-12, written
 from the paper and calling nothing of rbjax) and central finite differences of it. The default
-``method="auto"`` runs the quadrature (``rbjax.solve.quadrature``) for undamped models, the phase-angle
-integration (``rbjax.solve.angle``; its own tests: tests/test_angle.py) for damped ones on the rigid
-floor and the diffrax ODE otherwise; all must agree with the reference, and so must the histories.
+``method="auto"`` runs the quadrature (``rbjax.solve.quadrature``) for undamped models, the
+phase-angle integration (``rbjax.solve.angle``; its own tests: tests/test_angle.py) for damped ones
+on the rigid floor and the diffrax ODE otherwise; all must agree with the reference, and so must
+the histories.
 """
 
 from __future__ import annotations

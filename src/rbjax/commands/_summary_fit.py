@@ -15,7 +15,8 @@ def run_summary(args, fix: dict) -> int:
         raise UsageError("fit: give recordings (FILES_OR_DIR) or --summary TABLE")
     if args.paths:
         raise UsageError(
-            f"fit: --summary {args.summary} fits a table of figures; leave out the recordings {' '.join(args.paths)}"
+            f"fit: --summary {args.summary} fits a table of figures; leave out the recordings "
+            f"{' '.join(args.paths)}"
         )
     table = read_summary(args.summary)
     for note in table.notes:
@@ -34,7 +35,8 @@ def run_summary(args, fix: dict) -> int:
         )
         if selection.recommended is None:
             raise ValueError(
-                f"{table.source}: too few figures to compare models by held-out figures; give --model ({selection.table()})"
+                f"{table.source}: too few figures to compare models by held-out figures; give "
+                f"--model ({selection.table()})"
             )
         result = selection.candidates[selection.recommended].fit
         progress(f"recommended: {selection.recommended}")

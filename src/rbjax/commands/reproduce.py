@@ -1,4 +1,5 @@
-"""``rbjax reproduce``: the paper's predictions, figures like its Figs. 3–12, report.md and results.json."""
+"""``rbjax reproduce``: the paper's predictions, figures like its Figs. 3–12, report.md and
+results.json."""
 
 from __future__ import annotations
 
@@ -64,6 +65,7 @@ def run(args) -> int:
     else:
         print(summary_table(results))
         print(
-            f"\n{len(results['figures'])} figures, report.md and results.json written to {out}/ ({results['elapsed_s']:.1f} s)"
+            f"\n{len(results['figures'])} figures, report.md and results.json written to {out}/ "
+            f"({results['elapsed_s']:.1f} s)"
         )
     return 0

@@ -17,7 +17,8 @@ a modal floor file also needs the slab below it (--slab-material, --slab-thickne
 
 examples:
   rbjax room --floor concrete-150mm --room-volume-m3 50 --reverberation-s 0.5
-  rbjax room --floor concrete-200mm --room-volume-m3 40 --reverberation-s 1.2,0.9,0.8,0.7,0.6,0.6 --json
+  rbjax room --floor concrete-200mm --room-volume-m3 40 \
+--reverberation-s 1.2,0.9,0.8,0.7,0.6,0.6 --json
 """
 
 
@@ -114,12 +115,14 @@ def run(args) -> int:
     elif isinstance(floor, AbstractModalFloor):
         if args.slab_material is None or args.slab_thickness_m is None:
             raise RoomChainError(
-                "a modal floor needs the slab that radiates: give --slab-material and --slab-thickness-m"
+                "a modal floor needs the slab that radiates: give --slab-material and "
+                "--slab-thickness-m"
             )
         slab, modal = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides), floor
     else:
         raise RoomChainError(
-            f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; valid: a plate preset or file, or a modal floor file"
+            f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; "
+            "valid: a plate preset or file, or a modal floor file"
         )
     room = ReceivingRoom(args.room_volume_m3, args.reverberation_s)
     progress(f"room below {name}: ball from {args.height_m:g} m, V = {args.room_volume_m3:g} m³")
@@ -137,7 +140,8 @@ def run(args) -> int:
     ]
     print(format_table(["band Hz", "L_i,Fmax dB", "normalised dB", "t_max s"], rows))
     print(
-        f"L_iA,Fmax = {res.LiA_Fmax_dB} dB (normalised {res.LiA_Fmax_normalised_dB} dB; unrounded {res.LiA_Fmax_unrounded_dB:.2f} dB)"
+        f"L_iA,Fmax = {res.LiA_Fmax_dB} dB (normalised {res.LiA_Fmax_normalised_dB} dB; unrounded "
+        f"{res.LiA_Fmax_unrounded_dB:.2f} dB)"
     )
     for w in res.warnings:
         print(f"note: {w}")

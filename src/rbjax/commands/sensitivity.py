@@ -1,4 +1,5 @@
-"""``rbjax sensitivity``: local derivatives and elasticities of the impact outputs per drop height."""
+"""``rbjax sensitivity``: local derivatives and elasticities of the impact outputs per drop
+height."""
 
 from __future__ import annotations
 
@@ -103,7 +104,10 @@ def render_table(rows: list[dict]) -> str:
             for p in row["parameters"]
         ]
         values = ["output value", "", *(fmt(row["values"][o], ".4g") for o in outputs)]
-        title = f"drop height {row['height_m']:g} m ({row['status']}): elasticity, % per % (L_FE: of the band energy)"
+        title = (
+            f"drop height {row['height_m']:g} m ({row['status']}): elasticity, % per % "
+            "(L_FE: of the band energy)"
+        )
         blocks.append(title + "\n" + format_table(header, [values, *body]))
     return "\n\n".join(blocks)
 
@@ -123,7 +127,8 @@ def run(args) -> int:
     if args.wrt is not None:
         wrt = [canonical_name(w, model) for w in args.wrt]  # unknown names fail before any solve
     progress(
-        f"differentiating at {len(args.height_m)} drop height(s) w.r.t. {', '.join(wrt or parameter_names(model))}"
+        f"differentiating at {len(args.height_m)} drop height(s) w.r.t. "
+        f"{', '.join(wrt or parameter_names(model))}"
     )
     result = local_sensitivity(
         args.height_m,

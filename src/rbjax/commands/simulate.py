@@ -15,13 +15,15 @@ level L_FE (Eq. 11) in octave bands 31.5-1000 Hz and one-third-octave bands from
 44.1 kHz x 1 s force history (§2.4), and the check against the rubber-ball tolerance table
 (JIS A 1418-2 / ISO 10140-5 Annex F) at the standard drop height.
 
-With --floor the ball falls on a floor that moves under it (rbjax.terms.floors.kinds; solved by the ODE):
+With --floor the ball falls on a floor that moves under it (rbjax.terms.floors.kinds; solved by \
+the ODE):
 the outputs are those of the force that floor receives, and each JSON row adds "floor" (its
 name), "floor_energy_J" (the energy injected into the floor, rbjax.energy_balance) and
 "lfe_ratio_dB" (per octave band: L_FE on the floor minus L_FE of the blocked force of the
 same ball and model on the rigid floor). --floor takes a preset,
   {presets}
-(infinite plates of rbjax.terms.floors.materials, Z = 8 sqrt(B'm''); rbjax.terms.floors.presets), or a
+(infinite plates of rbjax.terms.floors.materials, Z = 8 sqrt(B'm''); \
+rbjax.terms.floors.presets), or a
 .toml/.json floor file (type = "infinite-plate", "dashpot", "modal" or "rigid"; see
 rbjax.terms.floors.presets and src/rbjax/examples/floors/).
 
@@ -63,7 +65,10 @@ def register(subparsers) -> None:
         "--blocked-force",
         choices=("paper", "momentum"),
         default=None,
-        help="floor force: 'paper' = F_B+F_G, 'momentum' adds the flux (M/2R)δ̇² in compression; default: from --params, else paper",
+        help=(
+            "floor force: 'paper' = F_B+F_G, 'momentum' adds the flux (M/2R)δ̇² in compression; "
+            "default: from --params, else paper"
+        ),
     )
     p.add_argument(
         "--youngs-pa",
@@ -94,16 +99,21 @@ def register(subparsers) -> None:
             "angle",
         ),  # rbjax.solve.simulate.METHODS (not imported: --help stays fast)
         default="auto",
-        help="path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on the rigid "
-        "floor, fastest), 'angle' takes fixed steps in the phase angle (any damping, rigid floor), 'ode' runs "
-        "the diffrax ODE, 'auto' (default) picks the fastest the model allows; the JSON rows record the path that ran",
+        help=(
+            "path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on "
+            "the rigid floor, fastest), 'angle' takes fixed steps in the phase angle (any "
+            "damping, rigid floor), 'ode' runs the diffrax ODE, 'auto' (default) picks the "
+            "fastest the model allows; the JSON rows record the path that ran"
+        ),
     )
     p.add_argument(
         "--floor",
         default=None,
         metavar="NAME|FILE",
-        help="the floor under the ball: a preset name (rigid, concrete-150mm, osb-15mm, ...; see above) "
-        "or a .toml/.json floor file; default: rigid (the blocked force)",
+        help=(
+            "the floor under the ball: a preset name (rigid, concrete-150mm, osb-15mm, ...; see "
+            "above) or a .toml/.json floor file; default: rigid (the blocked force)"
+        ),
     )
     p.set_defaults(func=run)
 
@@ -166,7 +176,8 @@ def _simulate(heights, ball, model, method: str, floor=None):
 
 
 def _octave_lfe(result):
-    """(L_FE total, octave, third-octave) of every impact of ``result`` (NaN if every solve failed)."""
+    """(L_FE total, octave, third-octave) of every impact of ``result`` (NaN if every solve
+    failed)."""
     from ..solve.simulate import PAPER_RATE_Hz
     from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
     from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
@@ -287,8 +298,10 @@ def _floor_notes(rows: list[dict]) -> list[str]:
     if not rows or "floor" not in rows[0]:
         return []
     lines = [
-        f"floor {rows[0]['floor']}: the force is the force this floor receives; E_floor: energy injected into the floor;",
-        "ΔL_FE: L_FE on this floor minus L_FE of the blocked force (rigid floor), per octave band (Hz):",
+        f"floor {rows[0]['floor']}: the force is the force this floor receives; "
+        "E_floor: energy injected into the floor;",
+        "ΔL_FE: L_FE on this floor minus L_FE of the blocked force (rigid floor), "
+        "per octave band (Hz):",
     ]
     for r in rows:
         bands = ", ".join(f"{b} {fmt(r['lfe_ratio_dB'][b], '+.2f')}" for b in OCTAVE_BANDS)
@@ -327,8 +340,10 @@ def render_table(rows: list[dict]) -> str:
         )
     notes = [
         "t_c: contact time; F_peak: peak blocked force; e: coefficient of restitution;",
-        "L_FE: force exposure level (paper Eq. 11), dB re 1 N, T0 = 1 s: total and per octave band (Hz).",
-        "conformance: rubber-ball table (ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), only at the",
+        "L_FE: force exposure level (paper Eq. 11), dB re 1 N, T0 = 1 s: "
+        "total and per octave band (Hz).",
+        "conformance: rubber-ball table (ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), "
+        "only at the",
         "standard drop height 1.00 ± 0.01 m (n/a elsewhere).",
     ]
     notes += _floor_notes(rows)
@@ -343,7 +358,8 @@ def run(args) -> int:
     for i, h in enumerate(args.height_m):  # before any output, so bad input gives one line
         if not (math.isfinite(h) and h > 0.0):
             raise ValueError(
-                f"height_m={h!r} (--height-m value {i + 1}) is outside the valid range (0, inf) and finite"
+                f"height_m={h!r} (--height-m value {i + 1}) "
+                "is outside the valid range (0, inf) and finite"
             )
     ball, model = load_ball_and_model(args)
     floor_name = None

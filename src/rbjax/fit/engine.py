@@ -15,9 +15,10 @@ Parameters, their units, bounds and transforms come from the terms' declarations
 (:mod:`rbjax.terms.parameters`): E = exp(φ), ν in (−1, 0.5] by a bounded map, damping parameters and
 β = exp(φ) > 0, onset shifts free, optional drop-height errors |Δh_k| < 1 cm.
 
-Identifiability: E and ν enter only through E/√(1−ν²) (see :func:`rbjax.fit.uncertainty.identifiability`);
-this is detected from the Jacobian and said in ``FitResult.identifiability``; ν is then held at
-a stated value (default 0.5, the paper's, §4) or given a prior.
+Identifiability: E and ν enter only through E/√(1−ν²) (see
+:func:`rbjax.fit.uncertainty.identifiability`); this is detected from the Jacobian and said in
+``FitResult.identifiability``; ν is then held at a stated value (default 0.5, the paper's, §4) or
+given a prior.
 
 The driver (on the host, between calls of the one compiled program of a
 :class:`~rbjax.fit.problem.Problem`), one step each: the set-up (:mod:`~rbjax.fit.setup`), the
@@ -200,7 +201,8 @@ def _check_arguments(
         mean, std = (float(x) for x in poisson_prior)
         if not (-1.0 < mean < 0.5 and std > 0):
             raise ValueError(
-                f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 and std > 0"
+                f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 "
+                "and std > 0"
             )
         poisson_prior = (mean, std)
     for k, weight in (extra_weights or {}).items():
@@ -215,7 +217,8 @@ def _check_arguments(
         and max_steps >= 0
     ):
         raise ValueError(
-            f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 (0: evaluate the start only)"
+            f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 "
+            "(0: evaluate the start only)"
         )
     return poisson_prior, max_steps
 

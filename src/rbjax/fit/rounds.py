@@ -89,7 +89,8 @@ def optimise(
             values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
             start = f" start {i}" if len(lanes) > 1 else ""
             say(
-                f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms {problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}",
+                f"{label}{start} round {rounds}: cost {lane.cost:.9g}, rms "
+                f"{problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}",
                 enabled=progress,
             )
             if not np.all(np.isfinite(r)):
@@ -101,18 +102,25 @@ def optimise(
             remaining = unc.step_in_sigma(r, jac_phi[:, inside], tau)
             if remaining < unc.STEP_TOLERANCE_SIGMA:
                 lane.done, lane.converged = True, True
-                lane.message = f"converged (remaining Gauss–Newton step {remaining:.1g} σ < {unc.STEP_TOLERANCE_SIGMA:g} σ)"
+                lane.message = (
+                    f"converged (remaining Gauss–Newton step {remaining:.1g} σ < "
+                    f"{unc.STEP_TOLERANCE_SIGMA:g} σ)"
+                )
                 continue
             best = min((other.cost for other in lanes if other.converged), default=math.inf)
             if rounds >= 2 and lane.cost > ABANDON_FACTOR * best:
                 lane.done = True
-                lane.message = f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× that of a converged start ({best:.4g})"
+                lane.message = (
+                    f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× "
+                    f"that of a converged start ({best:.4g})"
+                )
                 continue
             if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
                 lane.done = True
                 lane.message = (
                     lane.message
-                    or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton step {remaining:.2g} σ)"
+                    or f"not converged after {lane.steps} optimiser steps (remaining Gauss–Newton "
+                    f"step {remaining:.2g} σ)"
                 )
                 continue
             wi = np.zeros((n, n))

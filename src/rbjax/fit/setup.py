@@ -56,7 +56,8 @@ def _height_mask(data: FitData, heights) -> np.ndarray:
         hit = np.isclose(data.height_m, h, atol=5e-4)
         if not hit.any():
             raise ValueError(
-                f"fit_heights: no record at height {h:g} m; heights in the data: {', '.join(f'{x:g}' for x in data.heights_m)}"
+                f"fit_heights: no record at height {h:g} m; heights in the data: "
+                f"{', '.join(f'{x:g}' for x in data.heights_m)}"
             )
         mask |= hit
     return mask

@@ -93,7 +93,8 @@ def canonical_name(name: str, model: Model | None = None) -> str:
 
 
 def assemble(values: Mapping, height_m, ball: Ball, model: Model):
-    """(height, ball, model) with the named parameters of ``values`` replaced (arrays or tracers)."""
+    """(height, ball, model) with the named parameters of ``values`` replaced (arrays or
+    tracers)."""
     return params.replace(values, height_m, ball, model)
 
 
@@ -229,7 +230,8 @@ def _evaluate(
     n = {v.shape[0] for v in named.values()}
     if len(n) != 1:
         raise ValueError(
-            f"samples must all have the same length; got {dict((k, v.shape[0]) for k, v in named.items())}"
+            "samples must all have the same length; got "
+            f"{dict((k, v.shape[0]) for k, v in named.items())}"
         )
     # the constructors validate concrete values (jointly: e.g. wall < radius) and name the parameter
     assemble(named, height_m, ball, model)

@@ -83,12 +83,16 @@ def quadrature_unsupported(model: Model) -> str | None:
     """
     if model.damping:
         names = ", ".join(d.name for d in model.damping)
-        return f"the damping ({names}) makes the contact force depend on the velocity or on internal states, not on δ alone"
+        return (
+            f"the damping ({names}) makes the contact force depend on the velocity or on internal "
+            "states, not on δ alone"
+        )
     return model.coupling
 
 
 def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
-    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or ``"ode"``.
+    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or
+    ``"ode"``.
 
     ``auto`` is the fastest exact path the model allows when no ``solver`` is given (a ``Solver``
     describes an ODE integration: passing one asks for it): the quadrature where
@@ -101,7 +105,8 @@ def resolve_method(method: str, model: Model, solver: Solver | None = None) -> s
     if method in reasons:
         if reasons[method] is not None:
             raise ValueError(
-                f"method={method!r} cannot solve this model: {reasons[method]}; valid: method='ode' or method='auto'"
+                f"method={method!r} cannot solve this model: {reasons[method]}; valid: "
+                "method='ode' or method='auto'"
             )
         return method
     if method == "ode" or solver is not None:
@@ -197,9 +202,9 @@ class ImpactResult(eqx.Module):
         )
 
     def lfe_octave_dB(self) -> jax.Array:
-        """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.levels.lfe_octave_dB``) of the force record
-        of ``rate_Hz`` over ``duration_s``, from its contact samples (exact: the rest is zero);
-        shape (..., 6), NaN where the solve failed."""
+        """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.levels.lfe_octave_dB``) of the force
+        record of ``rate_Hz`` over ``duration_s``, from its contact samples (exact: the rest is
+        zero); shape (..., 6), NaN where the solve failed."""
         from ..spectrum.levels import lfe_octave_dB
 
         return lfe_octave_dB(
@@ -249,9 +254,9 @@ def simulate(
     The model is a :class:`~rbjax.terms.model.Model`, the one calling convention of rbjax
     (``trajectory``, ``fit``, ``batch``, the studies take the same): ``simulate(h, fit.ball,
     fit.model)`` runs a fitted model. The keywords ``gas``, ``blocked_force``, ``damping``,
-    ``stiffening``, ``max_deflection_ratio``, ``ball_mode``, ``series`` and ``floor`` are a thin shortcut that
-    builds the ``Model`` (``make_model``) when no ``model`` is given; giving both is a
-    ``ValueError``.
+    ``stiffening``, ``max_deflection_ratio``, ``ball_mode``, ``series`` and ``floor`` are a thin
+    shortcut that builds the ``Model`` (``make_model``) when no ``model`` is given; giving both is
+    a ``ValueError``.
 
     ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
     may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
@@ -264,9 +269,9 @@ def simulate(
       Eq. 7 integrated in δ, ~1e-12, no time stepping) for models without damping on the rigid
       floor; the phase-angle integration (``rbjax.solve.angle``: fixed 8th-order steps in the phase
       angle, ~1e-8) for damped models on the rigid floor; the diffrax ODE otherwise (ball mode,
-      series element, moving floors) or when a ``solver`` is given. Impacts the quadrature or the phase-angle
-      path flags ``solver_failed`` (its error estimate too large) are solved again by the ODE
-      when the inputs are concrete (``"quadrature+ode"``, ``"angle+ode"``).
+      series element, moving floors) or when a ``solver`` is given. Impacts the quadrature or the
+      phase-angle path flags ``solver_failed`` (its error estimate too large) are solved again by
+      the ODE when the inputs are concrete (``"quadrature+ode"``, ``"angle+ode"``).
     * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
     * ``"quadrature"``, ``"angle"``: that path only (``ValueError`` for models it cannot solve).
 
@@ -307,7 +312,8 @@ def simulate(
         )
     elif given:
         raise ValueError(
-            f"simulate got model= and the keyword options {sorted(given)}: give the options in the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out"
+            f"simulate got model= and the keyword options {sorted(given)}: give the options in "
+            f"the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out"
         )
     path = resolve_method(method, model, solver)
     solver = Solver() if solver is None else solver

@@ -289,7 +289,8 @@ class Selection:
         lines = [
             format_table(header, rows),
             "",
-            f"held-out errors: leave-one-height-out over {len(self.recommended.folds)} heights (|Δ|: mean over the folds).",
+            f"held-out errors: leave-one-height-out over {len(self.recommended.folds)} heights "
+            "(|Δ|: mean over the folds).",
             f"rule: {self.rule}.",
             f"recommended: {self.recommended.label}.",
             self.blocked_force_note,
@@ -329,7 +330,8 @@ def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
     candidates = [c for c in candidates if math.isfinite(c.cv_error_pct)]
     if not candidates:
         raise ValueError(
-            f"every candidate failed cross-validation (non-finite held-out error): {', '.join(c.label for c in failed)}"
+            "every candidate failed cross-validation (non-finite held-out error): "
+            f"{', '.join(c.label for c in failed)}"
         )
     best = min(candidates, key=lambda c: c.cv_error_pct)
     within = tuple(c for c in candidates if c is best or _paired(c, best)[0] <= _paired(c, best)[1])
@@ -350,15 +352,17 @@ def _blocked_force_note(candidates, chosen: Candidate) -> str:
         return "blocked force: not compared."
     mean, se = _paired(pap, mom)
     verdict = (
-        "the data support 'momentum' (the floor also takes the momentum flux (M/2R)δ̇² in compression)"
+        "the data support 'momentum' (the floor also takes the momentum flux (M/2R)δ̇² in "
+        "compression)"
         if mean > 2 * se
         else "the data support 'paper' (F_B + F_G + F_d)"
         if mean < -2 * se
         else "the data do not distinguish the two definitions"
     )
     return (
-        f"blocked force ({chosen.model_name}): held-out error {mom.cv_error_pct:.2f} % with 'momentum', "
-        f"{pap.cv_error_pct:.2f} % with 'paper' (paper − momentum = {mean:+.2f} ± {se:.2f} %): {verdict}."
+        f"blocked force ({chosen.model_name}): held-out error {mom.cv_error_pct:.2f} % with "
+        f"'momentum', {pap.cv_error_pct:.2f} % with 'paper' (paper − momentum = {mean:+.2f} ± "
+        f"{se:.2f} %): {verdict}."
     )
 
 

@@ -10,7 +10,7 @@
 
 A fit's JSON output carries these two keys, so ``rbjax simulate --params FIT.json`` predicts
 with the fitted model.
-"""
+"""  # noqa: E501
 
 from __future__ import annotations
 

@@ -20,8 +20,8 @@
   :mod:`~rbjax.studies.sensitivity.dgsm`); :func:`global_sensitivity`
   (:mod:`~rbjax.studies.sensitivity.study`) applies any of them to the impact model.
 * **Conformance probability** (:func:`conformance_probability`,
-  :mod:`rbjax.studies.sensitivity.conformance`): Monte Carlo probability that a ball whose drop height,
-  mass or rubber vary stays inside the rubber-ball tolerances (ISO 16283-2:2020 Table A.1 =
+  :mod:`rbjax.studies.sensitivity.conformance`): Monte Carlo probability that a ball whose drop
+  height, mass or rubber vary stays inside the rubber-ball tolerances (ISO 16283-2:2020 Table A.1 =
   ISO 10140-5:2010 Table F.1 = JIS A 1418-2:2019 Table A.2: L_FE per octave band 31.5–500 Hz,
   contact time, restitution, mass, drop height), with Wilson score confidence intervals.
 """

@@ -91,7 +91,10 @@ class DGSMResult(IndexResult):
     _DESIGN = ("n_base", "delta", "confidence", "seconds_exact", "seconds_fd")
 
     def _title(self) -> str:
-        return f"DGSM, {self.n_base} base points: exact gradients ({self.seconds_exact:.2f} s) and finite differences ({self.n_evaluations} evaluations, {self.seconds_fd:.2f} s)"
+        return (
+            f"DGSM, {self.n_base} base points: exact gradients ({self.seconds_exact:.2f} s) and "
+            f"finite differences ({self.n_evaluations} evaluations, {self.seconds_fd:.2f} s)"
+        )
 
     def _extra(self, output: str) -> dict:
         return super()._extra(output) | {"variance": self.variance[output]}

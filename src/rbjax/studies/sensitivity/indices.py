@@ -203,7 +203,8 @@ def morris_screening(
         k = check_count("optimal_trajectories", optimal_trajectories, 2)
         if k >= r:
             raise ValueError(
-                f"optimal_trajectories={k!r} must be fewer than n_trajectories={r!r} (the candidates it picks from)"
+                f"optimal_trajectories={k!r} must be fewer than n_trajectories={r!r} "
+                "(the candidates it picks from)"
             )
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)

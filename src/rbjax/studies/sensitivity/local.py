@@ -85,7 +85,8 @@ class Sensitivity:
         return out
 
     def to_dict(self) -> list[dict]:
-        """One dict per height: ``height_m``, ``status``, ``values``, ``jacobian``, ``elasticity``."""
+        """One dict per height: ``height_m``, ``status``, ``values``, ``jacobian``,
+        ``elasticity``."""
         el = self.elasticity
         names = self.status_name
         rows = []
@@ -126,7 +127,8 @@ class Sensitivity:
         n = len(self.height_m)
         if not (isinstance(height_index, (int, np.integer)) and 0 <= height_index < n):
             raise ValueError(
-                f"height_index={height_index!r} is outside the valid range: an integer in [0, {n - 1}]"
+                f"height_index={height_index!r} is outside the valid range: "
+                f"an integer in [0, {n - 1}]"
             )
         i = int(height_index)
         el = self.elasticity
@@ -163,7 +165,8 @@ class Sensitivity:
 def _local_jacobian_fn(
     names: tuple, wrt: tuple, solver: Solver, n_times: int, n_total: int, rate_Hz: float
 ) -> Callable:
-    """Jitted (θ, ball, model) → (values, tangents per wrt parameter, status); one compile per setup."""
+    """Jitted (θ, ball, model) → (values, tangents per wrt parameter, status); one compile per
+    setup."""
     from ...spectrum.levels import lfe_octave_dB
 
     def outputs(theta, ball, model):

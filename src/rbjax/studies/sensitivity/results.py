@@ -186,7 +186,10 @@ class SobolResult(IndexResult):
     _DESIGN = ("n_base", "design", "confidence")
 
     def _title(self) -> str:
-        return f"Sobol indices, {self.n_evaluations} evaluations (N = {self.n_base}, {self.design} design), {self.confidence:.0%} bootstrap CI"
+        return (
+            f"Sobol indices, {self.n_evaluations} evaluations (N = {self.n_base}, {self.design} "
+            f"design), {self.confidence:.0%} bootstrap CI"
+        )
 
     def _extra(self, output: str) -> dict:
         return super()._extra(output) | {
@@ -244,7 +247,10 @@ class MorrisResult(IndexResult):
     _DESIGN = ("n_trajectories", "n_levels", "optimal_trajectories", "confidence")
 
     def _title(self) -> str:
-        return f"Morris screening, {self.n_evaluations} evaluations ({self.n_trajectories} trajectories, {self.n_levels} levels)"
+        return (
+            f"Morris screening, {self.n_evaluations} evaluations ({self.n_trajectories} "
+            f"trajectories, {self.n_levels} levels)"
+        )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -273,7 +279,10 @@ class FastResult(IndexResult):
     _DESIGN = ("n_per_parameter", "interference", "confidence")
 
     def _title(self) -> str:
-        return f"eFAST indices, {self.n_evaluations} evaluations (N = {self.n_per_parameter} per parameter, M = {self.interference})"
+        return (
+            f"eFAST indices, {self.n_evaluations} evaluations (N = {self.n_per_parameter} per "
+            f"parameter, M = {self.interference})"
+        )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,4 +319,7 @@ class PawnResult(IndexResult):
         }
 
     def _title(self) -> str:
-        return f"PAWN indices (KS statistics), {self.n_evaluations} evaluations, {self.n_conditioning} slices"
+        return (
+            f"PAWN indices (KS statistics), {self.n_evaluations} evaluations, "
+            f"{self.n_conditioning} slices"
+        )
