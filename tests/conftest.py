@@ -15,6 +15,10 @@ import pytest
 
 jax.config.update("jax_enable_x64", True)
 os.environ["RBJAX_CACHE_DIR"] = ""
+# One CPU device in every test process, whichever test comes first: a command run in process
+# (tests/cli_runner.py) asks for one device per core, which JAX grants only before it starts.
+# The split over several devices is tested in subprocesses (tests/solve/test_devices.py).
+jax.devices()
 
 import rbjax  # noqa: E402,F401  (importing rbjax also enables x64; kept explicit above)
 from rbjax.fit import program_store  # noqa: E402

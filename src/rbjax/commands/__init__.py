@@ -113,16 +113,18 @@ def use_cpu_devices(count: int | None = None) -> None:
     """Give JAX ``count`` CPU devices (default: one per usable core) before it starts, so that
     forward batches are split over every core (:func:`rbjax.solve.simulate` and
     :func:`rbjax.solve.batch.evaluate` do so when there are several devices). Left alone where
-    ``XLA_FLAGS`` already sets a count or JAX's backend is running (a second command in one
-    process): its devices are used as they are."""
+    ``JAX_NUM_CPU_DEVICES`` or ``XLA_FLAGS`` already sets a count, or JAX's backend is running
+    (a second command in one process): its devices are used as they are."""
     import jax
 
     from ..studies.executors import usable_cores
 
     if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
         raise ValueError(f"--cpu-devices={count!r} must be an integer ≥ 1")
-    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
-        return
+    if "JAX_NUM_CPU_DEVICES" in os.environ or "xla_force_host_platform_device_count" in (
+        os.environ.get("XLA_FLAGS", "")
+    ):
+        return  # the user chose
     try:
         jax.config.update("jax_num_cpu_devices", count or usable_cores())
     except RuntimeError:  # the backend is running

@@ -6,6 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
+from ..studies.executors import single_threaded_blas
 from . import add_command, add_parallel_options, parallel_of, progress
 from ._fit_output import finish
 
@@ -50,9 +51,11 @@ def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
         "--lowpass-hz",
         default="auto",
         metavar="HZ",
-        help="cutoff of the measuring chain's causal 4th-order Butterworth low-pass, applied to the "
-        "predictions too; 'none' for no filter; default 'auto' (as the recordings declare; 1250 Hz for "
-        "the shipped emulated recordings)",
+        help=(
+            "cutoff of the measuring chain's causal 4th-order Butterworth low-pass, applied to "
+            "the predictions too; 'none' for no filter; default 'auto' (as the recordings "
+            "declare; 1250 Hz for the shipped emulated recordings)"
+        ),
     )
     p.add_argument(
         "--all-drops",
@@ -68,7 +71,10 @@ def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
     p.add_argument(
         "--strict",
         action="store_true",
-        help="refuse a clipped recording (default: leave it out, fit the others and say so in the report)",
+        help=(
+            "refuse a clipped recording (default: leave it out, fit the others and say so in the "
+            "report)"
+        ),
     )
 
 
@@ -114,7 +120,8 @@ def load_fit_data(args):
         progress(f"excluded {e['source']}: {e['reason']}")
     chain = f"{data.lowpass_Hz:g} Hz low-pass" if data.lowpass_Hz else "no low-pass"
     progress(
-        f"{len(recs)} recordings, {data.n_records} records at {', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})"
+        f"{len(recs)} recordings, {data.n_records} records at "
+        f"{', '.join(f'{h:g}' for h in data.heights_m)} m ({chain})"
     )
     return data
 
@@ -132,19 +139,28 @@ def register(subparsers) -> None:
         "--summary",
         default=None,
         metavar="TABLE",
-        help="fit to a table of summary figures per drop height (.csv or .toml) instead of recordings",
+        help=(
+            "fit to a table of summary figures per drop height (.csv or .toml) instead of "
+            "recordings"
+        ),
     )
     p.add_argument(
         "--model",
         default=None,
         metavar="NAME",
-        help="paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode or +series-kelvin-voigt); default: choose by cross-validation",
+        help=(
+            "paper, kelvin-voigt, hunt-crossley, zener (+stiffening) (+ball-mode or "
+            "+series-kelvin-voigt); default: choose by cross-validation"
+        ),
     )
     p.add_argument(
         "--blocked-force",
         choices=("paper", "momentum"),
         default=None,
-        help="floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in compression); default paper with --model, both compared without",
+        help=(
+            "floor force definition (paper: F_B+F_G+F_d; momentum: adds (M/2R)δ̇² in "
+            "compression); default paper with --model, both compared without"
+        ),
     )
     p.add_argument(
         "--fix",
@@ -163,7 +179,10 @@ def register(subparsers) -> None:
         "--method",
         choices=("auto", "samples", "ode"),
         default="auto",
-        help="the prediction: samples (the force at the records' own samples by fixed steps; auto's choice) or ode (the diffrax ODE with its events, the reference)",
+        help=(
+            "the prediction: samples (the force at the records' own samples by fixed steps; "
+            "auto's choice) or ode (the diffrax ODE with its events, the reference)"
+        ),
     )
     p.add_argument(
         "--out",
@@ -188,13 +207,14 @@ def _check_model_and_fix(model, fix):
     extra = sorted(set(fix) - common)
     if extra:
         raise ValueError(
-            f"--fix {', '.join(extra)}: without --model only parameters every candidate has can be fixed "
-            f"({', '.join(sorted(common))}); give --model"
+            f"--fix {', '.join(extra)}: without --model only parameters every candidate has can "
+            f"be fixed ({', '.join(sorted(common))}); give --model"
         )
     validate_fix(common, fix)
 
 
 def run(args) -> int:
+    single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..fit import fit
 
     if args.summary is not None or not args.paths:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..studies.executors import single_threaded_blas
 from . import add_command, add_parallel_options, emit_json, parallel_of, progress, write_json_file
 from .fit import add_data_options, load_fit_data
 
@@ -20,7 +21,8 @@ hunt-crossley+series-kelvin-voigt (its massless limit, held off at C = 0).
 examples:
   rbjax select recordings/
   rbjax select recordings/ --candidates paper,hunt-crossley --blocked-force momentum
-  rbjax select recordings/ --candidates hunt-crossley,hunt-crossley+ball-mode --blocked-force momentum
+  rbjax select recordings/ --candidates hunt-crossley,hunt-crossley+ball-mode \
+--blocked-force momentum
   rbjax select recordings/ --hold-out 0.2,0.8 --json > selection.json
 """
 
@@ -38,7 +40,12 @@ def register(subparsers) -> None:
         "--candidates",
         default=None,
         metavar="NAMES",
-        help="comma-separated model names (suffixes +stiffening, +ball-mode, +series-kelvin-voigt), each optionally NAME/paper or NAME/momentum (default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,hunt-crossley+series-kelvin-voigt)",
+        help=(
+            "comma-separated model names (suffixes +stiffening, +ball-mode, "
+            "+series-kelvin-voigt), each optionally NAME/paper or NAME/momentum "
+            "(default: paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,"
+            "hunt-crossley+series-kelvin-voigt)"
+        ),
     )
     p.add_argument(
         "--blocked-force",
@@ -50,7 +57,10 @@ def register(subparsers) -> None:
         "--hold-out",
         default=None,
         metavar="HEIGHTS",
-        help="also fit without these heights (comma-separated, m) and tabulate the errors predicting them",
+        help=(
+            "also fit without these heights (comma-separated, m) and tabulate the errors "
+            "predicting them"
+        ),
     )
     p.add_argument("--out", default=None, metavar="DIR", help="write selection.json into DIR")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
@@ -88,6 +98,7 @@ def _parse_heights(text):
 
 
 def run(args) -> int:
+    single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..studies.selection import BLOCKED_FORCES, held_out_comparison, select_model
 
     forces = BLOCKED_FORCES if args.blocked_force == "both" else (args.blocked_force,)
@@ -100,7 +111,8 @@ def run(args) -> int:
         missing = [h for h in held if not np.any(np.isclose(data.heights_m, h, atol=5e-4))]
         if missing:
             raise ValueError(
-                f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: {', '.join(f'{h:g}' for h in data.heights_m)}"
+                f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: "
+                f"{', '.join(f'{h:g}' for h in data.heights_m)}"
             )
     parallel = parallel_of(args)
     selection = select_model(

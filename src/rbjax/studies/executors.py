@@ -143,8 +143,25 @@ INHERITED_OPTIONS = (
 )
 
 
+#: Worker processes run one task at a time on one core: BLAS runs single-threaded in them.
+#: (OpenBLAS's threads, started at import and left to roam, made two workers on two cores run
+#: the fits of a selection slower than one process; one thread each, the same bits.)
+_BLAS_LIMIT: list = []
+
+
+def single_threaded_blas() -> None:
+    """Limit the BLAS libraries loaded in this process (OpenBLAS, MKL, BLIS) to one thread each,
+    for the rest of the process (``threadpoolctl``)."""
+    from threadpoolctl import threadpool_limits
+
+    if not _BLAS_LIMIT:
+        _BLAS_LIMIT.append(threadpool_limits(limits=1))
+
+
 def _worker_start(options: dict) -> None:
-    """A worker process's JAX: one CPU device, float64, the parent's options."""
+    """A worker process's JAX: one CPU device, float64, the parent's options; BLAS on one
+    thread."""
+    single_threaded_blas()
     import jax
 
     jax.config.update("jax_platforms", "cpu")

@@ -10,7 +10,7 @@ Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.
     seed = 0
     height_m = 1.0            # the nominal drop height (also a parameter: see below)
     outputs = ["contact_time_s", "peak_force_N", "restitution", "lfe"]
-    chunk_size = 1024         # impacts per device per step
+    chunk_size = 8192         # impacts per device per step (default: sized per solve path)
 
     [ball]                    # nominal ball (defaults: rbjax.JIS_RUBBER_BALL)
     youngs_Pa = 1.6e6
@@ -200,7 +200,7 @@ def _study(config: dict, *, evaluator: Callable | None, progress: bool, devices)
         model=model,
         solver=solver,
         seed=int(config.get("seed", 0)),
-        chunk_size=int(config.get("chunk_size", 1024)),
+        chunk_size=None if config.get("chunk_size") is None else int(config["chunk_size"]),
         devices=devices,
         progress=progress,
         evaluator=evaluator,

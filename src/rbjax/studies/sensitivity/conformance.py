@@ -54,7 +54,8 @@ def _distribution(name: str, spec) -> tuple[str, float, float]:
             ) from None
         if kind not in DISTRIBUTION_KINDS:
             raise ValueError(
-                f"distributions[{name!r}] kind {kind!r} is not known; valid: {', '.join(DISTRIBUTION_KINDS)}"
+                f"distributions[{name!r}] kind {kind!r} is not known; valid: "
+                f"{', '.join(DISTRIBUTION_KINDS)}"
             )
     a, b = float(a), float(b)
     ok = (
@@ -143,7 +144,8 @@ class ConformanceProbability:
 
     def table(self) -> str:
         lines = [
-            f"Conformance probability, {self.n_valid} valid of {self.n_samples} samples, {self.confidence:.0%} Wilson interval"
+            f"Conformance probability, {self.n_valid} valid of {self.n_samples} samples, "
+            f"{self.confidence:.0%} Wilson interval"
         ]
         for k, p in self.probability.items():
             lo, hi = self.interval[k]
@@ -152,9 +154,10 @@ class ConformanceProbability:
 
 
 def conformance_flags(values: Mapping, tolerances=None) -> dict[str, np.ndarray]:
-    """Per-sample pass flags, vectorised, by the rule of ``rbjax.spectrum.standards.check_conformance``
-    (lower ≤ value ≤ upper of ``RUBBER_BALL_TOLERANCES``). ``values`` holds arrays of the band
-    levels ``lfe_<band>_dB``, ``contact_time_s``, ``restitution``, ``mass_kg``, ``height_m``."""
+    """Per-sample pass flags, vectorised, by the rule of
+    ``rbjax.spectrum.standards.check_conformance`` (lower ≤ value ≤ upper of
+    ``RUBBER_BALL_TOLERANCES``). ``values`` holds arrays of the band levels ``lfe_<band>_dB``,
+    ``contact_time_s``, ``restitution``, ``mass_kg``, ``height_m``."""
     from ...spectrum.standards import RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS
 
     tol = RUBBER_BALL_TOLERANCES if tolerances is None else tolerances
@@ -192,7 +195,7 @@ def conformance_probability(
     model: Model | None = None,
     solver: Solver | None = None,
     confidence: float = 0.95,
-    chunk_size: int = 1024,
+    chunk_size: int | None = None,
     devices=None,
     progress: bool = False,
     evaluator: Callable | None = None,
@@ -206,12 +209,12 @@ def conformance_probability(
     "youngs_Pa": ("lognormal", 1.6e6, 0.1)}``. Each of ``n_samples`` draws is simulated (the
     others keep ``height_m``, ``ball`` and the model), its L_FE per octave band (Eq. 11, §2.4),
     contact time, restitution, mass and drop height are checked against
-    ``rbjax.spectrum.standards.RUBBER_BALL_TOLERANCES`` (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 =
-    JIS A 1418-2 Table A.2), and the pass fractions come with Wilson score intervals. The L_FE
-    limits hold for the standard drop height, so vary ``height_m`` around 1 m. Draws whose solve
-    is flagged (status ≠ 0) are left out and counted (``n_valid``). ``evaluator``: as in
-    :func:`~rbjax.studies.sensitivity.global_sensitivity` (default: ``rbjax.solve.batch.evaluate``
-    in this process).
+    ``rbjax.spectrum.standards.RUBBER_BALL_TOLERANCES`` (ISO 16283-2 Table A.1 =
+    ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), and the pass fractions come with Wilson score
+    intervals. The L_FE limits hold for the standard drop height, so vary ``height_m`` around 1 m.
+    Draws whose solve is flagged (status ≠ 0) are left out and counted (``n_valid``). ``evaluator``:
+    as in :func:`~rbjax.studies.sensitivity.global_sensitivity` (default:
+    ``rbjax.solve.batch.evaluate`` in this process).
     """
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
@@ -221,7 +224,8 @@ def conformance_probability(
         )
     if not isinstance(distributions, Mapping) or not distributions:
         raise ValueError(
-            f"distributions={distributions!r} must be a non-empty mapping of parameter name to distribution"
+            f"distributions={distributions!r} must be a non-empty mapping of parameter name "
+            "to distribution"
         )
     distributions = {canonical_name(k, model): v for k, v in distributions.items()}
     parsed = {k: _distribution(k, v) for k, v in distributions.items()}

@@ -42,7 +42,8 @@ METHODS: dict[str, Callable] = {
 def _signature(method: str) -> inspect.Signature:
     if method not in METHODS:
         raise ValueError(
-            f"method={method!r} is not a known sensitivity method; valid: {', '.join(map(repr, METHODS))}"
+            f"method={method!r} is not a known sensitivity method; valid: "
+            f"{', '.join(map(repr, METHODS))}"
         )
     return inspect.signature(METHODS[method])
 
@@ -93,7 +94,7 @@ def global_sensitivity(
     solver: Solver | None = None,
     path: str = "auto",
     seed: int = 0,
-    chunk_size: int = 1024,
+    chunk_size: int | None = None,
     devices=None,
     progress: bool = False,
     evaluator: Callable | None = None,
@@ -116,7 +117,8 @@ def global_sensitivity(
         solver, path: the solve path, as ``rbjax.solve.batch.evaluate``'s ``solver`` and
             ``method`` (default: the fastest exact path the model allows).
         seed: of the design and of SALib's bootstrap.
-        chunk_size, devices, progress: batching and sharding (``rbjax.solve.sharded``).
+        chunk_size, devices, progress: batching over the devices (``rbjax.solve.devices``;
+            ``chunk_size`` default: a size per solve path).
         evaluator: evaluates the design's rows, called as ``evaluator(samples, gradients,
             **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
             ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweep`` passes
