@@ -6,7 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
-from ..studies.executors import single_threaded_blas
+from ..studies.executors import prestart, single_threaded_blas
 from . import add_command, add_parallel_options, parallel_of, progress
 from ._fit_output import finish
 
@@ -223,6 +223,9 @@ def run(args) -> int:
         return run_summary(args, parse_fix(args.fix))
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
+    parallel = parallel_of(args) if args.model is None else None
+    if parallel is not None:
+        prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
     selection = None
     if args.model is None:
@@ -239,7 +242,7 @@ def run(args) -> int:
             fix=fix,
             optimizer=args.optimizer,
             method=args.method,
-            workers=parallel_of(args),
+            workers=parallel,
             progress=not args.quiet,
         )
         result = selection.recommended.fit

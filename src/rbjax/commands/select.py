@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..studies.executors import single_threaded_blas
+from ..studies.executors import prestart, single_threaded_blas
 from . import add_command, add_parallel_options, emit_json, parallel_of, progress, write_json_file
 from .fit import add_data_options, load_fit_data
 
@@ -104,6 +104,8 @@ def run(args) -> int:
     forces = BLOCKED_FORCES if args.blocked_force == "both" else (args.blocked_force,)
     candidates = _parse_candidates(args.candidates, forces)
     held = _parse_heights(args.hold_out)
+    parallel = parallel_of(args)
+    prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
     if held is not None:
         import numpy as np
@@ -114,7 +116,6 @@ def run(args) -> int:
                 f"--hold-out: no record at {', '.join(f'{h:g}' for h in missing)} m; heights: "
                 f"{', '.join(f'{h:g}' for h in data.heights_m)}"
             )
-    parallel = parallel_of(args)
     selection = select_model(
         data,
         candidates,

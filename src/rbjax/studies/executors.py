@@ -25,6 +25,7 @@ then the run fails naming the task: never a silently missing result.
 
 from __future__ import annotations
 
+import atexit
 import concurrent.futures as cf
 import contextlib
 import dataclasses
@@ -36,7 +37,17 @@ from typing import Any
 
 from .._progress import progress as say
 
-__all__ = ["Parallel", "Task", "TaskError", "usable_cores", "run_tasks", "open_executor"]
+__all__ = [
+    "Parallel",
+    "Task",
+    "TaskError",
+    "usable_cores",
+    "run_tasks",
+    "open_executor",
+    "prestart",
+    "shutdown_pools",
+    "single_threaded_blas",
+]
 
 #: Seconds to wait for a Dask scheduler to answer before the run fails.
 CONNECT_TIMEOUT_S = 5.0
@@ -174,10 +185,7 @@ def _worker_start(options: dict) -> None:
         jax.config.update(name, value)
 
 
-def _local_pool(n: int) -> cf.Executor:
-    import jax
-
-    options = {k: jax.config.values[k] for k in INHERITED_OPTIONS if k in jax.config.values}
+def _local_pool(n: int, options: dict) -> cf.ProcessPoolExecutor:
     return cf.ProcessPoolExecutor(
         max_workers=n,
         mp_context=multiprocessing.get_context("spawn"),
@@ -218,11 +226,62 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     elif parallel.in_process:
         yield _InProcess()
     else:
-        pool = _local_pool(parallel.local_workers)
+        pool = local_pool(parallel.local_workers)
         try:
             yield pool
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+        except cf.process.BrokenProcessPool:
+            _drop(pool)
+            raise
+
+
+#: The local pools of this process, by worker count and JAX options: kept until the process
+#: ends, so that a second study (or the selection after its data are read) finds its workers
+#: started, their imports done and their programs loaded.
+_POOLS: dict[tuple, cf.ProcessPoolExecutor] = {}
+
+
+def local_pool(n: int) -> cf.ProcessPoolExecutor:
+    """This process's pool of ``n`` local workers with its current JAX options (made on first
+    use, kept until the process ends or a worker dies)."""
+    import jax
+
+    options = {k: jax.config.values[k] for k in INHERITED_OPTIONS if k in jax.config.values}
+    key = (n, tuple(sorted(options.items())))
+    pool = _POOLS.get(key)
+    if pool is None:
+        pool = _POOLS[key] = _local_pool(n, options)
+    return pool
+
+
+def _drop(pool: cf.ProcessPoolExecutor) -> None:
+    for key, value in list(_POOLS.items()):
+        if value is pool:
+            del _POOLS[key]
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
+@atexit.register
+def shutdown_pools() -> None:
+    """Stop every local pool of this process (at exit; or to free the workers' memory)."""
+    for pool in list(_POOLS.values()):
+        pool.shutdown(wait=True, cancel_futures=True)
+    _POOLS.clear()
+
+
+def _warm() -> None:
+    """Imports the fit and the studies (a worker's first task would otherwise wait for them)."""
+    import rbjax.fit  # noqa: F401
+    import rbjax.studies.selection  # noqa: F401
+
+
+def prestart(parallel: Parallel | int | None) -> None:
+    """Start ``parallel``'s local workers now and have them import rbjax, while this process
+    does other work (reads the data); nothing for the other kinds of executor."""
+    parallel = as_parallel(parallel)
+    if parallel.scheduler is None and parallel.executor is None and not parallel.in_process:
+        pool = local_pool(parallel.local_workers)
+        for _ in range(parallel.local_workers):
+            pool.submit(_warm)
 
 
 def run_tasks(
@@ -276,6 +335,14 @@ def _drive(executor, parallel, all_tasks, results, then, label) -> None:
         if i not in results:
             heapq.heappush(ready, (-task.cost, i))
     running: dict[cf.Future, int] = {}
+    try:
+        _loop(executor, all_tasks, results, then, label, width, ready, running)
+    finally:
+        for future in running:  # after a failure: nothing more of this run starts
+            future.cancel()
+
+
+def _loop(executor, all_tasks, results, then, label, width, ready, running) -> None:
     while ready or running:
         while ready and len(running) < width:
             _, i = heapq.heappop(ready)
