@@ -1,8 +1,10 @@
 """Studies built on the solve and the fit: model selection by held-out error
 (:mod:`~rbjax.studies.selection`), the growth of L_FE per doubling of drop height
 (:mod:`~rbjax.studies.growth`), sensitivities (:mod:`rbjax.studies.sensitivity`) and TOML
-sweeps (:mod:`~rbjax.studies.sweep`)."""
+sweeps (:mod:`~rbjax.studies.sweep`), their independent tasks run where
+:class:`~rbjax.studies.executors.Parallel` says (in process, worker processes, a Dask cluster)."""
 
+from .executors import Parallel, Task, TaskError, run_tasks
 from .growth import (
     Growth,
     GrowthError,
@@ -19,9 +21,13 @@ from .selection import (
     recommend,
     select_model,
 )
-from .sweep import load_config, run_sweep, write_outputs
+from .sweep import load_config, merge_parts, run_part, run_sweep, write_outputs
 
 __all__ = [
+    "Parallel",
+    "Task",
+    "TaskError",
+    "run_tasks",
     "Growth",
     "GrowthError",
     "growth_per_doubling_dB",
@@ -36,5 +42,7 @@ __all__ = [
     "select_model",
     "load_config",
     "run_sweep",
+    "run_part",
+    "merge_parts",
     "write_outputs",
 ]
