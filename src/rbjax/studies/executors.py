@@ -269,9 +269,8 @@ def shutdown_pools() -> None:
 
 
 def _warm() -> None:
-    """Imports the fit and the studies (a worker's first task would otherwise wait for them)."""
+    """Imports JAX and the fit (a worker's first task would otherwise wait for them)."""
     import rbjax.fit  # noqa: F401
-    import rbjax.studies.selection  # noqa: F401
 
 
 def prestart(parallel: Parallel | int | None) -> None:
