@@ -82,8 +82,10 @@ class Parallel:
 
     Args:
         workers: local worker processes; ``None``: the usable cores; ``1``: in this process.
-        scheduler: address of a Dask scheduler (``tcp://host:port``) instead of local workers.
-        executor: an executor made by the caller, used as it is (and not closed here).
+        scheduler: address of a Dask scheduler (``tcp://host:port``); given, it is used and
+            ``workers`` is not (the cluster has its own).
+        executor: an executor made by the caller, used as it is (and not closed here); given,
+            ``workers`` is not used either.
         retries: how often the unfinished tasks of a local pool whose worker died are run
             again in a new pool before the run fails.
     """
