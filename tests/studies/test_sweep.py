@@ -31,10 +31,10 @@ from rbjax.studies.sweep import (
     evaluate,
     load_config,
     parameter_names,
-    part_rows,
     run_sweep,
     sharded_map,
 )
+from rbjax.studies.sweep_parts import part_rows
 
 import scipy_reference as ref
 
@@ -442,7 +442,7 @@ def test_a_sweep_in_parts_merges_to_the_single_run(tmp_path, capsys, in_process)
 
 
 def test_a_dgsm_sweep_in_parts_merges_to_the_single_run(tmp_path):
-    from rbjax.studies.sweep import merge_parts, run_part
+    from rbjax.studies.sweep_parts import merge_parts, run_part
 
     config = {  # as test_dgsm_sweep_of_the_impact_model... (the same compiled programs)
         "kind": "dgsm",

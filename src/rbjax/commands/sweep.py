@@ -98,14 +98,8 @@ def run(args) -> int:
     from pathlib import Path
 
     from ..studies.executors import TaskError
-    from ..studies.sweep import (
-        load_config,
-        merge_parts,
-        parse_part,
-        run_part,
-        run_sweep,
-        write_outputs,
-    )
+    from ..studies.sweep import load_config, run_sweep, write_outputs
+    from ..studies.sweep_parts import merge_parts, parse_part, run_part
 
     use_cpu_devices(args.cpu_devices)
     parallel = parallel_of(args)

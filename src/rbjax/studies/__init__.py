@@ -21,7 +21,8 @@ from .selection import (
     recommend,
     select_model,
 )
-from .sweep import load_config, merge_parts, run_part, run_sweep, write_outputs
+from .sweep import load_config, run_sweep, write_outputs
+from .sweep_parts import merge_parts, run_part
 
 __all__ = [
     "Parallel",

@@ -8,7 +8,7 @@ sub-steps, from the longest and the shortest contact. With L_FE, a first pass of
 (:func:`contact_times`) gives the contact time of every row, and every chunk is evaluated with
 the rows of the design's shortest and longest contact beside its own (and dropped after): the
 whole design's window in every chunk. :func:`evaluate_rows` also evaluates one slice of the
-rows that way (a part of a job array, ``rbjax.studies.sweep.run_part``);
+rows that way (a part of a job array, ``rbjax.studies.sweep_parts.run_part``);
 :func:`task_evaluator` is the ``evaluator`` the studies of ``rbjax.studies.sensitivity`` take.
 """
 
