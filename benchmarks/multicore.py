@@ -49,6 +49,21 @@ from _common import (  # noqa: E402
 RECOMMENDED = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10)
 
 
+def timing_row(variant: str, devices: str, n: int, t: dict, err: float) -> dict:
+    """One row of the table: throughput of ``n`` impacts timed as ``t`` (``time_call``)."""
+    return {
+        "variant": variant,
+        "devices": devices,
+        "batch": n,
+        "impacts_per_s": n / t["median_s"],
+        "best_impacts_per_s": n / t["min_s"],
+        "first_s": t["first_s"],
+        "median_s": t["median_s"],
+        "min_s": t["min_s"],
+        "contact_rel_err": err,
+    }
+
+
 def main():
     args = parse_args(__doc__.splitlines()[0])
     info = machine_info()
@@ -89,19 +104,7 @@ def main():
         ):
             t = time_call(lambda: fn(*args_), min_repeats=5)
             err = float(np.max(np.abs(np.asarray(t["out"]) / ref - 1)))
-            rows.append(
-                {
-                    "variant": name,
-                    "devices": label,
-                    "batch": n,
-                    "impacts_per_s": n / t["median_s"],
-                    "best_impacts_per_s": n / t["min_s"],
-                    "first_s": t["first_s"],
-                    "median_s": t["median_s"],
-                    "min_s": t["min_s"],
-                    "contact_rel_err": err,
-                }
-            )
+            rows.append(timing_row(name, label, n, t, err))
             print(
                 f"{name:36s} {label:22s} {n / t['median_s']:10.0f} /s (best "
                 f"{n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}",
@@ -161,16 +164,8 @@ def engine_rows(quick: bool, devices) -> list[dict]:
             err = float(np.max(np.abs(results[label][ok] / one[ok] - 1))) if ok.any() else 0.0
             chunked = results.get("1 device, chunks")
             rows.append(
-                {
-                    "variant": name,
-                    "devices": label,
-                    "batch": n,
-                    "impacts_per_s": n / t["median_s"],
-                    "best_impacts_per_s": n / t["min_s"],
-                    "first_s": t["first_s"],
-                    "median_s": t["median_s"],
-                    "min_s": t["min_s"],
-                    "contact_rel_err": err,
+                timing_row(name, label, n, t, err)
+                | {
                     "bitwise_1_device": None
                     if chunked is None
                     else bool(np.array_equal(results[label], chunked, equal_nan=True)),
