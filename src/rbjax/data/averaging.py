@@ -10,7 +10,7 @@ import numpy as np
 from scipy.fft import next_fast_len
 
 from .errors import DataError, DataWarning
-from .recording import Recording, _require_same_rate
+from .recording import Recording, require_same_rate
 from .shift import fractional_shift
 
 __all__ = ["average"]
@@ -57,7 +57,7 @@ def average(
         if r.onset_s is None:
             raise DataError(f"{r.source}: no onset_s; condition() the recording first")
         onsets.append(r.onset_s)
-    _require_same_rate(recs)
+    require_same_rate(recs)
     if domain not in ("frequency", "time"):
         raise ValueError(f"domain={domain!r}: use 'frequency' or 'time'")
     rate = recs[0].rate_Hz

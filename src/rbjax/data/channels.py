@@ -10,9 +10,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .columns import _FORCE_UNITS, _infer_rate
+from .columns import FORCE_UNITS, infer_rate
 from .errors import ClippedRecordError, DataError, MissingFormatError
-from .recording import MIN_SAMPLES, Recording, _check_force, _file_recording
+from .recording import MIN_SAMPLES, Recording, check_force, file_recording
 
 #: The optional dependencies of the formats, installed by ``pip install 'rbjax[formats]'``.
 FORMATS_EXTRA = "formats"
@@ -139,19 +139,19 @@ def channel_newtons(ch: Channel, calibration_N_per_FS, source: str) -> np.ndarra
     x = np.asarray(ch.samples)
     if x.dtype.kind in "iu":
         force = integer_newtons(x, calibration_N_per_FS, source, f"samples in channel {ch.name!r}")
-        _check_force(force, source, flat_top=False)
+        check_force(force, source, flat_top=False)
         return force
     if x.dtype.kind != "f":
         raise DataError(f"{source}: channel {ch.name!r} holds {x.dtype} samples, not numbers")
     unit = None if ch.unit is None or not ch.unit.strip() else ch.unit.strip()
     force = x.astype(np.float64)
-    if unit is not None and unit.lower() in _FORCE_UNITS:
+    if unit is not None and unit.lower() in FORCE_UNITS:
         if calibration_N_per_FS is not None:
             raise DataError(
                 f"{source}: channel {ch.name!r} is already in {unit}: do not pass "
                 "calibration_N_per_FS"
             )
-        force = force * _FORCE_UNITS[unit.lower()]
+        force = force * FORCE_UNITS[unit.lower()]
     elif unit is not None and calibration_N_per_FS is None:
         raise DataError(
             f"{source}: channel {ch.name!r} is in {unit!r}: pass calibration_N_per_FS= "
@@ -159,7 +159,7 @@ def channel_newtons(ch: Channel, calibration_N_per_FS, source: str) -> np.ndarra
         )
     elif calibration_N_per_FS is not None:
         force = force * check_calibration(calibration_N_per_FS, source)
-    _check_force(force, source)
+    check_force(force, source)
     return force
 
 
@@ -184,7 +184,7 @@ def channel_recording(
             raise DataError(
                 f"{source}: the time vector has {t.size} samples, channel {ch.name!r} {force.size}"
             )
-        rate, _, more = _infer_rate(t, ch.time_quantum_s, source)
+        rate, _, more = infer_rate(t, ch.time_quantum_s, source)
         notes += more
     if rate is not None and abs(rate - round(rate)) <= 1e-9 * rate:
         rate = float(round(rate))  # 1 / (1 / 44100 s) in floating point
@@ -196,7 +196,7 @@ def channel_recording(
                 f"{source}: the file gives no sampling rate for channel {ch.name!r}: pass rate_Hz="
             )
         rate = float(rate_Hz)
-    return _file_recording(
+    return file_recording(
         source,
         force,
         rate,

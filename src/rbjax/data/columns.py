@@ -10,13 +10,13 @@ import numpy as np
 from .errors import DataError
 
 _TIME_NAMES = {"time": 1.0, "t": 1.0}
-_FORCE_NAMES = {"force": 1.0, "f": 1.0}
+FORCE_NAMES = {"force": 1.0, "f": 1.0}
 _TIME_UNITS = {None: 1.0, "s": 1.0, "sec": 1.0, "ms": 1e-3}
-_FORCE_UNITS = {None: 1.0, "n": 1.0, "kn": 1e3}
+FORCE_UNITS = {None: 1.0, "n": 1.0, "kn": 1e3}
 _COL_RE = re.compile(r"^\s*([a-z]+)\s*(?:[_\s]\s*([a-z]+)|[\[(]\s*([a-z]+)\s*[\])])?\s*$")
 
 
-def _parse_column(name: str):
+def parse_column(name: str):
     """('time'|'force'|None, scale) for a header field such as ``time_s``, ``F [kN]``."""
     m = _COL_RE.match(name.strip().lower())
     if not m:
@@ -26,14 +26,14 @@ def _parse_column(name: str):
         if unit not in _TIME_UNITS:
             return "time?", unit
         return "time", _TIME_UNITS[unit]
-    if base in _FORCE_NAMES:
-        if unit not in _FORCE_UNITS:
+    if base in FORCE_NAMES:
+        if unit not in FORCE_UNITS:
             return "force?", unit
-        return "force", _FORCE_UNITS[unit]
+        return "force", FORCE_UNITS[unit]
     return None, None
 
 
-def _decimals(s: str) -> int | None:
+def decimal_places(s: str) -> int | None:
     s = s.strip()
     if "e" in s.lower():
         return None
@@ -42,7 +42,7 @@ def _decimals(s: str) -> int | None:
     return len(s.split(".", 1)[1])
 
 
-def _infer_rate(t: np.ndarray, quantum_s: float, source: str) -> tuple[float, float, list[str]]:
+def infer_rate(t: np.ndarray, quantum_s: float, source: str) -> tuple[float, float, list[str]]:
     """Uniform-sampling check of a time column; returns (rate_Hz, t0_s, notes)."""
     dt_steps = np.diff(t)
     if np.any(dt_steps <= 0):

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.signal
 
 from ..spectrum.filters import butter_lowpass_sos
-from .crossings import _quiet, _rising_crossing, estimate_noise_rms_N
+from .crossings import estimate_noise_rms_N, quiet_level, rising_crossing
 from .errors import DataError, DataWarning, NoImpactError, RecordCutOffError
 from .recording import Recording
 from .shift import fractional_shift
@@ -43,7 +43,7 @@ class Impact(NamedTuple):
 # --------------------------------------------------------------------------------------
 
 
-def _default_threshold(noise_rms_N: float) -> float:
+def default_threshold(noise_rms_N: float) -> float:
     return max(10.0, 8.0 * noise_rms_N)
 
 
@@ -70,8 +70,8 @@ def find_impacts(
     x = np.asarray(force_N, dtype=np.float64)
     if x.ndim != 1:
         raise ValueError(f"force_N must be 1-D, got shape {x.shape}")
-    level, noise = _quiet(x)
-    thr = _default_threshold(noise) if threshold_N is None else float(threshold_N)
+    level, noise = quiet_level(x)
+    thr = default_threshold(noise) if threshold_N is None else float(threshold_N)
     y = x - level
     idx = np.flatnonzero(y > thr)
     if idx.size == 0:
@@ -136,7 +136,7 @@ def locate_onset(
     s, e, _ = impact
     ip = s + int(np.argmax(x[s:e]))
     level = fraction * x[ip]
-    return _rising_crossing(x, ip, level, source, start=s) / float(rate_Hz)
+    return rising_crossing(x, ip, level, source, start=s) / float(rate_Hz)
 
 
 # --------------------------------------------------------------------------------------
@@ -201,8 +201,8 @@ def condition(
     rate = recording.rate_Hz
     x = np.array(recording.force_N, dtype=np.float64)
     n = x.size
-    level0, noise = _quiet(x)
-    thr = _default_threshold(noise) if threshold_N is None else float(threshold_N)
+    level0, noise = quiet_level(x)
+    thr = default_threshold(noise) if threshold_N is None else float(threshold_N)
     imps = find_impacts(x, rate, threshold_N=thr, min_separation_s=min_separation_s)
     if not imps:
         raise NoImpactError(
@@ -282,7 +282,7 @@ def condition(
         notes.append(
             f"onset level {level:.3g} N is below 5x the noise rms ({noise:.3g} N): onset is noisy"
         )
-    onset_idx = _rising_crossing(x, ip, level, src, start=s)  # fractional sample index
+    onset_idx = rising_crossing(x, ip, level, src, start=s)  # fractional sample index
 
     # --- window
     m = int(round(window_s * rate))

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import RecordCutOffError
-from .shift import _lagrange4
+from .shift import lagrange4
 
 
-def _segments_stats(x: np.ndarray):
+def segment_stats(x: np.ndarray):
     n = x.size
     L = int(max(16, min(256, n // 16)))
     m = n // L
@@ -22,9 +22,9 @@ def _segments_stats(x: np.ndarray):
     return med, sig
 
 
-def _quiet(x: np.ndarray) -> tuple[float, float]:
+def quiet_level(x: np.ndarray) -> tuple[float, float]:
     """(baseline level, noise rms) from the quietest segments of the record."""
-    med, sig = _segments_stats(np.asarray(x, dtype=np.float64))
+    med, sig = segment_stats(np.asarray(x, dtype=np.float64))
     order = np.argsort(sig)
     low = order[: max(1, len(order) // 4)]
     s0 = float(np.median(sig[low]))
@@ -40,10 +40,10 @@ def estimate_noise_rms_N(force_N) -> float:
     first estimate ``s0``, and the result is the median over all segments with spread
     below ``2 s0`` (so the impact, ringing and drifts do not count).
     """
-    return _quiet(force_N)[1]
+    return quiet_level(force_N)[1]
 
 
-def _solve_crossing(x: np.ndarray, j: int, level: float, sign: float = 1.0) -> float:
+def solve_crossing(x: np.ndarray, j: int, level: float, sign: float = 1.0) -> float:
     """u in [0, 1]: sign*x crosses ``level`` between samples j-1 (u=0) and j (u=1).
 
     Cubic (4-point Lagrange) interpolation on samples j-2..j+1 when available, solved by
@@ -57,14 +57,14 @@ def _solve_crossing(x: np.ndarray, j: int, level: float, sign: float = 1.0) -> f
     lo, hi = 0.0, 1.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if _lagrange4(y4, mid) < level:
+        if lagrange4(y4, mid) < level:
             lo = mid
         else:
             hi = mid
     return 0.5 * (lo + hi)
 
 
-def _rising_crossing(
+def rising_crossing(
     x: np.ndarray, ip: int, level: float, source: str, start: int | None = None
 ) -> float:
     """Sub-sample index where x rises through ``level`` on the edge that leads to ``ip``."""
@@ -80,4 +80,4 @@ def _rising_crossing(
             f"{source}: the impact is already above the onset level at the first sample: "
             "no pre-trigger, onset unknown"
         )
-    return (j - 1) + _solve_crossing(x, j, level)
+    return (j - 1) + solve_crossing(x, j, level)

@@ -16,8 +16,8 @@ import warnings
 import numpy as np
 import scipy.optimize
 
-from .conditioning import _default_threshold, find_impacts
-from .crossings import _quiet, _segments_stats
+from .conditioning import default_threshold, find_impacts
+from .crossings import quiet_level, segment_stats
 from .errors import DataWarning
 from .recording import Recording
 
@@ -49,7 +49,7 @@ QUIET_AFTER_S = 0.020
 
 def _robust_trend(x: np.ndarray) -> np.ndarray:
     """A line through the medians of the record's quiet segments (impacts do not pull it)."""
-    med, sig = _segments_stats(x)
+    med, sig = segment_stats(x)
     if med.size < 2:
         return np.full(x.size, float(np.median(x)))
     seg = x.size // med.size
@@ -169,8 +169,8 @@ def clean(
     rate, n = recording.rate_Hz, recording.n_samples
     notes, log = list(recording.notes), list(recording.log)
     detrended = x - _robust_trend(x)
-    level, noise = _quiet(detrended)
-    thr = _default_threshold(noise) if threshold_N is None else float(threshold_N)
+    level, noise = quiet_level(detrended)
+    thr = default_threshold(noise) if threshold_N is None else float(threshold_N)
     low, high = -float(np.min(detrended - level)), float(np.max(detrended - level))
     if low >= thr and low > 2.0 * high:
         x, detrended = -x, -detrended

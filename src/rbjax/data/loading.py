@@ -20,8 +20,8 @@ from typing import Literal, overload
 from .errors import ClippedRecordError, DataError
 from .matlab import read_mat
 from .readers import read_csv, read_npy
-from .recording import Recording, _require_same_rate
-from .sources import _as_source, height_from_name
+from .recording import Recording, require_same_rate
+from .sources import as_source, height_from_name
 from .tdms import read_tdms
 from .uff import read_uff
 from .wav import read_wav
@@ -114,7 +114,7 @@ def _read_manifest(manifest) -> dict[str, dict]:
         for k, v in manifest.items():
             out[Path(k).name] = dict(v) if isinstance(v, Mapping) else {"height_m": v}
         return out
-    src = _as_source(manifest)
+    src = as_source(manifest)
     text = Path(manifest).read_text(encoding="utf-8-sig")
     rows = [r for r in csv.reader(io.StringIO(text)) if any(c.strip() for c in r)]
     if not rows:
@@ -255,5 +255,5 @@ def load(
             if strict:
                 raise
             recs.append(Excluded(f.name, h, str(err)))
-    _require_same_rate([r for r in recs if isinstance(r, Recording)])
+    require_same_rate([r for r in recs if isinstance(r, Recording)])
     return recs

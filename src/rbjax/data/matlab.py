@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from .channels import Channel, channel_recording, import_extra, pick_channel
-from .columns import _FORCE_NAMES, _parse_column
+from .columns import FORCE_NAMES, parse_column
 from .errors import DataError
 from .recording import MIN_SAMPLES, Recording
-from .sources import _as_source
+from .sources import as_source
 
 __all__ = ["read_mat"]
 
@@ -102,7 +102,7 @@ def _channels(variables: dict[str, np.ndarray], source: str) -> list[Channel]:
                 raise DataError(f"{source}: {name}={v!r} is not a sampling rate (or step)")
             rate = 1.0 / v if leaf.lower() in _STEP_NAMES else v
             continue
-        kind, scale = _parse_column(leaf)
+        kind, scale = parse_column(leaf)
         if a.ndim > 2 or max(a.shape, default=0) < MIN_SAMPLES:
             continue
         if a.ndim == 2 and min(a.shape) > 1:
@@ -114,7 +114,7 @@ def _channels(variables: dict[str, np.ndarray], source: str) -> list[Channel]:
             raise DataError(
                 f"{source}: time vector {name!r}: unknown unit {scale!r} (s, ms understood)"
             )
-        elif kind == "force" and leaf.lower() not in _FORCE_NAMES:  # force_N, F_kN: in newtons
+        elif kind == "force" and leaf.lower() not in FORCE_NAMES:  # force_N, F_kN: in newtons
             channels.append((name, a.reshape(-1) * scale, "N"))
         else:  # force_V: in volts; ch1: no unit
             channels.append((name, a.reshape(-1), scale if kind == "force?" else None))
@@ -147,7 +147,7 @@ def read_mat(
         missing rate or calibration, a non-uniform time vector, clipping, too few samples.
       MissingFormatError: a v7.3 file without h5py (``pip install 'rbjax[formats]'``).
     """
-    source = _as_source(path)
+    source = as_source(path)
     if Path(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     variables = _variables_v73(path, source) if _is_hdf5(path) else _variables_v5(path, source)

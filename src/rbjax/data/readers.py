@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .columns import _decimals, _infer_rate, _parse_column
+from .columns import decimal_places, infer_rate, parse_column
 from .errors import DataError
-from .recording import Recording, _check_force, _check_height, _file_recording
-from .sources import _as_source, height_from_name
+from .recording import Recording, check_force, check_height, file_recording
+from .sources import as_source, height_from_name
 
 __all__ = ["read_csv", "read_npy"]
 
@@ -62,7 +62,7 @@ def read_csv(
       DataError: empty or truncated file, missing/unknown columns, non-numeric or
         non-finite values, fewer than ``MIN_SAMPLES`` rows, non-uniform time, clipping.
     """
-    source = _as_source(path)
+    source = as_source(path)
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as e:
@@ -93,7 +93,7 @@ def read_csv(
     t_col = f_col = None
     t_scale = f_scale = 1.0
     if has_header:
-        kinds = [_parse_column(h) for h in header]
+        kinds = [parse_column(h) for h in header]
         for k, (kind, val) in enumerate(kinds):
             if kind in ("time?", "force?"):
                 raise DataError(
@@ -165,14 +165,14 @@ def read_csv(
             raise DataError(
                 f"{source}: line {data_lines[k]}: time {t_txt[k].strip()!r} is not finite"
             )
-    _check_force(force, source)
+    check_force(force, source)
 
     notes = []
     if t is not None:
-        dec = [_decimals(s) for s in t_txt[: min(len(t_txt), 1000)]]
+        dec = [decimal_places(s) for s in t_txt[: min(len(t_txt), 1000)]]
         known = [d for d in dec if d is not None]
         quantum = 0.0 if len(known) < len(dec) else 10.0 ** (-max(known)) * t_scale
-        rate_t, t0, more = _infer_rate(t, quantum, source)
+        rate_t, t0, more = infer_rate(t, quantum, source)
         notes += more
         if t0 != 0 and abs(t0) > 0.5 / rate_t:
             notes.append(
@@ -190,7 +190,7 @@ def read_csv(
         if rate_Hz is None:
             raise DataError(f"{source}: no time column: pass rate_Hz=")
         rate = float(rate_Hz)
-    return _file_recording(source, force, rate, height_m, lowpass_Hz=lowpass_Hz, notes=notes)
+    return file_recording(source, force, rate, height_m, lowpass_Hz=lowpass_Hz, notes=notes)
 
 
 # --------------------------------------------------------------------------------------
@@ -213,7 +213,7 @@ def read_npy(
     defaults to the one in the name.
     """
     if isinstance(path_or_array, (str, os.PathLike)):
-        src = _as_source(path_or_array)
+        src = as_source(path_or_array)
         p = Path(path_or_array)
         if p.stat().st_size == 0:
             raise DataError(f"{src}: empty file")
@@ -238,10 +238,10 @@ def read_npy(
         raise DataError(f"{src}: expected a 1-D force array, got shape {a.shape}")
     if rate_Hz is None:
         raise DataError(f"{src}: pass rate_Hz= (a bare array has no time base)")
-    _check_force(a, src)
+    check_force(a, src)
     return Recording(
         source=src,
-        height_m=_check_height(height_m, src),
+        height_m=check_height(height_m, src),
         rate_Hz=float(rate_Hz),
         force_N=a,
         lowpass_Hz=lowpass_Hz,

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .crossings import _rising_crossing, _solve_crossing, estimate_noise_rms_N
+from .crossings import estimate_noise_rms_N, rising_crossing, solve_crossing
 from .errors import ClippedRecordError, DataError
 from .shift import fractional_shift
 from .sources import height_from_name
@@ -133,7 +133,7 @@ class Recording:
         x = self.force_N
         ip = int(np.argmax(x))
         level = fraction * x[ip]
-        start = _rising_crossing(x, ip, level, self.source)
+        start = rising_crossing(x, ip, level, self.source)
         # falling edge: first sample after the peak below the level
         below = np.flatnonzero(x[ip:] < level)
         if below.size == 0:
@@ -141,7 +141,7 @@ class Recording:
                 f"{self.source}: the force does not fall below {level:.4g} N after the peak"
             )
         j = ip + int(below[0])  # x[j-1] >= level > x[j]
-        u = _solve_crossing(x, j, -level, sign=-1.0)
+        u = solve_crossing(x, j, -level, sign=-1.0)
         return start / self.rate_Hz, (j - 1 + u) / self.rate_Hz
 
     def aligned(self, onset_s: float, *, method: str = "fourier") -> Recording:
@@ -175,7 +175,7 @@ def _longest_run(mask: np.ndarray) -> tuple[int, int]:
     return int(ends[k] - starts[k]), int(starts[k])
 
 
-def _check_force(force: np.ndarray, source: str, *, flat_top: bool = True) -> None:
+def check_force(force: np.ndarray, source: str, *, flat_top: bool = True) -> None:
     """Length, finiteness, constant signal and (for float data) flat-top clipping."""
     n = force.size
     if n == 0:
@@ -204,7 +204,7 @@ def _check_force(force: np.ndarray, source: str, *, flat_top: bool = True) -> No
             )
 
 
-def _check_height(height_m, source):
+def check_height(height_m, source):
     if height_m is None:
         return None
     h = float(height_m)
@@ -213,7 +213,7 @@ def _check_height(height_m, source):
     return h
 
 
-def _file_recording(
+def file_recording(
     source: str,
     force_N,
     rate_Hz: float,
@@ -229,7 +229,7 @@ def _file_recording(
         height_m = height_from_name(source)
     return Recording(
         source=source,
-        height_m=_check_height(height_m, source),
+        height_m=check_height(height_m, source),
         rate_Hz=float(rate_Hz),
         force_N=force_N,
         calibration_N_per_FS=calibration_N_per_FS,
@@ -238,7 +238,7 @@ def _file_recording(
     )
 
 
-def _require_same_rate(recs) -> None:
+def require_same_rate(recs) -> None:
     rates = {r.rate_Hz for r in recs}
     if len(rates) > 1:
         listing = ", ".join(f"{r.source}: {r.rate_Hz:g} Hz" for r in recs)

@@ -10,7 +10,7 @@ from scipy.fft import next_fast_len
 __all__ = ["fractional_shift"]
 
 
-def _lagrange4(y4, u):
+def lagrange4(y4, u):
     """Cubic through y(-1), y(0), y(1), y(2) evaluated at u (scalars or arrays)."""
     ym1, y0, y1, y2 = y4
     return (
@@ -63,5 +63,5 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
 
         if method == "linear":
             return (1 - u) * at(ip) + u * at(ip + 1)
-        return _lagrange4((at(ip - 1), at(ip), at(ip + 1), at(ip + 2)), u)
+        return lagrange4((at(ip - 1), at(ip), at(ip + 1), at(ip + 2)), u)
     raise ValueError(f"method={method!r}: use 'fourier', 'cubic' or 'linear'")

@@ -22,5 +22,5 @@ def height_from_name(name: str | os.PathLike) -> float | None:
     return int(m.group(1)) / 100.0
 
 
-def _as_source(path) -> str:
+def as_source(path) -> str:
     return Path(path).name if isinstance(path, (str, os.PathLike)) else str(path)

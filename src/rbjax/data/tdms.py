@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from .channels import Channel, channel_recording, import_extra, pick_channel
-from .columns import _parse_column
+from .columns import parse_column
 from .errors import DataError
 from .recording import MIN_SAMPLES, Recording
-from .sources import _as_source
+from .sources import as_source
 
 __all__ = ["read_tdms"]
 
@@ -28,7 +28,7 @@ def _channels(tdms_file) -> list[Channel]:
         time = None
         members = []
         for c in group.channels():
-            kind, scale = _parse_column(c.name)
+            kind, scale = parse_column(c.name)
             data = np.asarray(c[:])
             if data.dtype.kind not in "iuf" or data.size < MIN_SAMPLES:
                 continue
@@ -72,7 +72,7 @@ def read_tdms(
         rate or calibration, clipping, too few samples.
       MissingFormatError: npTDMS is not installed (``pip install 'rbjax[formats]'``).
     """
-    source = _as_source(path)
+    source = as_source(path)
     if Path(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     nptdms = import_extra("nptdms", "TDMS (.tdms) files")

@@ -15,7 +15,7 @@ import numpy as np
 from .channels import Channel, channel_recording, import_extra, pick_channel
 from .errors import DataError
 from .recording import Recording
-from .sources import _as_source
+from .sources import as_source
 
 __all__ = ["read_uff"]
 
@@ -87,7 +87,7 @@ def read_uff(
         clipping, too few samples.
       MissingFormatError: pyuff is not installed (``pip install 'rbjax[formats]'``).
     """
-    source = _as_source(path)
+    source = as_source(path)
     if Path(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     pyuff = import_extra("pyuff", "Universal File Format (.uff/.unv) files")

@@ -13,8 +13,8 @@ from scipy.io import wavfile
 
 from .channels import check_calibration, integer_newtons
 from .errors import DataError
-from .recording import Recording, _check_force, _file_recording
-from .sources import _as_source
+from .recording import Recording, check_force, file_recording
+from .sources import as_source
 
 _UNKNOWN_FORMAT_RE = re.compile(r"Unknown wave file format: (\w+)")
 
@@ -68,7 +68,7 @@ def read_wav(
       DataError: empty, truncated or not a WAV file, an unsupported format, a missing
         channel or calibration, clipping, non-finite or too few samples.
     """
-    source = _as_source(path)
+    source = as_source(path)
     _check_riff_header(path, source)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wavfile.WavFileWarning)
@@ -103,13 +103,13 @@ def read_wav(
     samples = data if data.ndim == 1 else data[:, c]
     if samples.dtype.kind in "iu":
         force = integer_newtons(samples, calibration_N_per_FS, source, "PCM WAV")
-        _check_force(force, source, flat_top=False)
+        check_force(force, source, flat_top=False)
     else:
         force = samples.astype(np.float64)
         if calibration_N_per_FS is not None:
             force = force * check_calibration(calibration_N_per_FS, source)
-        _check_force(force, source)
-    return _file_recording(
+        check_force(force, source)
+    return file_recording(
         source,
         force,
         rate,
