@@ -25,15 +25,24 @@ at 2 s relative to 0.5 s are subtracted). It assumes that the floor's own decay 
 against T (the room decay sets the Fast maximum); ``rbjax.room.chain`` reports where it is not.
 
 **Rating (ISO 717-2:2020, Annex D).** The A-weighted maximum impact sound pressure level is
-the energetic sum of the band levels plus the A-weights of IEC 61672-1:2013 Table 3 at the
-nominal frequencies, octaves 63–500 Hz or one-third octaves 50–630 Hz,
+the energetic sum of the band levels plus the A-weighted reference values A_k of ISO 717-2:2020
+Table D.3 (printed p. 21), octaves 63–500 Hz or one-third octaves 50–630 Hz (Formula (D.1)),
 
     L_iA,Fmax = 10 lg Σ_k 10^{(L_i,Fmax,k + A_k)/10},
 
-stated as an integer (Annex D's worked example, its Table D.4: the octave levels 65.3, 64.5,
-58.0, 55.8 dB at 63–500 Hz give 55.4 → 55 dB). The rounding is the ordinary one, half away
-from zero (ISO 80000-1 Annex B, rule B): x.5 goes up; the sum is first rounded to 1e-9 dB so
-that a level printed to 0.1 dB that sums to exactly x.5 is not flipped by floating point.
+stated as an integer. Table D.3 is not the A-weighting of IEC 61672-1:2013 Table 3 at the
+nominal frequencies: six of its twelve one-third-octave values differ by 0.1–0.2 dB (50 Hz
+−30.3 against −30.2, 80 Hz −22.4/−22.5, 125 Hz −16.2/−16.1, 160 Hz −13.2/−13.4, 200 Hz
+−10.8/−10.9, 250 Hz −8.7/−8.6), and so do the octaves 125 and 250 Hz (−16.2, −8.7). The
+standard's text could not be read here: the values are those transcribed from Table D.3 in the
+tests of the phonometry project (J. M. Requena Plens, ``tests/building/measurement/
+test_heavy_impact.py``, "ISO 717-2:2020 Table D.3 (printed p. 21)"), checked against the
+standard's worked example, Table D.4: the octave levels 65.3, 64.5, 58.0, 55.8 dB, corrected to
+39.1, 48.3, 49.3, 52.6 dB, rate 55.350 66… → 55 dB (the IEC weights give 55.3955).
+``IEC_61672_A_WEIGHTS_*`` keeps the IEC values for what really means A-weighting (a check of the
+IEC formula; no rating uses them). The rounding is the ordinary one, half away from zero
+(ISO 80000-1 Annex B, rule B): x.5 goes up; the sum is first rounded to 1e-9 dB so that a level
+printed to 0.1 dB that sums to exactly x.5 is not flipped by floating point.
 """
 
 from __future__ import annotations
@@ -54,14 +63,28 @@ REFERENCE_REVERBERATION_s = 0.5
 #: Decay rate of the energy, per s, per 1/T: 60 dB in T is e^{-6 ln 10}.
 DECAY_PER_REVERBERATION = 6.0 * math.log(10.0)
 
-#: A-weights, dB, at the nominal frequencies (IEC 61672-1:2013, Table 3), over the bands of
-#: ISO 717-2:2020 Annex D: octaves 63–500 Hz, one-third octaves 50–630 Hz.
-A_WEIGHTS_OCTAVE_dB: dict[str, float] = {"63": -26.2, "125": -16.1, "250": -8.6, "500": -3.2}
-A_WEIGHTS_THIRD_OCTAVE_dB: dict[str, float] = {
+#: The A-weighted reference values A_k, dB, of the rating (ISO 717-2:2020 Annex D, Table D.3):
+#: octaves 63–500 Hz, one-third octaves 50–630 Hz.
+ISO_717_2_TABLE_D3_OCTAVE_dB: dict[str, float] = {
+    "63": -26.2, "125": -16.2, "250": -8.7, "500": -3.2,
+}  # fmt: skip
+ISO_717_2_TABLE_D3_THIRD_OCTAVE_dB: dict[str, float] = {
+    "50": -30.3, "63": -26.2, "80": -22.4, "100": -19.1, "125": -16.2, "160": -13.2,
+    "200": -10.8, "250": -8.7, "315": -6.6, "400": -4.8, "500": -3.2, "630": -1.9,
+}  # fmt: skip
+#: The A-weighting of IEC 61672-1:2013 Table 3 at the same nominal frequencies (what "A-weights"
+#: means elsewhere; not the rating's values).
+IEC_61672_A_WEIGHTS_OCTAVE_dB: dict[str, float] = {
+    "63": -26.2, "125": -16.1, "250": -8.6, "500": -3.2,
+}  # fmt: skip
+IEC_61672_A_WEIGHTS_THIRD_OCTAVE_dB: dict[str, float] = {
     "50": -30.2, "63": -26.2, "80": -22.5, "100": -19.1, "125": -16.1, "160": -13.4,
     "200": -10.9, "250": -8.6, "315": -6.6, "400": -4.8, "500": -3.2, "630": -1.9,
 }  # fmt: skip
-RATING_BANDS = {1: tuple(A_WEIGHTS_OCTAVE_dB), 3: tuple(A_WEIGHTS_THIRD_OCTAVE_dB)}
+RATING_BANDS = {
+    1: tuple(ISO_717_2_TABLE_D3_OCTAVE_dB),
+    3: tuple(ISO_717_2_TABLE_D3_THIRD_OCTAVE_dB),
+}
 
 
 def decay_rate_per_s(reverberation_s):
@@ -100,21 +123,22 @@ def normalised_level_dB(level_dB, volume_m3, reverberation_s):
     )
 
 
-def a_weights_dB(fraction: int) -> np.ndarray:
-    """The A-weights of the rating bands of ``fraction`` (1: octaves 63–500 Hz, 3: thirds
-    50–630 Hz)."""
+def rating_reference_values_dB(fraction: int) -> np.ndarray:
+    """The A-weighted reference values A_k of the rating bands of ``fraction`` (ISO 717-2:2020
+    Table D.3; 1: octaves 63–500 Hz, 3: thirds 50–630 Hz)."""
     if fraction not in RATING_BANDS:
         raise ValueError(
             f"fraction={fraction!r} is outside the valid choices 1 (octave), 3 (one-third octave)"
         )
-    table = A_WEIGHTS_OCTAVE_dB if fraction == 1 else A_WEIGHTS_THIRD_OCTAVE_dB
+    table = ISO_717_2_TABLE_D3_OCTAVE_dB if fraction == 1 else ISO_717_2_TABLE_D3_THIRD_OCTAVE_dB
     return np.array(list(table.values()))
 
 
 def a_weighted_sum_dB(levels_dB, fraction: int = 1):
-    """10 lg Σ 10^{(L_k + A_k)/10} over the rating bands (unrounded, differentiable); the last
-    axis of ``levels_dB`` holds one level per rating band (4 octaves or 12 thirds)."""
-    weights = a_weights_dB(fraction)
+    """10 lg Σ 10^{(L_k + A_k)/10} over the rating bands with A_k of ISO 717-2:2020 Table D.3
+    (Formula (D.1); unrounded, differentiable); the last axis of ``levels_dB`` holds one level per
+    rating band (4 octaves or 12 thirds)."""
+    weights = rating_reference_values_dB(fraction)
     levels = jnp.asarray(levels_dB, dtype=jnp.float64)
     if levels.shape[-1:] != weights.shape:
         raise ValueError(
