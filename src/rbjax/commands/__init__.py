@@ -69,11 +69,15 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 
 
 def add_parallel_options(
-    parser: argparse.ArgumentParser, what: str = "fits", default: int | None = None
+    parser: argparse.ArgumentParser,
+    what: str = "fits",
+    default: int | None = None,
+    lanes: bool = False,
 ) -> None:
     """``--workers N`` or ``--scheduler ADDRESS``: where independent tasks run
     (:mod:`rbjax.studies.executors`); ``default``: the worker count without ``--workers``
-    (``None``: the usable cores)."""
+    (``None``: the usable cores); ``lanes``: also ``--lanes`` (fits as lanes of batched
+    programs)."""
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
@@ -91,6 +95,15 @@ def add_parallel_options(
         help=f"send the {what} to the Dask scheduler at ADDRESS (tcp://host:port) instead; needs "
         "pip install 'rbjax[cluster]' (dask-jobqueue starts such a cluster on SLURM/PBS)",
     )
+    if lanes:
+        where.add_argument(
+            "--lanes",
+            action="store_true",
+            default=None,
+            help="run the fits in this process as lanes of one batched program per structure "
+            "(the default where JAX's default device is a GPU or TPU; on a CPU it is slower "
+            "than worker processes)",
+        )
 
 
 def parallel_of(args):
@@ -102,6 +115,8 @@ def parallel_of(args):
         raise ValueError(f"--workers={args.workers!r} is outside the valid range: an integer ≥ 1")
     if args.scheduler is not None:
         return Parallel(scheduler=args.scheduler)
+    if getattr(args, "lanes", None):
+        return Parallel(lanes=True)
     cores = usable_cores()
     if args.workers is not None and args.workers > cores:
         progress(f"--workers={args.workers}: this process may use {cores} cores; using {cores}")

@@ -134,7 +134,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p, paths="*")
-    add_parallel_options(p, what="fits of the model selection (without --model)")
+    add_parallel_options(p, what="fits of the model selection (without --model)", lanes=True)
     p.add_argument(
         "--summary",
         default=None,

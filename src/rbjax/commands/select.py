@@ -35,7 +35,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p)
-    add_parallel_options(p)
+    add_parallel_options(p, lanes=True)
     p.add_argument(
         "--candidates",
         default=None,

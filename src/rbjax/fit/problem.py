@@ -6,6 +6,7 @@ superset of its terms).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 
 import jax
@@ -14,16 +15,17 @@ import numpy as np
 from .._validate import check_choice
 from ..solve.outcome import impact_velocity_m_per_s
 from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
-from ..solve.vector_field import _RESTITUTION, _initial_state
+from ..solve.vector_field import RESTITUTION_FIELD, initial_state
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model, Solver
 from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
+from .lanes import current_batcher
 from .layout import FASTEST_AT_LOWER, FIT_RANGES, FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program
 from .records import FitData, prepare_data, record_features
-from .result import _plain
+from .result import plain_value
 
 #: Optimiser steps per compiled call (a static size of the program).
 STEPS_PER_ROUND = 40
@@ -78,8 +80,8 @@ def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
 @jax.jit
 def _first_contact_jacobian(ball: Ball, model: Model):
     """The vector field's Jacobian at first contact from 5 m/s (the fastest impact a fit meets)."""
-    state = _initial_state(impact_velocity_m_per_s(5.0), ball, model)
-    return jax.jacfwd(lambda y: _RESTITUTION(0.0, y, (ball, model)))(state)
+    state = initial_state(impact_velocity_m_per_s(5.0), ball, model)
+    return jax.jacfwd(lambda y: RESTITUTION_FIELD(0.0, y, (ball, model)))(state)
 
 
 class Problem:
@@ -109,7 +111,6 @@ class Problem:
             if data.lowpass_Hz is not None
             else np.zeros((1, 6))
         )
-        import jax
 
         treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
         self.structure = Structure(
@@ -146,6 +147,10 @@ class Problem:
             "measured": np.asarray(data.force_N, dtype=float),
             "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
         }
+        #: what the program's shared data are, for gathering fits of the same records as lanes
+        self.data_digest = hashlib.sha256(
+            b"".join(np.ascontiguousarray(v).tobytes() for v in self.arrays.values())
+        ).hexdigest()
         self.record_weights = 1.0 / (
             np.maximum(data.noise_rms_N, 1e-12)
             if scale == "noise"
@@ -192,40 +197,48 @@ class Problem:
         dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, or none of them: an
         evaluation at θ, one Jacobian and no optimiser step): one output dict per lane.
 
-        On a CPU the lanes go through the program one at a time: it is compute-bound, so B lanes
-        in lockstep cost B lanes' work, and each would run as many steps as the slowest
-        (measured in ``benchmarks/fit_time.py``); on an accelerator they go in one call."""
-        import jax
-
+        In a thread of a :class:`~rbjax.fit.lanes.LaneExecutor` the lanes join those of the
+        other fits there (one batch on the accelerator). Otherwise, on a CPU the lanes go
+        through the program one at a time: it is compute-bound, so B lanes in lockstep cost B
+        lanes' work, and each would run as many steps as the slowest (measured in
+        ``benchmarks/fit_time.py``); on an accelerator they go in one call."""
         lay = self.layout
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         b, n = thetas.shape
         evaluate_only = atol is None
-        phi_c = np.stack([lay.to_phi(th) for th in thetas]) if phi_c is None else np.asarray(phi_c)
-        w = np.broadcast_to(np.eye(n), (b, n, n)) if w is None else np.asarray(w)
-        atol = np.full(b, math.inf) if atol is None else np.asarray(atol, dtype=float)
-        lanes = weights if isinstance(weights, list) else [weights] * b
-        per_call = 1 if jax.default_backend() == "cpu" else b
-        outs = []
-        for lo in range(0, b, per_call):
-            part = slice(lo, lo + per_call)
-            stacked = {k: np.stack([np.asarray(x[k]) for x in lanes[part]]) for k in lanes[0]}
-            out = run_program(
-                self.structure,
-                optimizer,
-                STEPS_PER_ROUND,
-                phi_c=phi_c[part],
-                w=w[part],
-                free=free,
-                held=thetas[part],
-                constants=constants,
-                data=self.arrays,
-                weights=stacked,
-                atol=atol[part],
-                evaluate_only=evaluate_only,
-            )
-            outs += [{k: v[i] for k, v in out.items()} for i in range(len(thetas[part]))]
-        return outs
+        lanes = {
+            "phi_c": np.stack([lay.to_phi(th) for th in thetas]) if phi_c is None else phi_c,
+            "w": np.broadcast_to(np.eye(n), (b, n, n)) if w is None else w,
+            "free": np.broadcast_to(np.asarray(free, dtype=bool), (b, n)),
+            "held": thetas,
+            "constants": np.broadcast_to(np.asarray(constants, dtype=float), (b, len(constants))),
+            "weights": _stacked(weights if isinstance(weights, list) else [weights] * b),
+            "atol": np.full(b, math.inf) if atol is None else atol,
+        }
+        lanes = {
+            k: (v if k == "weights" else np.asarray(v, dtype=float if k != "free" else bool))
+            for k, v in lanes.items()
+        }
+        batcher = current_batcher()
+        if batcher is not None:
+            key = (self.structure, optimizer, STEPS_PER_ROUND, evaluate_only, self.data_digest)
+            out = batcher.call(key, lanes, self.arrays)
+        else:
+            per_call = 1 if jax.default_backend() == "cpu" else b
+            parts = [
+                run_program(
+                    self.structure,
+                    optimizer,
+                    STEPS_PER_ROUND,
+                    jax.tree_util.tree_map(lambda x, lo=lo: x[lo : lo + per_call], lanes),
+                    self.arrays,
+                    evaluate_only,
+                )
+                for lo in range(0, b, per_call)
+            ]
+            out = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs), *parts)
+        fields = out._asdict()
+        return [{k: v[i] for k, v in fields.items()} for i in range(b)]
 
     def run(
         self, theta, free, weights, constants, *, optimizer="lm", phi_c=None, w=None, atol=None
@@ -256,6 +269,11 @@ class Problem:
         if not np.any(mask):
             return float("nan")
         return float(np.sqrt(np.mean((force[mask] - self.data.force_N[mask]) ** 2)))
+
+
+def _stacked(weights: list[dict]) -> dict:
+    """Per-lane weight dicts as one dict of arrays with a leading lane axis."""
+    return {k: np.stack([np.asarray(x[k]) for x in weights]) for k in weights[0]}
 
 
 def realign(problem: Problem, theta, feats, which, *, rescale_E: bool, fit_mask):
@@ -294,14 +312,14 @@ def per_height_rows(problem: Problem, force, feats, fit_mask) -> list[dict]:
                 "n_drops": int(d.n_drops[k].sum()),
                 "in_fit": bool(fit_mask[k].all()),
                 "residual_rms_N": float(np.sqrt(np.mean((force[k] - d.force_N[k]) ** 2))),
-                "measured": {q: _plain(v) for q, v in m.items()},
-                "fitted": {q: _plain(v) for q, v in f.items()},
+                "measured": {q: plain_value(v) for q, v in m.items()},
+                "fitted": {q: plain_value(v) for q, v in f.items()},
                 "error": {
                     "contact_time_pct": float(
                         100 * (f["contact_time_s"] / m["contact_time_s"] - 1)
                     ),
                     "peak_force_pct": float(100 * (f["peak_force_N"] / m["peak_force_N"] - 1)),
-                    "lfe_octave_dB": _plain(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
+                    "lfe_octave_dB": plain_value(f["lfe_octave_dB"] - m["lfe_octave_dB"]),
                 },
             }
         )

@@ -23,25 +23,29 @@ also comes back as auxiliary output for the uncertainties. The predicted forces 
 sampled path (:mod:`rbjax.fit.record_forces`: fixed steps at the records' own samples, only the
 physical columns carried through the solve) or, with ``Structure.path == "ode"``, from the
 diffrax ODE with its events (:func:`sample_force`). The optimiser is vmapped over a batch of
-lanes (starts; :meth:`rbjax.fit.problem.Problem.run_batch` sends one lane a call on a CPU);
-an evaluate-only flag, shared by the lanes, skips the optimiser (one Jacobian).
+lanes, each with its own free mask, constants and weights (the starts of a fit; or the fits of
+a model selection, gathered by :mod:`rbjax.fit.lanes`; :meth:`rbjax.fit.problem.Problem.
+run_batch` sends one lane a call on a CPU); an evaluate-only flag, shared by the lanes, skips
+the optimiser (one Jacobian).
 """
 
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
 import jax.extend
 import jax.numpy as jnp
 import lineax as lx
+import numpy as np
 import optimistix as optx
 
 from ..spectrum.filters import sosfilt_jax
 from .program_store import load_or_export
 from .record_forces import ball_and_model, record_forces
-from .records import _features
+from .records import pulse_features
 
 OPTIMIZERS = ("lm", "gauss-newton")
 
@@ -109,7 +113,7 @@ def predict(s: Structure, theta, constants, data):
         )(data["heights"] + dh, shifts)
     if s.filtered:
         force = sosfilt_jax(data["sos"], force)
-    feats = _features(
+    feats = pulse_features(
         force if s.feature_rows else jax.lax.stop_gradient(force), s.rate_Hz, int(round(s.rate_Hz))
     )
     return force, feats
@@ -155,15 +159,39 @@ def _value_and_jac(s: Structure, u, phi_c, w, free, held, constants, data, weigh
     return r, (jac * slope[None, :]) @ w, (r, jac, force, feats)
 
 
+class ProgramOutput(NamedTuple):
+    """What the fit program returns for a batch of lanes (each field with a leading lane axis).
+
+    Attributes:
+        u: the optimum in whitened coordinates (0 where only evaluated).
+        successful: the optimiser converged (``True`` where only evaluated).
+        max_steps_reached: the optimiser stopped at its step budget.
+        steps: optimiser steps taken.
+        r: the residuals at the last accepted point.
+        jac_theta: dr/dθ there.
+        force: the predicted force through the measuring chain there (K, N).
+        features: onset, end of contact, peak and octave L_FE there (K, 3 + 6).
+    """
+
+    u: np.ndarray
+    successful: np.ndarray
+    max_steps_reached: np.ndarray
+    steps: np.ndarray
+    r: np.ndarray
+    jac_theta: np.ndarray
+    force: np.ndarray
+    features: np.ndarray
+
+
 @functools.lru_cache(maxsize=8)
 def compiled(s: Structure, optimizer: str, max_steps: int):
     """The jitted fit program of a structure (cached in this process; :func:`run_program` also
-    keeps it on disk through :mod:`rbjax.fit.program_store` where the compilation cache is on).
+    keeps it on disk through :mod:`rbjax.fit.program_store`).
 
-    ``run(phi_c, w, free, held, constants, data, weights, atol, evaluate_only)`` → dict with
-    ``u`` (the optimum in whitened coordinates), ``result`` (optimistix's code), ``steps``, and
-    at the last accepted point ``r``, ``jac_theta`` (dr/dθ), ``force`` and ``features``. With
-    ``evaluate_only`` (one flag for all lanes) it only evaluates at φ_c: one Jacobian, no step.
+    ``run(phi_c, w, free, held, constants, data, weights, atol, evaluate_only)``, vmapped over
+    lanes (every argument but ``data`` and the evaluate-only flag has a leading lane axis) →
+    a dict of the fields of :class:`ProgramOutput`. With ``evaluate_only`` (one flag for all
+    lanes) it only evaluates at φ_c: one Jacobian, no step.
     """
 
     def run(phi_c, w, free, held, constants, data, weights, atol, evaluate_only):
@@ -214,7 +242,8 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
             r, jac, force, feats = sol.aux
             return {
                 "u": sol.value,
-                "result": sol.result._value,
+                "successful": sol.result == optx.RESULTS.successful,
+                "max_steps_reached": sol.result == optx.RESULTS.max_steps_reached,
                 "steps": sol.stats["num_steps"],
                 "r": r,
                 "jac_theta": jac,
@@ -224,10 +253,10 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
 
         def evaluate(_):
             _, _, (r, jac, force, feats) = value_and_jac(u0)
-            ok = jnp.asarray(optx.RESULTS.successful._value, dtype=jnp.int32)  # type: ignore[attr-defined]
             return {
                 "u": u0,
-                "result": ok,
+                "successful": jnp.ones((), dtype=bool),
+                "max_steps_reached": jnp.zeros((), dtype=bool),
                 "steps": jnp.zeros((), dtype=jnp.int64),
                 "r": r,
                 "jac_theta": jac,
@@ -238,55 +267,48 @@ def compiled(s: Structure, optimizer: str, max_steps: int):
         # the flag is the same for every lane, so under vmap this stays a branch (one runs)
         return jax.lax.cond(evaluate_only, evaluate, optimise, None)
 
-    # Several starts (or fits) of one structure in lockstep: every argument but the free mask,
-    # the constants, the data and the evaluate-only flag has a leading batch axis.
-    return jax.jit(jax.vmap(run, in_axes=(0, 0, None, 0, None, None, 0, 0, None)))
+    # Independent fits (starts, candidates, folds) as lanes: every argument but the data and the
+    # evaluate-only flag has a leading lane axis (each lane its own free mask and constants).
+    return jax.jit(jax.vmap(run, in_axes=(0, 0, 0, 0, 0, None, 0, 0, None)))
+
+
+#: The per-lane arguments of the program, in its order (``data`` and the flag come apart).
+LANE_ARGS = ("phi_c", "w", "free", "held", "constants", "weights", "atol")
 
 
 def run_program(
-    s: Structure,
-    optimizer: str,
-    max_steps: int,
-    *,
-    phi_c,
-    w,
-    free,
-    held,
-    constants,
-    data,
-    weights,
-    atol,
-    evaluate_only=False,
-):
-    """Call the compiled program on a batch of B lanes (``phi_c``, ``w``, ``held``, ``atol``
-    and every weight with a leading axis B); NumPy in, NumPy out, each output with its leading
-    axis B (``successful`` and ``max_steps_reached`` flags added per lane). ``evaluate_only``:
-    the residuals and Jacobian at φ_c of every lane, no optimiser step."""
-    import numpy as np
-
+    s: Structure, optimizer: str, max_steps: int, lanes: dict, data, evaluate_only=False
+) -> ProgramOutput:
+    """Call the compiled program on a batch of B lanes: ``lanes`` holds each of
+    :data:`LANE_ARGS` with a leading axis B (``weights`` a dict of such arrays); ``data`` is
+    shared by the lanes. NumPy in, NumPy out. ``evaluate_only``: the residuals and Jacobian at
+    φ_c of every lane, no optimiser step."""
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
+    weights = {
+        k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v))
+        for k, v in lanes["weights"].items()
+    }
     args = (
-        f64(phi_c),
-        f64(w),
-        jnp.asarray(free, dtype=bool),
-        f64(held),
-        f64(constants),
+        f64(lanes["phi_c"]),
+        f64(lanes["w"]),
+        jnp.asarray(lanes["free"], dtype=bool),
+        f64(lanes["held"]),
+        f64(lanes["constants"]),
         jax.tree_util.tree_map(f64, data),
-        {
-            k: (jnp.asarray(v, dtype=bool) if k == "fit_mask" else f64(v))
-            for k, v in weights.items()
-        },
-        f64(atol),
+        weights,
+        f64(lanes["atol"]),
         jnp.asarray(evaluate_only, dtype=bool),
     )
     fn = load_or_export(
         ("fit", s, optimizer, max_steps), lambda: compiled(s, optimizer, max_steps), args
     )
     out = fn(*args)
-    out = {k: np.asarray(v) for k, v in out.items()}
-    code = out.pop("result")
-    # optimistix declares RESULTS.successful as a str; at run time it is an enumeration item
-    # whose _value is the integer code.
-    out["successful"] = code == int(optx.RESULTS.successful._value)  # type: ignore[attr-defined]
-    out["max_steps_reached"] = code == int(optx.RESULTS.max_steps_reached._value)
-    return out
+    return ProgramOutput(**{k: np.asarray(out[k]) for k in ProgramOutput._fields})
+
+
+def run_lanes(key, lanes: dict, data) -> ProgramOutput:
+    """One batch of a :class:`rbjax.fit.lanes.LaneBatcher`: ``key`` is (structure, optimiser,
+    step budget, evaluate-only, the data's digest) (see :meth:`rbjax.fit.problem.Problem.
+    run_batch`)."""
+    s, optimizer, max_steps, evaluate_only = key[:4]
+    return run_program(s, optimizer, max_steps, lanes, data, evaluate_only)

@@ -17,6 +17,10 @@ folds of a model selection, the chunks of a sweep's design. Each is a picklable 
   PBS, SGE or LSF (``SLURMCluster(...).scheduler_address``). Dask runs a task again on
   another worker when its worker dies.
 * ``Parallel(executor=ex)``: any executor the caller made (closed by the caller).
+* ``Parallel(lanes=True)`` (the default where JAX's default device is not a CPU): the fits run
+  in threads of this process and every call of the fit program is gathered into one batch per
+  program, the fits as lanes of it (:mod:`rbjax.fit.lanes`): an accelerator steps 64 lanes
+  for about the cost of one.
 
 A task that raises is reported with its name (the candidate and fold, the chunk's rows); a
 local worker that dies has its unfinished tasks run again in a new pool (``retries`` times),
@@ -88,17 +92,26 @@ class Parallel:
             ``workers`` is not used either.
         retries: how often the unfinished tasks of a local pool whose worker died are run
             again in a new pool before the run fails.
+        lanes: run the fits as lanes of one batched program per structure, in this process
+            (:mod:`rbjax.fit.lanes`); ``None`` (default): so where JAX's default device is not
+            a CPU and neither ``workers``, ``scheduler`` nor ``executor`` is given.
     """
 
     workers: int | None = None
     scheduler: str | None = None
     executor: cf.Executor | None = None
     retries: int = 1
+    lanes: bool | None = None
 
     def __post_init__(self):
         given = [x is not None for x in (self.scheduler, self.executor)]
         if sum(given) > 1:
             raise ValueError("Parallel: give a scheduler or an executor, not both")
+        if self.lanes and (sum(given) or self.workers not in (None, 1)):
+            raise ValueError(
+                "Parallel: lanes=True runs the fits in this process; give no scheduler, "
+                f"executor or worker count (got workers={self.workers!r})"
+            )
         if self.workers is not None and (
             isinstance(self.workers, bool) or not isinstance(self.workers, int) or self.workers < 1
         ):
@@ -115,10 +128,30 @@ class Parallel:
         return min(self.workers or usable_cores(), usable_cores())
 
     @property
+    def use_lanes(self) -> bool:
+        """Whether the fits run as lanes of batched programs (see ``lanes``)."""
+        if self.lanes is not None:
+            return self.lanes
+        if self.workers is not None or self.scheduler is not None or self.executor is not None:
+            return False
+        import jax  # here: deciding needs JAX's backend, nothing else here does
+
+        return jax.default_backend() != "cpu"
+
+    @property
     def in_process(self) -> bool:
-        return self.scheduler is None and self.executor is None and self.local_workers == 1
+        return (
+            self.scheduler is None
+            and self.executor is None
+            and self.local_workers == 1
+            and not self.use_lanes
+        )
 
     def describe(self) -> str:
+        if self.use_lanes:
+            import jax
+
+            return f"lanes of one batched program per structure on {jax.default_backend()}"
         if self.scheduler is not None:
             return f"the Dask cluster at {self.scheduler}"
         if self.executor is not None:
@@ -218,6 +251,15 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     """The executor ``parallel`` describes, closed on leaving (unless the caller gave it)."""
     if parallel.executor is not None:
         yield parallel.executor
+    elif parallel.use_lanes:
+        # the fit package only where its fits run as lanes (sweeps use this module too)
+        from ..fit.lanes import LaneExecutor
+
+        lanes = LaneExecutor()
+        try:
+            yield lanes
+        finally:
+            lanes.shutdown(wait=False)
     elif parallel.scheduler is not None:
         client = _dask_client(parallel.scheduler)
         try:
@@ -279,7 +321,12 @@ def prestart(parallel: Parallel | int | None) -> None:
     """Start ``parallel``'s local workers now and have them import rbjax, while this process
     does other work (reads the data); nothing for the other kinds of executor."""
     parallel = as_parallel(parallel)
-    if parallel.scheduler is None and parallel.executor is None and not parallel.in_process:
+    if (
+        parallel.scheduler is None
+        and parallel.executor is None
+        and not parallel.in_process
+        and not parallel.use_lanes
+    ):
         pool = local_pool(parallel.local_workers)
         for _ in range(parallel.local_workers):
             pool.submit(_warm)
@@ -331,6 +378,8 @@ def _drive(executor, parallel, all_tasks, results, then, label) -> None:
     width = 1 if parallel.in_process else max(parallel.local_workers, 1)
     if parallel.scheduler is not None or parallel.executor is not None:
         width = max(len(all_tasks), 1) * 4  # the cluster has its own queue
+    if parallel.use_lanes:
+        width = 1 << 30  # every fit at once: they step together as lanes
     ready: list[tuple[float, int]] = []
     for i, task in enumerate(all_tasks):
         if i not in results:

@@ -1,0 +1,99 @@
+"""The lane batcher (:mod:`rbjax.fit.lanes`): the calls of fits running in threads are gathered
+into one batch per program once every fit waits, padded to a few sizes, and split again;
+each call gets back its own lanes' outputs, and an error reaches only the fits of its batch.
+
+The reference is plain arithmetic on each call's own lanes (``run`` below is elementwise, so
+stacking, padding and splitting must be invisible in the outputs). That the fit program gives
+the same fits as lanes as alone is tested with the selection, in
+``tests/studies/test_parallel_selection.py``.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from rbjax.fit.lanes import BATCH_SIZES, LaneExecutor, current_batcher, padded_size
+from rbjax.studies.executors import Parallel, Task, run_tasks
+
+
+def test_a_batch_runs_at_the_next_of_a_few_sizes():
+    assert [padded_size(n) for n in (1, 2, 3, 5, 9, 33, 64)] == [1, 2, 4, 8, 16, 64, 64]
+    assert padded_size(65) == 2 * BATCH_SIZES[-1] and padded_size(129) == 3 * BATCH_SIZES[-1]
+
+
+def _executor():
+    """A lane executor whose 'program' is elementwise: lane x → 10·x + key, with the data."""
+    seen = []
+
+    def run(key, lanes, shared):
+        seen.append((key, len(lanes["x"])))
+        if key == "bad":
+            raise ValueError("this program fails")
+        return {"y": 10 * lanes["x"] + key + shared, "n": np.full(len(lanes["x"]), len(seen))}
+
+    return LaneExecutor(run), seen
+
+
+def _fit(rounds, key, lanes0, started=None):
+    """A toy fit: ``rounds`` calls, each of its lanes, each feeding the next (after every fit
+    of ``started`` has started, if given: all have joined the batcher then)."""
+    if started is not None:
+        started.wait(timeout=30)
+    x = np.asarray(lanes0, dtype=float)
+    for _ in range(rounds):
+        out = current_batcher().call(key, {"x": x}, 0.5)
+        x = out["y"]
+    return x
+
+
+def test_every_call_gets_its_own_lanes_back_through_shared_batches():
+    executor, seen = _executor()
+    plan = [(3, 1, [1.0, 2.0]), (1, 1, [3.0]), (2, 2, [4.0, 5.0, 6.0]), (0, 1, [7.0])]
+    started = threading.Barrier(len(plan))
+    futures = [executor.submit(_fit, *p, started) for p in plan]
+    results = [f.result(timeout=30) for f in futures]
+    executor.shutdown()
+    for (rounds, key, x0), got in zip(plan, results):
+        want = np.asarray(x0)
+        for _ in range(rounds):
+            want = 10 * want + key + 0.5
+        np.testing.assert_array_equal(got, want)
+    # every round is one batch a key: first both keys with every fit still running (3 lanes of
+    # key 1 padded to 4, 3 of key 2 padded to 4; the fit of 0 rounds never calls), then the
+    # fits still going, packed again (2 + 3 lanes, then 2)
+    assert sorted(seen[:2]) == [(1, 4), (2, 4)]
+    assert sorted(seen[2:4]) == [(1, 2), (2, 4)] and seen[4:] == [(1, 2)]
+    assert sorted(executor.batcher.batches) == [(2, 2), (2, 2), (3, 4), (3, 4), (3, 4)]
+
+
+def test_an_error_in_a_batch_reaches_only_the_fits_in_it():
+    executor, _ = _executor()
+    good = executor.submit(_fit, 2, 1, [1.0])
+    bad = executor.submit(_fit, 1, "bad", [1.0])
+    with pytest.raises(ValueError, match="this program fails"):
+        bad.result(timeout=30)
+    np.testing.assert_array_equal(good.result(timeout=30), [10 * (10 * 1 + 1.5) + 1.5])
+
+
+def test_tasks_added_while_others_run_join_the_batches():
+    executor, _ = _executor()
+    tasks = [Task("fit a", _fit, (2, 1, [1.0])), Task("fit b", _fit, (1, 1, [2.0]))]
+
+    def then(i, result):
+        return [Task(f"fold of {i}", _fit, (1, 1, result))] if i < 2 else []
+
+    out = run_tasks(Parallel(executor=executor), tasks, then=then, label="toy")
+    assert [float(x[0]) for x in out[:2]] == [10 * (10 + 1.5) + 1.5, 21.5]
+    assert len(out) == 4 and threading.active_count() < 50
+
+
+def test_lanes_run_in_this_process_only():
+    with pytest.raises(ValueError, match=r"lanes=True .* workers=2"):
+        Parallel(lanes=True, workers=2)
+    with pytest.raises(ValueError, match="lanes=True"):
+        Parallel(lanes=True, scheduler="tcp://127.0.0.1:1")
+    assert Parallel(lanes=True).use_lanes and not Parallel(lanes=True).in_process
+    assert not Parallel(workers=2).use_lanes  # a worker count given: processes, not lanes
