@@ -21,9 +21,10 @@ spent: 450 s, quick 125 s):
 2. ``rbjax fit src/rbjax/examples/emulated-rubber-ball --model hunt-crossley+ball-mode
    --blocked-force momentum``, cold (an empty ``RBJAX_CACHE_DIR``) then warm (the same cache),
    per configuration (quick: ``cpu, all devices`` only);
-3. the full selection ``rbjax select src/rbjax/examples/emulated-rubber-ball --workers N`` (N:
-   the usable cores; quick: one candidate), on the accelerator's and the CPU's configuration;
-   a command line that refuses ``--workers`` is reported with its error.
+3. the full selection ``rbjax select src/rbjax/examples/emulated-rubber-ball``, cold then warm:
+   on the accelerator with ``--lanes`` (every fit a lane of one batched program per
+   structure, :mod:`rbjax.fit.lanes`), on the CPU with ``--workers N`` (N: the usable cores);
+   quick: one candidate; a command line that fails is reported with its error.
 
 Prints a table and writes ``$OUT/device_check.json`` where ``OUT`` is set, else
 ``benchmarks/results/device_check.json`` (quick: ``device_check_quick.json``).
@@ -300,10 +301,15 @@ def fit_step(config: str, budget: Budget, timeouts: dict) -> dict:
 
 
 def select_step(config: str, quick: bool, budget: Budget, timeouts: dict) -> dict:
-    argv = ["select", str(EXAMPLE), "--workers", str(usable_cores()), "--quiet"]
+    """The selection cold then warm: on the accelerator its fits as lanes of batched programs
+    (``--lanes``, the default there), on the CPU in one worker process per core."""
+    where = ["--lanes"] if config == "accelerator" else ["--workers", str(usable_cores())]
+    argv = ["select", str(EXAMPLE), *where, "--quiet"]
     argv += QUICK_CANDIDATES if quick else []
     with tempfile.TemporaryDirectory(prefix="rbjax-device-check-") as cache:
-        return cli_step(config, argv, budget, timeouts["select"], cache)
+        cold = cli_step(config, argv, budget, timeouts["select"], cache)
+        warm = cli_step(config, argv, budget, timeouts["select"], cache)
+    return {"cold": cold, "warm": warm, "where": " ".join(where)}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -345,20 +351,22 @@ def table(report: dict) -> str:
                 f"| fit ({phase}) | {config} | hunt-crossley+ball-mode/momentum | "
                 f"{s['wall_s']:.1f} s | — | {note} |"
             )
-    for config, s in report["select"].items():
-        if "skipped" in s:
-            lines.append(f"| select | {config} | — | — | — | {s['skipped']} |")
-            continue
-        rec = s.get("recommended")
-        note = f"exit {s['exit']}" + (
-            f", recommended {rec['model_name']}/{rec['blocked_force']}" if rec else ""
-        )
-        if s["exit"] != 0:
-            note += ": " + " ".join(s["stderr_tail"].split())[-200:]
-        lines.append(
-            f"| select --workers {report['cores']} | {config} | {s.get('candidates', '?')} "
-            f"candidates | {s['wall_s']:.1f} s | — | {note} |"
-        )
+    for config, step in report["select"].items():
+        for phase in ("cold", "warm"):
+            s = step[phase]
+            if "skipped" in s:
+                lines.append(f"| select ({phase}) | {config} | — | — | — | {s['skipped']} |")
+                continue
+            rec = s.get("recommended")
+            note = f"exit {s['exit']}" + (
+                f", recommended {rec['model_name']}/{rec['blocked_force']}" if rec else ""
+            )
+            if s["exit"] != 0:
+                note += ": " + " ".join(s["stderr_tail"].split())[-200:]
+            lines.append(
+                f"| select {step['where']} ({phase}) | {config} | {s.get('candidates', '?')} "
+                f"candidates | {s['wall_s']:.1f} s | — | {note} |"
+            )
     return "\n".join(lines)
 
 

@@ -376,10 +376,8 @@ def _drive(executor, parallel, all_tasks, results, then, label) -> None:
     """Submit ready tasks costliest first (as many in flight as workers), collect results,
     add the tasks ``then`` makes; the tasks already in ``results`` are not run again."""
     width = 1 if parallel.in_process else max(parallel.local_workers, 1)
-    if parallel.scheduler is not None or parallel.executor is not None:
-        width = max(len(all_tasks), 1) * 4  # the cluster has its own queue
-    if parallel.use_lanes:
-        width = 1 << 30  # every fit at once: they step together as lanes
+    if parallel.scheduler is not None or parallel.executor is not None or parallel.use_lanes:
+        width = 1 << 30  # a cluster has its own queue; lanes step together: all at once
     ready: list[tuple[float, int]] = []
     for i, task in enumerate(all_tasks):
         if i not in results:
