@@ -125,7 +125,7 @@ SCRIPT = textwrap.dedent(
     import jax, numpy as np
     sys.path.insert(0, sys.argv[2])
     import test_devices as t
-    from rbjax.solve.devices import _jitted
+    from rbjax.solve.devices import cached_jit
     from rbjax.solve.simulate import _Rows, _rows_program, as_arrays
     import rbjax
 
@@ -136,7 +136,7 @@ SCRIPT = textwrap.dedent(
     # a per-device program holds no collective: nothing ties one device's loops to another's
     batch = _Rows.of(*as_arrays((np.linspace(0.1, 1.6, 8), rbjax.JIS_RUBBER_BALL, t.ZENER)))
     rows = jax.device_put(batch.rows, jax.devices()[-1])
-    fn = _jitted(_rows_program("ode", batch.spec, rbjax.Solver()))
+    fn = cached_jit(_rows_program("ode", batch.spec, rbjax.Solver()))
     hlo = fn.lower(rows, batch.shared).compile().as_text()
     collectives = ("all-reduce", "all-gather", "all-to-all", "collective-permute")
     out["collectives"] = np.array(sum(hlo.count(op) for op in collectives))

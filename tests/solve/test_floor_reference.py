@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 
 import rbjax
-from rbjax.solve.simulate import _simulate  # a Model with a batch of momentum_flux_weight
+from rbjax.solve.simulate import simulate_model  # a Model with a batch of momentum_flux_weight
 from rbjax.terms.floors.modes import floating_floor, simply_supported_plate_modes
 
 from scipy_floor_reference import (
@@ -120,7 +120,7 @@ def dashpot_results() -> dict:
     floor = rbjax.Dashpot(np.array([r[2] for r in rows]))
     weights = np.array([r[3] for r in rows])
     model = rbjax.Model(momentum_flux_weight=weights, floor=floor)
-    out = _simulate(heights, ball, model, rbjax.Solver(), method="ode")
+    out = simulate_model(heights, ball, model, rbjax.Solver(), method="ode")
     assert np.all(np.asarray(out.status) == 0)
     return {
         r[0]: {q: float(getattr(out, q)[i]) for q in (*QUANTITIES, "max_deflection_m")}
@@ -157,7 +157,7 @@ def test_dashpot_matches_reference(z, bf):
 @functools.cache
 def stiff_results():
     model = rbjax.Model(momentum_flux_weight=np.array([0.0, 0.0, 1.0, 1.0]), floor=STIFF)
-    out = _simulate(np.array([*HEIGHTS, *HEIGHTS]), BALL, model, rbjax.Solver(), method="ode")
+    out = simulate_model(np.array([*HEIGHTS, *HEIGHTS]), BALL, model, rbjax.Solver(), method="ode")
     energy = rbjax.energy_balance(np.array([*HEIGHTS, *HEIGHTS]), BALL, model)
     return out, energy
 

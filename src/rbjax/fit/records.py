@@ -220,7 +220,7 @@ def _check_positive(name, value):
 # features measured the same way on data and predictions
 
 
-def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRACTION):
+def pulse_features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRACTION):
     """(t_rise, t_fall, peak, L_FE × 6 octave bands) of histories (..., n), differentiable.
 
     t_rise/t_fall: where the force crosses ``fraction`` × peak on the rising edge (last
@@ -258,7 +258,7 @@ def _features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATURE_FRA
 
 @functools.lru_cache(maxsize=8)
 def _features_jit(rate_Hz: float, n_pad: int):
-    return jax.jit(lambda x: _features(x, rate_Hz, n_pad))
+    return jax.jit(lambda x: pulse_features(x, rate_Hz, n_pad))
 
 
 def _n_pad(rate_Hz: float) -> int:

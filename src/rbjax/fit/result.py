@@ -94,8 +94,8 @@ class FitResult:
         """JSON-ready dict; ``ball``/``model`` in the ``rbjax.terms.serialize`` format
         (``rbjax simulate --params FIT.json`` reproduces the fitted model)."""
         return {
-            **_model_fields(self),
-            "per_height": [_plain(row) for row in self.per_height],
+            **model_fields(self),
+            "per_height": [plain_value(row) for row in self.per_height],
             "octave_bands_Hz": list(OCTAVE_BANDS),
             "residual_rms_N": self.residual_rms_N,
             "converged": bool(self.converged),
@@ -119,7 +119,7 @@ class FitResult:
             f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): "
             f"{self.message}"
         ]
-        lines += _parameter_lines(self)
+        lines += parameter_lines(self)
         bands = OCTAVE_BANDS
         header = [
             "h (m)",
@@ -168,7 +168,7 @@ class Prediction:
     converged: bool = True
 
 
-def _model_fields(fit) -> dict:
+def model_fields(fit) -> dict:
     """The JSON of what a fit (:class:`FitResult`, ``SummaryFitResult``) says of its model:
     name, blocked force, gas, ball and model (``rbjax.terms.serialize`` format), parameters,
     correlations, identifiability."""
@@ -187,7 +187,7 @@ def _model_fields(fit) -> dict:
     }
 
 
-def _parameter_lines(fit) -> list[str]:
+def parameter_lines(fit) -> list[str]:
     """The lines of a fit's text summary on its parameters (value ± std, 95 % interval; held
     ones marked) and what the data determine."""
     lines = []
@@ -202,14 +202,14 @@ def _parameter_lines(fit) -> list[str]:
     return lines + ["identifiability: " + fit.identifiability]
 
 
-def _plain(x):
+def plain_value(x):
     if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
+        return {k: plain_value(v) for k, v in x.items()}
     if isinstance(x, (list, tuple, np.ndarray)):
         return (
-            [_plain(v) for v in np.asarray(x).tolist()]
+            [plain_value(v) for v in np.asarray(x).tolist()]
             if isinstance(x, np.ndarray)
-            else [_plain(v) for v in x]
+            else [plain_value(v) for v in x]
         )
     if isinstance(x, (np.floating, float)):
         return float(x)

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..terms.ball import Ball
 from ..terms.model import Model
-from .result import _model_fields, _parameter_lines
+from .result import model_fields, parameter_lines
 
 #: How each figure is shown: (label, unit, scale from SI to the unit shown).
 DISPLAY = {
@@ -75,7 +75,7 @@ class SummaryFitResult:
         return {
             "kind": "summary fit",
             "source": self.source,
-            **_model_fields(self),
+            **model_fields(self),
             "figures": [dict(r) for r in self.rows],
             "chi2": self.chi2,
             "n_figures": self.n_figures,
@@ -93,7 +93,7 @@ class SummaryFitResult:
             f"to {self.n_figures} figures of {self.source}: χ² = {self.chi2:.3g}, {self.n_free} "
             f"free; {self.message}"
         ]
-        lines += _parameter_lines(self)
+        lines += parameter_lines(self)
         rows = []
         for r in self.rows:
             label, unit, k = display(r["figure"])

@@ -45,7 +45,7 @@ PAPER = {
 }
 
 
-def _ends(run) -> tuple[int, int]:
+def solved_ends(run) -> tuple[int, int]:
     """Indices of the lowest and highest heights whose solve succeeded (Fig. 12, §4.2)."""
     ok = np.flatnonzero(run["ok"])
     return (int(ok[0]), int(ok[-1])) if ok.size else (0, len(run["ok"]) - 1)
@@ -61,7 +61,7 @@ def _at(runs, heights, name, h):
     return {gas: (float(run[name][idx[0]]) if idx.size else None) for gas, run in runs.items()}
 
 
-def _comparison(runs, heights) -> list[dict]:
+def comparison_rows(runs, heights) -> list[dict]:
     """Rows of the report: paper value, rbjax gas on/off, relative differences."""
     from ..spectrum.bands import OCTAVE_BANDS
 
@@ -148,7 +148,7 @@ def _comparison(runs, heights) -> list[dict]:
     return rows
 
 
-def _f(x, spec=".1f"):
+def fnum(x, spec=".1f"):
     return "—" if x is None or not np.isfinite(x) else format(x, spec)
 
 
@@ -167,7 +167,7 @@ def printed_eq4_limit_m(radius_m: float) -> float:
     return float(x * radius_m)
 
 
-def _diff(row, gas) -> str:
+def diff_text(row, gas) -> str:
     """Relative difference in %, or the difference in dB for levels."""
     if row["unit"] == "dB":
         d = row["difference"][gas]
@@ -175,7 +175,7 @@ def _diff(row, gas) -> str:
     return _pct(row["relative_difference"][gas])
 
 
-def _explanations(runs, heights, comparison) -> dict[str, str]:
+def explain_comparison(runs, heights, comparison) -> dict[str, str]:
     """One paragraph per compared quantity; every number in it is computed here."""
     from ..spectrum.bands import OCTAVE_BANDS, band_edges_Hz
 
@@ -277,7 +277,7 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
     ideal = 10 * math.log10(2)
     slope = {g: runs[g]["increase_per_doubling_dB"] for g in GAS}
     spread = {g: float(np.nanmax(np.abs(slope[g][others] - ideal))) for g in GAS}
-    lo, hi = _ends(on)  # the lowest and highest heights solved
+    lo, hi = solved_ends(on)  # the lowest and highest heights solved
     res = {
         g: (runs[g]["contact_resonance_Hz"][lo], runs[g]["contact_resonance_Hz"][hi]) for g in GAS
     }
@@ -289,8 +289,8 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
         f"within {spread['adiabatic']:.2f} dB (gas on) and {spread['none']:.2f} dB (gas off) of "
         f"that (paper: about 3 dB). The 63 Hz band ({lo63:.1f}–{hi63:.1f} Hz) holds the contact "
         "resonance, the first minimum of the spectrum, which moves up as the contact shortens "
-        f"({_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz gas on, "
-        f"{_f(res['none'][0])} → {_f(res['none'][1])} Hz gas off, {heights[lo] * 100:.0f} → "
+        f"({fnum(res['adiabatic'][0])} → {fnum(res['adiabatic'][1])} Hz gas on, "
+        f"{fnum(res['none'][0])} → {fnum(res['none'][1])} Hz gas off, {heights[lo] * 100:.0f} → "
         f"{heights[hi] * 100:.0f} cm), so the band gains energy faster: rbjax gives "
         f"{slope['adiabatic'][j63]:.2f} dB (gas on) and {slope['none'][j63]:.2f} dB (gas off) at "
         f"63 Hz against the paper's about {paper63:.0f} dB. "
@@ -316,10 +316,10 @@ def _explanations(runs, heights, comparison) -> dict[str, str]:
         "The notch sits near 1.5/t_c, the first zero of a half-sine pulse: "
         f"1.5/t_c = {1.5 / tc['adiabatic'][0]:.1f} → {1.5 / tc['adiabatic'][1]:.1f} Hz gas on and "
         f"{1.5 / tc['none'][0]:.1f} → {1.5 / tc['none'][1]:.1f} Hz gas off, against the located "
-        f"minima {_f(res['adiabatic'][0])} → {_f(res['adiabatic'][1])} Hz and "
-        f"{_f(res['none'][0])} → {_f(res['none'][1])} Hz. The gas force makes the pulse peakier "
-        "than a half-sine at large heights, which moves the notch above 1.5/t_c. The paper read "
-        "66 → 73 Hz from a 1 Hz FFT of its 1 s record; rbjax refines the minimum on a 0.1 Hz "
-        f"grid.{match}"
+        f"minima {fnum(res['adiabatic'][0])} → {fnum(res['adiabatic'][1])} Hz and "
+        f"{fnum(res['none'][0])} → {fnum(res['none'][1])} Hz. The gas force makes the pulse "
+        "peakier than a half-sine at large heights, which moves the notch above 1.5/t_c. The "
+        "paper read 66 → 73 Hz from a 1 Hz FFT of its 1 s record; rbjax refines the minimum on a "
+        f"0.1 Hz grid.{match}"
     )
     return text

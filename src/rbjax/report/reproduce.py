@@ -34,11 +34,11 @@ from .paper import (
     GAS,
     PAPER,
     STANDARD_HEIGHT_M,
-    _comparison,
-    _diff,
-    _ends,
-    _explanations,
-    _f,
+    comparison_rows,
+    diff_text,
+    explain_comparison,
+    fnum,
+    solved_ends,
 )
 
 
@@ -296,7 +296,7 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     # Fig. 12: narrow-band spectra at the lowest and highest height, contact resonance marked.
     fig, axes = figure(2)
     freq = np.arange(0.0, 400.0 + 0.125, 0.25)
-    ends = list(_ends(runs["adiabatic"]))
+    ends = list(solved_ends(runs["adiabatic"]))
     for ax, (g, run) in zip(axes, runs.items()):
         # The record is zero after the contact, so its DTFT is that of the contact samples.
         n = int(np.max(np.sum(run["in_contact"], axis=1))) + 1
@@ -354,9 +354,9 @@ def _report(
             f"{r['paper']:{'.1f' if r['unit'] in ('ms', 'dB') else '.0f'}} {r['unit']}"
         )
         lines.append(
-            f"| {r['quantity']} | {r['source']} | {paper} | {_f(r['rbjax']['adiabatic'], spec)} "
-            f"{r['unit']} | {_f(r['rbjax']['none'], spec)} {r['unit']} | {_diff(r, 'adiabatic')} "
-            f"| {_diff(r, 'none')} |"
+            f"| {r['quantity']} | {r['source']} | {paper} | {fnum(r['rbjax']['adiabatic'], spec)} "
+            f"{r['unit']} | {fnum(r['rbjax']['none'], spec)} {r['unit']} | "
+            f"{diff_text(r, 'adiabatic')} | {diff_text(r, 'none')} |"
         )
     lines += ["", "## Why they differ", ""]
     titles = {
@@ -381,11 +381,12 @@ def _report(
     on, off = runs["adiabatic"], runs["none"]
     for i, h in enumerate(heights):
         lines.append(
-            f"| {h * 100:.0f} | {_f(on['contact_time_s'][i] * 1e3, '.2f')} | "
-            f"{_f(off['contact_time_s'][i] * 1e3, '.2f')} | {_f(on['peak_force_N'][i], '.0f')} | "
-            f"{_f(off['peak_force_N'][i], '.0f')} | {_f(on['restitution'][i], '.3f')} | "
-            f"{_f(off['restitution'][i], '.3f')} | {_f(on['lfe_total_dB'][i])} | "
-            f"{_f(off['lfe_total_dB'][i])} |"
+            f"| {h * 100:.0f} | {fnum(on['contact_time_s'][i] * 1e3, '.2f')} | "
+            f"{fnum(off['contact_time_s'][i] * 1e3, '.2f')} | "
+            f"{fnum(on['peak_force_N'][i], '.0f')} | "
+            f"{fnum(off['peak_force_N'][i], '.0f')} | {fnum(on['restitution'][i], '.3f')} | "
+            f"{fnum(off['restitution'][i], '.3f')} | {fnum(on['lfe_total_dB'][i])} | "
+            f"{fnum(off['lfe_total_dB'][i])} |"
         )
     i1 = int(np.flatnonzero(np.isclose(heights, STANDARD_HEIGHT_M))[0])
     lines += [
@@ -398,7 +399,7 @@ def _report(
     for g in GAS:
         lines.append(
             f"| rbjax, {GAS[g]} (dB) | "
-            + " | ".join(_f(v) for v in runs[g]["lfe_octave_dB"][i1])
+            + " | ".join(fnum(v) for v in runs[g]["lfe_octave_dB"][i1])
             + " |"
         )
     from ..plot import tolerance_limits
@@ -525,8 +526,8 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             enabled=progress,
         )
         runs[gas] = _run(heights, gas)
-    comparison = _comparison(runs, heights)
-    explanations = _explanations(runs, heights, comparison)
+    comparison = comparison_rows(runs, heights)
+    explanations = explain_comparison(runs, heights, comparison)
     i1 = int(np.flatnonzero(np.isclose(heights, STANDARD_HEIGHT_M))[0])
     conformance = {}
     for g, run in runs.items():

@@ -50,10 +50,10 @@ from ..terms.model import Model, Solver
 from .angle import impact_angle
 from .devices import default_chunk_size, local_devices
 from .inputs import padded_rows
-from .ode import _trajectory, impact_ode
+from .ode import impact_ode, ode_trajectory
 from .outcome import STATUS_CODES
 from .quadrature import impact_quadrature
-from .sampled import _sampled_history, sampled_history_unsupported, substeps_for_contact
+from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
 from .sharded import sharded_map
 from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, resolve_method
 
@@ -140,11 +140,11 @@ def _one_impact(row: Mapping, model: Model, spec: _Spec) -> dict:
     height, ball, model = assemble(row, None, JIS_RUBBER_BALL, model)
     if spec.n_times:  # L_FE per octave band from the contact samples of the record (§2.4)
         if spec.path == "sampled":
-            *_, force, _, status = _sampled_history(
+            *_, force, _, status = sampled_impact(
                 height, ball, model, spec.rate_Hz, spec.n_times, spec.substeps
             )
         else:
-            traj = _trajectory(
+            traj = ode_trajectory(
                 height, ball, model, spec.solver, jnp.arange(spec.n_times) / spec.rate_Hz
             )
             force, status = traj.force_N, traj.status

@@ -112,7 +112,7 @@ def plan(n: int, n_devices: int, chunk_size: int) -> tuple[int, int]:
 
 
 @functools.lru_cache(maxsize=64)
-def _jitted(fn: Callable) -> Callable:
+def cached_jit(fn: Callable) -> Callable:
     return jax.jit(fn)
 
 
@@ -155,7 +155,7 @@ def device_map(
     used, chunk = plan(n, len(devices), int(chunk_size))
     devices = devices[:used]
     n_chunks = math.ceil(n / chunk)
-    program = _jitted(fn)
+    program = cached_jit(fn)
     shared_leaves, shared_def = jax.tree_util.tree_flatten(shared)
     on_device = [
         jax.tree_util.tree_unflatten(

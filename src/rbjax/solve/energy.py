@@ -29,8 +29,8 @@ from jaxtyping import ArrayLike
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
-from .ode import _final, _phases, _status
-from .vector_field import _split_energy, body_velocity_m_per_s
+from .ode import final_state, impact_status, solve_phases
+from .vector_field import body_velocity_m_per_s, split_energy
 
 
 class EnergyBalance(eqx.Module):
@@ -57,15 +57,15 @@ class EnergyBalance(eqx.Module):
 
 
 def _balance(height_m, ball, model, solver) -> EnergyBalance:
-    v0, sols, _, (t_max, y_max) = _phases(
+    v0, sols, _, (t_max, y_max) = solve_phases(
         height_m, ball, model, solver, dense=False, peak=False, energy=True
     )
     sol1, _, sol3 = sols
-    t_end, y_end = _final(sol3)
-    y_end, acc = _split_energy(y_end, model)
+    t_end, y_end = final_state(sol3)
+    y_end, acc = split_energy(y_end, model)
     speed = body_velocity_m_per_s(y_end, ball, model)
     rebound = 0.5 * dynamic_mass_kg(y_end[0], ball) * speed**2
-    status = _status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
+    status = impact_status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
     nan = jnp.where(status == 0, 1.0, jnp.nan)
     return EnergyBalance(
         impact_energy_J=0.5 * ball.mass_kg * v0**2,

@@ -39,14 +39,14 @@ from .outcome import (
     impact_velocity_m_per_s,
 )
 from .vector_field import (
-    _COMPRESSION_ENERGY,
-    _RESTITUTION,
-    _RESTITUTION_ENERGY,
+    COMPRESSION_ENERGY_FIELD,
     COMPRESSION_FIELD,
-    _contact_force,
-    _initial_state,
+    RESTITUTION_ENERGY_FIELD,
+    RESTITUTION_FIELD,
     body_velocity_m_per_s,
+    contact_force,
     floor_force_N,
+    initial_state,
 )
 
 
@@ -105,7 +105,7 @@ def _saveat(dense: bool, steps: bool):
     )
 
 
-def _final(sol):
+def final_state(sol):
     """(t, y) at the end of a solve."""
     if isinstance(sol.ts, (list, tuple)):
         return sol.ts[0][-1], sol.ys[0][-1]
@@ -116,7 +116,7 @@ def _ok(sol):
     return (sol.result == dfx.RESULTS.successful) | (sol.result == dfx.RESULTS.event_occurred)
 
 
-def _phases(
+def solve_phases(
     height_m,
     ball,
     model: Model,
@@ -135,9 +135,11 @@ def _phases(
     """
     args = (ball, model)
     v0 = impact_velocity_m_per_s(height_m)
-    y0 = _initial_state(v0, ball, model, energy)
+    y0 = initial_state(v0, ball, model, energy)
     compression, restitution = (
-        (_COMPRESSION_ENERGY, _RESTITUTION_ENERGY) if energy else (COMPRESSION_FIELD, _RESTITUTION)
+        (COMPRESSION_ENERGY_FIELD, RESTITUTION_ENERGY_FIELD)
+        if energy
+        else (COMPRESSION_FIELD, RESTITUTION_FIELD)
     )
     singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
 
@@ -162,7 +164,7 @@ def _phases(
     else:
         conds, dirs = (velocity, singularity), (False, True)
     sol1 = _solve(compression, 0.0, y0, args, conds, dirs, solver, dense=dense, steps=steps)
-    t_peak, y_peak = _final(sol1)
+    t_peak, y_peak = final_state(sol1)
 
     if split:
         # From the force peak on to maximum compression (zero length if they coincide).
@@ -179,7 +181,7 @@ def _phases(
             dense=dense,
             steps=steps,
         )
-        t_max, y_max = _final(sol2)
+        t_max, y_max = final_state(sol2)
     else:
         sol2, t_max, y_max = None, t_peak, y_peak
 
@@ -191,7 +193,7 @@ def _phases(
     if model.velocity_dependent:
 
         def contact(t, y, args, **kw):
-            return _contact_force(y, *args) / force_scale
+            return contact_force(y, *args) / force_scale
 
         conds3, dirs3 = (contact, deflection), (False, False)
     else:
@@ -204,7 +206,7 @@ def _phases(
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 
 
-def _status(sols, y_max, outputs, ball, model: Model):
+def impact_status(sols, y_max, outputs, ball, model: Model):
     """The status code of one impact from its phase solutions and outputs (see STATUS_NAMES)."""
     solved = [s for s in sols if s is not None]
     step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
@@ -235,7 +237,7 @@ def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
     ``value_of`` at t_start if no event occurs."""
     t0, y0 = start
     sol = _solve(
-        _RESTITUTION,
+        RESTITUTION_FIELD,
         t0,
         y0,
         args,
@@ -245,7 +247,7 @@ def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
         t1=t_end,
         max_steps=REFINE_MAX_STEPS,
     )
-    t, y = _final(sol)
+    t, y = final_state(sol)
     hit = sol.result == dfx.RESULTS.event_occurred
     return jnp.where(hit, value_of(y), value_of(y0)), jnp.where(hit, t, t0)
 
@@ -254,7 +256,7 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
     """Global maxima of the floor force (and its time) and of δ over the contact.
 
     A ball mode or a moving floor can give several local maxima, and the phase events find
-    the first one only. Every step of every phase is saved (``_phases(steps=True)``); the
+    the first one only. Every step of every phase is saved (``solve_phases(steps=True)``); the
     largest value over the step ends and the step ends either side of it bracket the global
     maximum, located exactly by a short solve to the event dF/dt = 0 (or δ̇ = 0) between them.
     The restitution vector field is valid in every phase (its thrust acts only where δ̇ < 0).
@@ -274,7 +276,7 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
         return floor_force_N(y, ball, model)
 
     def force_rate(y):
-        _, rate = jax.jvp(force, (y,), (_RESTITUTION(0.0, y, args),))
+        _, rate = jax.jvp(force, (y,), (RESTITUTION_FIELD(0.0, y, args),))
         return rate / (force_scale * v0 / ball.wall_m)
 
     def deflection(y):
@@ -370,15 +372,15 @@ def _recontacts(y_end, args):
 
 
 def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
-    v0, sols, (t_peak, y_peak), (t_max, y_max) = _phases(
+    v0, sols, (t_peak, y_peak), (t_max, y_max) = solve_phases(
         height_m, ball, model, solver, dense=False, steps=model.coupled
     )
     sol3 = sols[2]
-    t_end, y_end = _final(sol3)
+    t_end, y_end = final_state(sol3)
     args = (ball, model)
 
     peak = floor_force_N(y_peak, *args)
-    first = floor_force_N(_initial_state(v0, ball, model), *args)
+    first = floor_force_N(initial_state(v0, ball, model), *args)
     max_deflection = y_max[0]
     recontact = jnp.asarray(False)
     if model.coupled:
@@ -391,7 +393,7 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
 
     solved = [s for s in sols if s is not None]
     steps = sum(s.stats["num_steps"] for s in solved)
-    status = _status(
+    status = impact_status(
         sols,
         y_max.at[0].set(max_deflection),
         jnp.stack([t_end, peak_force, restitution, max_deflection, t_max, peak_time]),
@@ -413,14 +415,14 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     )
 
 
-def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
+def ode_trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajectory:
     # compression in one solve: the force peak needs no exact time here
-    v0, (sol1, _, sol3), _, (t_max, y_max) = _phases(
+    v0, (sol1, _, sol3), _, (t_max, y_max) = solve_phases(
         height_m, ball, model, solver, dense=True, peak=False
     )
     t_end = sol3.ts[-1]
     args = (ball, model)
-    status = _status((sol1, sol3), y_max, jnp.stack([t_end, t_max, y_max[0]]), ball, model)
+    status = impact_status((sol1, sol3), y_max, jnp.stack([t_end, t_max, y_max[0]]), ball, model)
     failed = status != 0
 
     def at(t):
@@ -452,4 +454,4 @@ def _trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Trajec
 
 
 impact_batch = eqx.filter_jit(eqx.filter_vmap(impact_ode, in_axes=(0, 0, 0, None)))
-trajectory_batch = eqx.filter_jit(eqx.filter_vmap(_trajectory, in_axes=(0, 0, 0, None, None)))
+trajectory_batch = eqx.filter_jit(eqx.filter_vmap(ode_trajectory, in_axes=(0, 0, 0, None, None)))

@@ -106,7 +106,7 @@ def gauss_legendre_01(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-def _check(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) -> None:
+def check_quadrature(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) -> None:
     require_x64()
     check_range("height_m", height_m, lower=0.0)
     if not isinstance(ball, Ball):
@@ -128,7 +128,7 @@ def _check(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) 
         )
 
 
-def _force(d, ball, model):
+def undamped_force(d, ball, model):
     """F(δ) = F_B (+ stiffening) (+ F_G): the right-hand side of Eq. 7 without damping."""
     return contact_force_N(d, 0.0, jnp.zeros(0), ball, model)
 
@@ -296,7 +296,7 @@ def _bracket(v0, ball, model, target, d_limit):
     t, to_coef, to_anti = (jnp.asarray(a) for a in _bracket_rules(BRACKET_NODES))
     d0 = jnp.minimum(_upper_bound(v0, ball, model, target), d_limit)
     s = d0 * t[1:]  # g(0) = 0: not evaluated
-    g = jnp.concatenate([jnp.zeros(1), _force(s, ball, model) / (2.0 * ball.radius_m - s)])
+    g = jnp.concatenate([jnp.zeros(1), undamped_force(s, ball, model) / (2.0 * ball.radius_m - s)])
     coef, anti = g @ to_coef.T, g @ to_anti.T  # row-vector form: one GEMM under vmap
 
     def step(_, d):
@@ -315,7 +315,7 @@ def _tail_estimate(tail):
     return last * jnp.minimum(1.0, last / jnp.maximum(before, 1e-300))
 
 
-def _bernstein_decay(a, n):
+def bernstein_decay(a, n):
     """ρ^(−2n), ρ = a + √(a² − 1): the error decay of an n-point rule for a function analytic
     inside the Bernstein ellipse whose semi-major axis is a (in units of the half interval)."""
     rho = a + jnp.sqrt(jnp.maximum(a**2 - 1.0, 0.0))
@@ -331,7 +331,7 @@ def _phi_rule_error(d_max, two_r, n: int):
     alpha_left = 1.0 + 4.0 / jnp.pi * jnp.arcsin(
         jnp.clip(0.5 * two_r / jnp.maximum(d_max, 1e-300), 0.0, 1.0)
     )
-    return _bernstein_decay(jnp.minimum(alpha_right, alpha_left), n)
+    return bernstein_decay(jnp.minimum(alpha_right, alpha_left), n)
 
 
 class _Scalars(eqx.Module):
@@ -361,7 +361,7 @@ def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
 
     # n − 1 samples on (0, d1] (fixed points; the samples carry the derivatives)
     s = d1 * t
-    f = _force(s, ball, model)
+    f = undamped_force(s, ball, model)
     gap = two_r - s
     # every functional at once, (n,) @ (n, rows): a row vector on the left keeps the batch a free
     # dimension under vmap (one GEMM, ~5× faster than rows @ samples); two products, not one of
@@ -457,7 +457,7 @@ def quadrature_error_estimate(
     """The scalar path's error estimate for ONE impact (statuses ``ok`` need it ≤ RULE_TOLERANCE):
     the larger of the interpolants' Chebyshev tail (relative), the φ rule's ρ^(−2n) and the Taylor
     remainder in ε."""
-    _check(height_m, ball, model, n_nodes, lowest=4, highest=128)
+    check_quadrature(height_m, ball, model, n_nodes, lowest=4, highest=128)
     return _solve_scalars(height_m, ball, model, n_nodes).error_estimate
 
 
@@ -497,7 +497,7 @@ def impact_quadrature(
     reported peak is max(F(δ_max), floor force at first contact (M/2R)v0²), and the peak time is
     the compression time (or 0 if the first-contact value is larger).
     """
-    _check(height_m, ball, model, n_nodes, lowest=4, highest=128)
+    check_quadrature(height_m, ball, model, n_nodes, lowest=4, highest=128)
     sol = _solve_scalars(height_m, ball, model, n_nodes)
     peak = sol.peak_force
     first = model.momentum_flux_weight * ball.mass_kg / (2.0 * ball.radius_m) * sol.v0**2

@@ -15,7 +15,13 @@ from ..terms.ball import Ball
 from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import Model
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
-from .quadrature import RESIDUAL_TOLERANCE, _bernstein_decay, _check, _force, gauss_legendre_01
+from .quadrature import (
+    RESIDUAL_TOLERANCE,
+    bernstein_decay,
+    check_quadrature,
+    gauss_legendre_01,
+    undamped_force,
+)
 
 # --- force histories (force_history_quadrature) -------------------------------------------------
 #: Gauss–Legendre points of the nested rules of the history path.
@@ -33,13 +39,19 @@ def _compression_residual(d, v0, ball, model, x, w):
     """u_c(δ) = v0² − (4R/M) ∫₀^δ F(s)/(2R − s) ds on an n-point rule."""
     two_r = 2.0 * ball.radius_m
     s = d * x
-    integral = d * jnp.sum(w * _force(s, ball, model) / (two_r - s))
+    integral = d * jnp.sum(w * undamped_force(s, ball, model) / (two_r - s))
     return v0**2 - 4.0 * ball.radius_m / ball.mass_kg * integral
 
 
 def _compression_slope(d, ball, model):
     """du_c/dδ = −(4R/M) F(δ)/(2R − δ)."""
-    return -4.0 * ball.radius_m / ball.mass_kg * _force(d, ball, model) / (2.0 * ball.radius_m - d)
+    return (
+        -4.0
+        * ball.radius_m
+        / ball.mass_kg
+        * undamped_force(d, ball, model)
+        / (2.0 * ball.radius_m - d)
+    )
 
 
 def _max_deflection(v0, ball, model, x, w, d_limit):
@@ -68,7 +80,7 @@ def _phase_weights(sigma, d_max, ball, model, x, w):
     """W_c(σ) and W_r(σ) (see the module docstring) at the points ``sigma`` (inner n-point rule)."""
     two_r = 2.0 * ball.radius_m
     s = d_max * (1.0 - sigma[..., None] ** 2 * x)
-    f = _force(s, ball, model)
+    f = undamped_force(s, ball, model)
     scale = 4.0 * ball.radius_m * d_max / ball.mass_kg
     return scale * jnp.sum(w * f / (two_r - s), axis=-1), scale * jnp.sum(
         w * f * (two_r - s), axis=-1
@@ -91,7 +103,7 @@ def rule_error_estimate(d_max, two_r, n_nodes: int):
     [−1, 1]'s axis). Near the mass singularity ρ → 1 and no fixed rule converges: at
     δ_max = 0.998·2R, 32 nodes miss the contact time by 6e-4 (estimate 3e-3), 128 by 1e-10.
     """
-    return _bernstein_decay(2.0 * two_r / jnp.maximum(d_max, 1e-300) - 1.0, n_nodes)
+    return bernstein_decay(2.0 * two_r / jnp.maximum(d_max, 1e-300) - 1.0, n_nodes)
 
 
 class _Solution(eqx.Module):
@@ -124,7 +136,9 @@ def _solve(height_m, ball, model, n_nodes) -> _Solution:
     t_restitution = jnp.sum(w * rate_r)
     s = d_max * x
     v_out = jnp.sqrt(
-        d_max * jnp.sum(w * _force(s, ball, model) * (two_r - s)) / (ball.mass_kg * ball.radius_m)
+        d_max
+        * jnp.sum(w * undamped_force(s, ball, model) * (two_r - s))
+        / (ball.mass_kg * ball.radius_m)
     )
 
     finite = jnp.all(jnp.isfinite(jnp.stack([d_max, t_compression, t_restitution, v_out])))
@@ -161,7 +175,7 @@ def force_history_quadrature(
     ``times_s`` is a 1-D array. Outputs are NaN where the impact's status is not 0. Cost:
     (HISTORY_NEWTON_STEPS + 1)·n(n + 1) + n + 1 force evaluations per sample.
     """
-    _check(height_m, ball, model, n_nodes)
+    check_quadrature(height_m, ball, model, n_nodes)
     times = jnp.asarray(times_s, dtype=jnp.float64)
     if times.ndim != 1:
         raise ValueError(f"times_s has shape {times.shape}; valid: a 1-D array of times")
@@ -204,7 +218,7 @@ def force_history_quadrature(
         sigma * jnp.sqrt(w_c),
         -sigma * jnp.sqrt(w_r) / (2.0 * ball.radius_m - deflection),
     )
-    force = _force(deflection, ball, model)
+    force = undamped_force(deflection, ball, model)
     force = force + model.momentum_flux_weight * jnp.where(
         compressing, ball.mass_kg / (2.0 * ball.radius_m) * sigma**2 * w_c, 0.0
     )

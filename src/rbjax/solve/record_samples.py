@@ -40,7 +40,7 @@ import jax.numpy as jnp
 
 from ..terms.model import Model
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s
-from .vector_field import _RESTITUTION, _contact_force, _initial_state, floor_force_N
+from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
 
 #: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate λ of the
 #: model over its fit range (a ball mode's damping ηω at η = 4, f = 2.5 kHz; a Zener
@@ -77,7 +77,7 @@ def _rk4(y, k1, h, args, substeps: int):
     of the vector field in the compiled program, whatever ``substeps``."""
 
     def f(yy):
-        return _RESTITUTION(0.0, yy, args)
+        return RESTITUTION_FIELD(0.0, yy, args)
 
     step = h / substeps
 
@@ -97,7 +97,7 @@ def _force_and_rate(y, ydot, ball, model):
     force, rate = jax.jvp(lambda yy: floor_force_N(yy, ball, model), (y,), (ydot,))
     inside = y[0] > 0.0
     if model.velocity_dependent:
-        inside = inside & (_contact_force(y, ball, model) > 0.0)
+        inside = inside & (contact_force(y, ball, model) > 0.0)
     return force, rate, inside
 
 
@@ -112,7 +112,7 @@ def record_samples(
     n0 = jnp.floor(x)
     a = n0 + 1.0 - x  # in-contact fraction of the first sample's interval, (0, 1]
     args = (ball, model)
-    y0 = _initial_state(impact_velocity_m_per_s(height_m), ball, model)
+    y0 = initial_state(impact_velocity_m_per_s(height_m), ball, model)
     singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
     # Sample j of the contact is reached by a step of h_j from the previous one: aΔ/2 to the
     # first sample's in-contact midpoint, (a + 1)Δ/2 to the second sample, Δ after that. The
@@ -144,7 +144,7 @@ def record_samples(
         ), out
 
     false = jnp.asarray(False)
-    k0 = _RESTITUTION(0.0, y0, args)
+    k0 = RESTITUTION_FIELD(0.0, y0, args)
     (_, _, _, bad, singular_hit), (hist_f, hist_d) = jax.lax.scan(
         step, (y0, k0, jnp.asarray(True), false, false), (h, scale, value_rate, rate_rate)
     )

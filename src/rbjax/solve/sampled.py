@@ -45,7 +45,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
 from .inputs import PAPER_RATE_Hz, as_arrays, broadcast_inputs, check_inputs
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
-from .vector_field import _RESTITUTION, _contact_force, _initial_state, floor_force_N
+from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
 
 #: Fourth-order Runge–Kutta steps per sample unless the caller asks for more.
 DEFAULT_SUBSTEPS = 1
@@ -58,18 +58,18 @@ HERMITE_NEWTON_STEPS = 4
 
 def _sample(y, ball, model):
     """(dy/dt, floor force, the contact not yet over) at state y. The three share the contact
-    force, which XLA computes once (see ``_sampled_history``)."""
+    force, which XLA computes once (see ``sampled_impact``)."""
     inside = y[0] > 0.0
     if model.velocity_dependent:
-        inside = inside & (_contact_force(y, ball, model) > 0.0)
-    return _RESTITUTION(0.0, y, (ball, model)), floor_force_N(y, ball, model), inside
+        inside = inside & (contact_force(y, ball, model) > 0.0)
+    return RESTITUTION_FIELD(0.0, y, (ball, model)), floor_force_N(y, ball, model), inside
 
 
 def _rk4(y, k1, h, ball, model):
     """One classic Runge–Kutta step of length h from y, with k1 = dy/dt at y given."""
 
     def f(yy):
-        return _RESTITUTION(0.0, yy, (ball, model))
+        return RESTITUTION_FIELD(0.0, yy, (ball, model))
 
     k2 = f(y + 0.5 * h * k1)
     k3 = f(y + 0.5 * h * k2)
@@ -116,11 +116,11 @@ def _max_deflection(d, v, inside, dt):
     return jnp.maximum(jnp.max(d_in), jnp.where(jnp.any(crossing), refined, 0.0))
 
 
-def _sampled_history(height_m, ball, model: Model, rate_Hz, num_samples: int, substeps: int):
+def sampled_impact(height_m, ball, model: Model, rate_Hz, num_samples: int, substeps: int):
     """One impact: (δ, δ̇, floor force) at the ``num_samples`` samples k/rate_Hz from first
     contact, each (num_samples,), 0 out of contact, NaN if failed, and the status."""
     v0 = impact_velocity_m_per_s(height_m)
-    y0 = _initial_state(v0, ball, model)
+    y0 = initial_state(v0, ball, model)
     h = 1.0 / (rate_Hz * substeps)
     singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
     arrays, static = eqx.partition((ball, model), eqx.is_array)
@@ -139,7 +139,7 @@ def _sampled_history(height_m, ball, model: Model, rate_Hz, num_samples: int, su
         for j in range(substeps):
             yn = _rk4(yn, kn, h, b, m)
             if j < substeps - 1:
-                kn = _RESTITUTION(0.0, yn, (b, m))
+                kn = RESTITUTION_FIELD(0.0, yn, (b, m))
         kn, fn, inside = _sample(yn, b, m)
         too_close = yn[0] >= singular
         broken = ~(jnp.all(jnp.isfinite(yn)) & jnp.isfinite(fn)) | too_close
@@ -228,7 +228,7 @@ def _sampled_program(height_m, ball, model, rate_Hz, num_samples: int, substeps:
     """Broadcast, the solve vmapped over the batch and the reshape as ONE compiled program (one
     dispatch): one per batch shape, ``num_samples``, ``substeps`` and model structure."""
     shape, height, ball, model = broadcast_inputs(height_m, ball, model)
-    solve = jax.vmap(lambda h, b, m: _sampled_history(h, b, m, rate_Hz, num_samples, substeps))
+    solve = jax.vmap(lambda h, b, m: sampled_impact(h, b, m, rate_Hz, num_samples, substeps))
     out = jax.tree_util.tree_map(
         lambda x: x.reshape(shape + x.shape[1:]), solve(height, ball, model)
     )

@@ -317,7 +317,7 @@ def simulate(
         )
     path = resolve_method(method, model, solver)
     solver = Solver() if solver is None else solver
-    return _simulate(
+    return simulate_model(
         height_m,
         ball,
         model,
@@ -329,7 +329,7 @@ def simulate(
     )
 
 
-def _simulate(
+def simulate_model(
     height_m,
     ball,
     model,
@@ -369,9 +369,9 @@ def _staged() -> bool:
 
 def _check_quadrature(path: str, height_m, ball, model) -> None:
     if path == "quadrature":
-        from .quadrature import DEFAULT_NODES, _check
+        from .quadrature import DEFAULT_NODES, check_quadrature
 
-        _check(height_m, ball, model, DEFAULT_NODES)
+        check_quadrature(height_m, ball, model, DEFAULT_NODES)
 
 
 @eqx.filter_jit
@@ -457,13 +457,13 @@ def _run_rows(path: str, batch: _Rows, solver: Solver, devices=None):
     """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
     batch fits one chunk of one device (JAX arrays), else chunks split over the local
     ``devices`` (default: all; NumPy arrays)."""
-    from .devices import _jitted, default_chunk_size, device_map
+    from .devices import cached_jit, default_chunk_size, device_map
 
     fn = _rows_program(path, batch.spec, solver)
     devices = jax.local_devices() if devices is None else list(devices)
     chunk_size = default_chunk_size(path, devices)
     if batch.size <= chunk_size:  # one chunk, whatever the number of devices
-        return _jitted(fn)(batch.rows, batch.shared)
+        return cached_jit(fn)(batch.rows, batch.shared)
     return device_map(fn, batch.rows, batch.shared, chunk_size=chunk_size, devices=devices)
 
 
@@ -474,6 +474,8 @@ def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
     padded by ``inputs.padded_rows``, so that few shapes compile)."""
     if path != "ode":
         _check_quadrature(path, height_m, ball, model)
+    # a list of heights is one array (as a pytree its floats would be leaves of their own)
+    height_m = np.asarray(height_m, dtype=np.float64)
     batch = _Rows.of(*as_arrays((height_m, ball, model)))
     reshape = lambda x: np.reshape(x, batch.shape)  # noqa: E731
     out = _run_rows(path, batch, solver)
@@ -558,7 +560,7 @@ def force_history(
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
         path = resolve_method("auto", model)
-        contact_time_s = _simulate(
+        contact_time_s = simulate_model(
             height_m, ball, model, solver, method=path, fallback=True
         ).contact_time_s
     tc = None if is_traced(contact_time_s) else np.asarray(contact_time_s, dtype=float)

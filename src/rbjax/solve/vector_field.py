@@ -27,7 +27,7 @@ def _split(y):
     return y[0], y[1], y[2:]
 
 
-def _contact_force(y, ball, model):
+def contact_force(y, ball, model):
     d, v, z = _split(y)
     return contact_force_N(d, v, z, ball, model)
 
@@ -38,7 +38,7 @@ def floor_force_N(y, ball, model):
     on the rigid floor)."""
     v = y[1]
     flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
-    return _contact_force(y, ball, model) + model.momentum_flux_weight * flux
+    return contact_force(y, ball, model) + model.momentum_flux_weight * flux
 
 
 def floor_velocity_m_per_s(y, ball, model):
@@ -61,7 +61,7 @@ def body_velocity_m_per_s(y, ball, model):
 def _series_velocity(y, ball, model):
     """ẇ = −(w + C F_c)/τ of the series element (``rbjax.terms.series_kelvin_voigt``)."""
     return model.series.velocity_m_per_s(
-        model.series_states(y[2:])[0], _contact_force(y, ball, model)
+        model.series_states(y[2:])[0], contact_force(y, ball, model)
     )
 
 
@@ -84,7 +84,7 @@ def _vector_field(flux_on: bool, energy: bool = False):
         d, v, z = _split(y)
         parts = [internal_rates(d, v, z, ball, model)]
         if model.series is None:
-            force = _contact_force(y, ball, model)
+            force = contact_force(y, ball, model)
         else:
             # F_c and G = ∂F_c/∂δ δ̇ + ∂F_c/∂z ż in one forward pass, H = ∂F_c/∂δ̇ (the damping
             # laws only) in another: the series element's dF_c/dt = G + H δ̈
@@ -155,23 +155,23 @@ def _energy_rates(y, ball, model):
         + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
     )
     return jnp.stack(
-        [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, _contact_force(y, ball, model) * v, cap]
+        [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, contact_force(y, ball, model) * v, cap]
     )
 
 
-def _split_energy(y, model):
+def split_energy(y, model):
     """The state without the energy accumulators, and the accumulators."""
     n = 2 + model.num_internal_states
     return y[:n], y[n:]
 
 
 COMPRESSION_FIELD = _vector_field(flux_on=False)
-_RESTITUTION = _vector_field(flux_on=True)
-_COMPRESSION_ENERGY = _vector_field(flux_on=False, energy=True)
-_RESTITUTION_ENERGY = _vector_field(flux_on=True, energy=True)
+RESTITUTION_FIELD = _vector_field(flux_on=True)
+COMPRESSION_ENERGY_FIELD = _vector_field(flux_on=False, energy=True)
+RESTITUTION_ENERGY_FIELD = _vector_field(flux_on=True, energy=True)
 
 
-def _initial_state(v0, ball, model: Model, energy: bool = False):
+def initial_state(v0, ball, model: Model, energy: bool = False):
     """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0) + ẇ(0). On a massless floor
     u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term), and the series element gives
     ẇ(0) = −C F_c(0, δ̇)/τ: δ̇ + F(0, δ̇)/Z + F_c(0, δ̇)/c_b = v0 is solved by Newton's method

@@ -264,12 +264,12 @@ def model_lfe_dB(
                 "model_lfe_dB: pass either model or simulate options, not both "
                 f"({sorted(simulate_kwargs)})"
             )
-        from ..solve.simulate import _simulate, check_inputs, resolve_method
+        from ..solve.simulate import check_inputs, resolve_method, simulate_model
         from ..terms.model import Solver
 
         h = np.asarray(heights_m, dtype=float)
         check_inputs(h, ball, PAPER_RATE_Hz, 1.0)
-        res = _simulate(
+        res = simulate_model(
             h, ball, model, Solver(), method=resolve_method("auto", model, None), fallback=True
         )
     force = np.asarray(res.history().force_N)

@@ -29,7 +29,7 @@ def batch_evaluator(samples: Mapping, gradients: bool = False, **settings):
     return evaluate(samples, **settings)
 
 
-def _is_lfe(name: str) -> bool:
+def is_lfe(name: str) -> bool:
     """Whether an output name is an octave-band force exposure level ``lfe_<band>_dB``."""
     return name.startswith("lfe_")
 

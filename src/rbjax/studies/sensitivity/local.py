@@ -26,15 +26,15 @@ from ...solve.batch import assemble, canonical_name, lfe_output_names, parameter
 from ...solve.simulate import (
     PAPER_DURATION_S,
     PAPER_RATE_Hz,
-    _simulate,
     check_inputs,
     make_model,
+    simulate_model,
     trajectory,
 )
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
 from ...terms.parameters import parameter_table
-from ._common import _is_lfe
+from ._common import is_lfe
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
 _LN10_OVER_10 = math.log(10.0) / 10.0
@@ -78,7 +78,7 @@ class Sensitivity:
         """
         out = {}
         for o in self.outputs:
-            scale = _LN10_OVER_10 if _is_lfe(o) else 1.0 / self.values[o]
+            scale = _LN10_OVER_10 if is_lfe(o) else 1.0 / self.values[o]
             out[o] = {
                 p: self.jacobian[o][p] * self.parameter_values[p] * scale for p in self.parameters
             }
@@ -148,7 +148,7 @@ class Sensitivity:
             ax.barh(np.arange(len(order)), vals[order], color=colors)
             ax.set_yticks(np.arange(len(order)), [self.parameters[k] for k in order])
             ax.axvline(0.0, color="k", lw=0.8)
-            label = f"L_FE {o[4:-3]} Hz (energy)" if _is_lfe(o) else o
+            label = f"L_FE {o[4:-3]} Hz (energy)" if is_lfe(o) else o
             ax.set_title(label, fontsize=9)
             ax.set_xlabel("elasticity (% per %)", fontsize=8)
             ax.tick_params(labelsize=8)
@@ -171,7 +171,7 @@ def _local_jacobian_fn(
 
     def outputs(theta, ball, model):
         height, ball, model = assemble(theta, None, ball, model)
-        result = _simulate(height, ball, model, solver)
+        result = simulate_model(height, ball, model, solver)
         out = {k: getattr(result, k) for k in SCALAR_OUTPUTS}
         if n_times:  # the force history on the contact window, zero-padded to the record (§2.4)
             force = trajectory(height, jnp.arange(n_times) / rate_Hz, ball, model, solver).force_N
@@ -258,7 +258,7 @@ def local_sensitivity(
     n_times = n_total = 0
     if lfe:
         n_total = int(round(rate_Hz * duration_s))
-        tc = np.asarray(_simulate(heights, ball, model, solver).contact_time_s)
+        tc = np.asarray(simulate_model(heights, ball, model, solver).contact_time_s)
         longest = float(np.nanmax(tc)) if np.any(np.isfinite(tc)) else 0.0
         n_times = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
 

@@ -22,7 +22,7 @@ from ...solve.batch import (
 from ...solve.simulate import make_model
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
-from ._common import _is_lfe, batch_evaluator, check_ranges
+from ._common import batch_evaluator, check_ranges, is_lfe
 from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
@@ -75,7 +75,7 @@ def impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
             f"outputs={list(outputs)!r}: unknown {unknown}; valid: 'lfe', {', '.join(valid)}"
         )
     names = tuple(dict.fromkeys(expanded))
-    return names, any(_is_lfe(o) for o in names)
+    return names, any(is_lfe(o) for o in names)
 
 
 def global_sensitivity(
