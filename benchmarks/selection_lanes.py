@@ -1,0 +1,160 @@
+"""The model selection as lanes of batched programs (:mod:`rbjax.fit.lanes`): how much shorter
+the chain of optimiser steps gets when every fit of a structure steps in one batch.
+
+On an accelerator one Levenberg–Marquardt step costs about the same for 1 lane as for 64 (an
+H100 measured ~110 ms a step, 64 lanes 1.2× 3 lanes: the sample loop's sequential depth), so
+the selection's time there is set by the steps walked one after another, not by the work.
+This script runs the full default selection on the bundled recordings on this machine's CPU
+twice — one fit after another (each fit's starts in one call, as an accelerator runs
+them without lanes) and as lanes (``Parallel(lanes=True)``) — and
+counts, from every call of the fit program:
+
+* the **sequential depth**: the steps walked one after another (a call costs as many steps as
+  its slowest lane; an evaluation counts as one step), sequential against lanes;
+* the program calls, their lanes (mean, largest) and the padding;
+* whether the two runs recommend the same model and how far their held-out errors differ.
+
+The depth times a measured per-step cost estimates an accelerator's time; it is an estimate
+(stated as such), not a measurement: only ``benchmarks/device_check.py`` on a machine with an
+accelerator measures that. On the CPU the lanes run slower than one fit after another (the
+lanes are compute-bound there); that time is reported too.
+
+Prints a table and writes ``results/selection_lanes.json``. ``--quick``: two candidates.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from rbjax.data import examples_dir
+from rbjax.fit import prepare_data
+from rbjax.fit.lanes import LaneExecutor
+from rbjax.fit.problem import STEPS_PER_ROUND
+from rbjax.fit.program import run_lanes
+from rbjax.studies import Parallel, select_model
+
+from _common import finish_machine_info, machine_info, parse_args, table, write_json
+
+QUICK = ["hunt-crossley", "hunt-crossley+ball-mode"]
+#: The per-step cost of the fit program on an H100 (issue measurements of `fc0325d`: ~110 ms a
+#: step whatever the batch), for the estimate only.
+H100_STEP_S = 0.110
+
+
+class OneAtATime(LaneExecutor):
+    """A lane executor that runs one fit at a time (each returns before the next starts): the
+    calls of one fit after another, as an accelerator would run them without lanes."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        future = super().submit(fn, *args, **kwargs)
+        future.exception()  # wait for it (an error stays in the future)
+        return future
+
+
+def calls_of(run_selection, executor_type=LaneExecutor):
+    """Run ``run_selection(parallel)`` with a lane executor recording every program call."""
+    calls = []
+
+    def recorded(key, lanes, data):
+        out = run_lanes(key, lanes, data)
+        calls.append({"lanes": int(len(out.steps)), "steps": [int(x) for x in out.steps]})
+        return out
+
+    executor = executor_type(run=recorded)
+    result = run_selection(Parallel(executor=executor))
+    for call, (asked, _) in zip(calls, executor.batcher.batches):
+        call["asked"] = asked
+    return result, calls
+
+
+def depth(calls) -> int:
+    """Steps walked one after another: each call as many as its slowest asked-for lane."""
+    return sum(max(1, *c["steps"][: c["asked"]]) for c in calls)
+
+
+def main() -> None:
+    args = parse_args(__doc__.splitlines()[0])
+    info = machine_info()
+    data = prepare_data(examples_dir())
+    kwargs = {"progress": False}
+    if args.quick:
+        kwargs["candidates"] = QUICK
+        kwargs["blocked_forces"] = ("momentum",)
+
+    def run(parallel):
+        return select_model(data, workers=parallel, **kwargs)
+
+    t0 = time.perf_counter()
+    seq, sequential_calls = calls_of(run, OneAtATime)
+    seq_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lanes, calls = calls_of(run)
+    lanes_s = time.perf_counter() - t0
+    seq_depth = depth(sequential_calls)
+    lane_depth = depth(calls)
+    differences = [
+        float(np.max(np.abs(b.fold_errors_pct / a.fold_errors_pct - 1)))
+        for a, b in zip(seq.candidates, lanes.candidates)
+    ]
+    report = {
+        "candidates": len(seq.candidates),
+        "steps_per_round": STEPS_PER_ROUND,
+        "sequential": {
+            "wall_s": seq_s,
+            "recommended": seq.recommended.label,
+            "program_calls": len(sequential_calls),
+            "sequential_depth_steps": seq_depth,
+        },
+        "lanes": {
+            "wall_s": lanes_s,
+            "recommended": lanes.recommended.label,
+            "program_calls": len(calls),
+            "sequential_depth_steps": lane_depth,
+            "mean_lanes_per_call": float(np.mean([c["asked"] for c in calls])),
+            "largest_call_lanes": max(c["asked"] for c in calls),
+            "padded_lanes": sum(c["lanes"] - c["asked"] for c in calls),
+            "total_lane_steps": sum(sum(c["steps"][: c["asked"]]) for c in calls),
+        },
+        "largest_relative_difference_of_held_out_errors": max(differences),
+        "estimate_on_h100_s": {
+            "sequential": seq_depth * H100_STEP_S,
+            "lanes": lane_depth * H100_STEP_S,
+        },
+        "calls": calls,
+    }
+    rows = [
+        [
+            "one fit after another",
+            f"{seq_s:.1f}",
+            seq.recommended.label,
+            str(len(sequential_calls)),
+            f"{np.mean([c['asked'] for c in sequential_calls]):.1f}",
+            str(seq_depth),
+        ],
+        [
+            "lanes",
+            f"{lanes_s:.1f}",
+            lanes.recommended.label,
+            str(len(calls)),
+            f"{report['lanes']['mean_lanes_per_call']:.1f}",
+            str(lane_depth),
+        ],
+    ]
+    print(
+        table(["run (this CPU)", "wall (s)", "recommended", "calls", "lanes/call", "depth"], rows)
+    )
+    print(
+        f"held-out errors, lanes vs sequential: largest relative difference {max(differences):.1e}"
+    )
+    print(
+        f"estimate on an H100 at {H100_STEP_S * 1e3:.0f} ms a step: {seq_depth} → {lane_depth} "
+        f"steps in sequence, ~{seq_depth * H100_STEP_S:.0f} s → ~{lane_depth * H100_STEP_S:.0f} s "
+        "(an estimate, not a measurement)"
+    )
+    write_json("selection_lanes", {"machine": finish_machine_info(info), **report})
+
+
+if __name__ == "__main__":
+    main()
