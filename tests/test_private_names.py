@@ -1,0 +1,78 @@
+"""No module imports another module's ``_private`` name (README "Layout"): a helper that two
+modules share has a public name in the module where it belongs. Read from the source text like
+``tests/test_layout.py`` (every ``import`` statement, lazy and ``TYPE_CHECKING`` ones included).
+
+A package's own ``__init__`` re-exporting a private name counts as well. Dunder names
+(``__version__``) are not private, and a package-private *module* (``rbjax._x64``,
+``rbjax.studies.sensitivity._common``) may be imported by the modules of its package: the rule
+is about the names defined inside another module.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import rbjax
+
+SRC = Path(rbjax.__file__).parent
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(p): p for p in SRC.rglob("*.py")}
+
+
+def is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_imports(name: str, source: str) -> list[str]:
+    """``"module: target.name"`` for each private name of another rbjax module imported in
+    ``source`` (the text of module ``name``)."""
+    is_package = name in MODULES and MODULES[name].name == "__init__.py"
+    package = name if is_package else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        if node.level:
+            base = package.split(".")
+            base = base[: len(base) - (node.level - 1)]
+            target = ".".join(base + ([node.module] if node.module else []))
+        else:
+            target = node.module or ""
+        if target.split(".")[0] != "rbjax":
+            continue
+        for alias in node.names:
+            full = f"{target}.{alias.name}"
+            if is_private(alias.name) and full not in MODULES:
+                out.append(f"{name}: {full}")
+    return out
+
+
+def test_the_check_finds_a_private_import():
+    source = (
+        "from .ode import _phases, solve_phases\n"
+        "from .. import _x64, __version__\n"
+        "def f():\n"
+        "    from rbjax.solve.simulate import _simulate\n"
+    )
+    assert private_imports("rbjax.solve.energy", source) == [
+        "rbjax.solve.energy: rbjax.solve.ode._phases",
+        "rbjax.solve.energy: rbjax.solve.simulate._simulate",
+    ]
+    # a package's facade re-exporting a private name of its own module counts too
+    assert private_imports("rbjax.solve", "from .ode import _final\n") == [
+        "rbjax.solve: rbjax.solve.ode._final"
+    ]
+
+
+def test_no_module_imports_another_modules_private_name():
+    found = [
+        hit for name, path in MODULES.items() for hit in private_imports(name, path.read_text())
+    ]
+    assert found == []
