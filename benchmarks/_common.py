@@ -229,11 +229,12 @@ def scipy_impact_lean(
 def quadrature_reference(heights_m, ball=None, *, gas="adiabatic", n_nodes: int = 64):
     """Scalar outputs of the elastic model by the quadrature path at a high node count (an
     independent integration of Eq. 7 in δ, exponentially convergent; see rbjax.solve.quadrature)."""
+    from rbjax import Model
     from rbjax.solve import impact_quadrature_batch
-    from rbjax.solve.simulate import broadcast_inputs, make_model
+    from rbjax.solve.simulate import broadcast_inputs
 
     ball = rbjax.JIS_RUBBER_BALL if ball is None else ball
-    _, h, b, m = broadcast_inputs(np.asarray(heights_m, dtype=float), ball, make_model(gas=gas))
+    _, h, b, m = broadcast_inputs(np.asarray(heights_m, dtype=float), ball, Model(gas=gas))
     out = impact_quadrature_batch(h, b, m, n_nodes)
     return {
         k: np.asarray(getattr(out, k))

@@ -20,7 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
-from rbjax.solve import force_history, make_model, trajectory
+from rbjax import Model
+from rbjax.solve import force_history, trajectory
 from rbjax.solve.sampled import sampled_solve, substeps_for_contact
 
 from _common import finish_machine_info, machine_info, parse_args, table, time_call, write_json
@@ -100,7 +101,7 @@ def main() -> None:
     out: dict = {"rate_Hz": RATE_Hz, "error_heights_m": ERROR_HEIGHTS, "models": {}}
     rows = []
     for name, options in MODELS.items():
-        model = make_model(**options)
+        model = Model(**options)
         errors = _errors(model, options)
         entry: dict = {"max_rel_error": errors, "batches": {}}
         for batch in batches:

@@ -33,9 +33,10 @@ from jax.sharding import Mesh, NamedSharding  # noqa: E402
 from jax.sharding import PartitionSpec as P  # noqa: E402
 
 import rbjax  # noqa: E402
+from rbjax import Model  # noqa: E402
 from rbjax.solve import impact_quadrature  # noqa: E402
 from rbjax.solve.ode import impact_batch, impact_ode  # noqa: E402
-from rbjax.solve.simulate import broadcast_inputs, make_model  # noqa: E402
+from rbjax.solve.simulate import broadcast_inputs  # noqa: E402
 
 from _common import (  # noqa: E402
     finish_machine_info,
@@ -69,7 +70,7 @@ def main():
     info = machine_info()
     t0 = time.perf_counter()
     n = 1000 if args.quick else 10_000
-    model = make_model()
+    model = Model()
     heights = np.linspace(0.1, 1.6, n)
     _, h, b, _ = broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
     ref = quadrature_reference(heights)["contact_time_s"]
@@ -122,7 +123,7 @@ def main():
     )
 
 
-ZENER = make_model(
+ZENER = Model(
     damping=rbjax.Zener(stiffness_ratio=0.3, relaxation_time_s=2e-3), blocked_force="momentum"
 )
 
@@ -134,7 +135,7 @@ def engine_rows(quick: bool, devices) -> list[dict]:
 
     rows = []
     for name, path, model, n in (
-        ("simulate elastic (quadrature)", "quadrature", make_model(), 1_000_000),
+        ("simulate elastic (quadrature)", "quadrature", Model(), 1_000_000),
         ("simulate zener (phase angle)", "angle", ZENER, 200_000),
         ("simulate zener (ode)", "ode", ZENER, 4096),
     ):

@@ -30,9 +30,10 @@ import warnings
 import numpy as np
 
 import rbjax
+from rbjax import Model
 from rbjax.solve import impact_batch, impact_quadrature_batch
 from rbjax.solve.outcome import SINGULAR_FRACTION
-from rbjax.solve.simulate import broadcast_inputs, make_model
+from rbjax.solve.simulate import broadcast_inputs
 
 from _common import (
     RESULTS_DIR,
@@ -96,14 +97,14 @@ def grids(n):
 def inputs(key, s):
     hh, yy = np.meshgrid(s["x"], s["y"])  # rows: y, columns: height
     if key == "A":
-        return hh, BALL.replace(youngs_Pa=yy), make_model()
+        return hh, BALL.replace(youngs_Pa=yy), Model()
     if key == "B":
         c = yy * critical_damping(BALL.youngs_Pa)
-        return hh, BALL, make_model(damping=rbjax.KelvinVoigt(damping_Ns_per_m=c))
+        return hh, BALL, Model(damping=rbjax.KelvinVoigt(damping_Ns_per_m=c))
     return (
         hh,
         BALL.replace(youngs_Pa=yy),
-        make_model(gas="none", max_deflection_ratio=MAX_DEFLECTION_RATIO_C),
+        Model(gas="none", max_deflection_ratio=MAX_DEFLECTION_RATIO_C),
     )
 
 

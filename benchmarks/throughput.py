@@ -39,9 +39,10 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
+from rbjax import Model
 from rbjax.solve import impact_quadrature, impact_quadrature_batch
 from rbjax.solve.ode import impact_batch, impact_ode
-from rbjax.solve.simulate import broadcast_inputs, make_model
+from rbjax.solve.simulate import broadcast_inputs
 from rbjax.solve.vector_field import COMPRESSION_FIELD
 from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
@@ -75,7 +76,7 @@ def heights(n):
 
 
 def flat(n, model=None, **ball_changes):
-    model = make_model() if model is None else model
+    model = Model() if model is None else model
     ball = BALL.replace(**ball_changes) if ball_changes else BALL
     _, h, b, m = broadcast_inputs(heights(n), ball, model)
     return h, b, m
@@ -194,7 +195,7 @@ def bucketing_workload(rows, quick):
             _, hh, bb, mm = broadcast_inputs(
                 height[idx],
                 BALL.replace(youngs_Pa=youngs[idx]),
-                make_model(damping=rbjax.KelvinVoigt(c[idx])),
+                Model(damping=rbjax.KelvinVoigt(c[idx])),
             )
             outs.append(impact_batch(hh, bb, mm, solver))
         return outs
@@ -285,7 +286,7 @@ def lfe_octave_from_window(force_window):
 
 
 def history_workload(rows, sizes):
-    model = make_model()
+    model = Model()
     t_c = float(
         quadrature_reference([0.1])["contact_time_s"][0]
     )  # the longest contact of 0.1–1.6 m
@@ -358,7 +359,7 @@ def history_workload(rows, sizes):
 
 
 def jacobian_workload(rows, sizes):
-    model0 = make_model(damping=rbjax.KelvinVoigt(damping_Ns_per_m=100.0))
+    model0 = Model(damping=rbjax.KelvinVoigt(damping_Ns_per_m=100.0))
 
     def one_ode(theta, h, solver):
         ball = BALL.replace(youngs_Pa=theta[0], poisson=theta[1])
@@ -367,7 +368,7 @@ def jacobian_workload(rows, sizes):
         return jnp.stack([out.contact_time_s, out.peak_force_N, out.restitution])
 
     def one_quad(theta, h):
-        out = impact_quadrature(h, BALL.replace(youngs_Pa=theta[0], poisson=theta[1]), make_model())
+        out = impact_quadrature(h, BALL.replace(youngs_Pa=theta[0], poisson=theta[1]), Model())
         return jnp.stack([out.contact_time_s, out.peak_force_N, out.restitution])
 
     def value_and_jac(f):
@@ -418,7 +419,7 @@ def compile_breakdown(n=1000, quick=False):
     h, b, m = flat(n)
     variants = (("default Solver()", DEFAULT), ("recommended, adjoint=forward", RECOMMENDED_FWD))
     for name, solver in variants[:1] if quick else variants:
-        fn = jax.jit(jax.vmap(lambda hh, bb: impact_ode(hh, bb, make_model(), solver)))
+        fn = jax.jit(jax.vmap(lambda hh, bb: impact_ode(hh, bb, Model(), solver)))
         t0 = time.perf_counter()
         lowered = fn.lower(h, b)
         t1 = time.perf_counter()
@@ -432,7 +433,7 @@ def compile_breakdown(n=1000, quick=False):
             "stablehlo_lines": lowered.as_text().count("\n"),
             "while_loops": hlo.count(" while("),
         }
-    fn = jax.jit(jax.vmap(lambda hh, bb: impact_quadrature(hh, bb, make_model())))
+    fn = jax.jit(jax.vmap(lambda hh, bb: impact_quadrature(hh, bb, Model())))
     t0 = time.perf_counter()
     lowered = fn.lower(h, b)
     t1 = time.perf_counter()
@@ -491,7 +492,7 @@ def vector_field_floor(n=10_000):
     out = {}
     y = jnp.stack([jnp.full(n, 0.01), jnp.full(n, 1.0)], axis=-1)
     for gas in ("adiabatic", "none"):
-        h, b, m = flat(n, make_model(gas=gas))
+        h, b, m = flat(n, Model(gas=gas))
 
         @jax.jit
         def f(y, b, m):

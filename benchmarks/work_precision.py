@@ -31,13 +31,14 @@ import jax.numpy as jnp
 import numpy as np
 
 import rbjax
+from rbjax import Model
 from rbjax.solve import (
     force_history_quadrature,
     impact_batch,
     impact_quadrature_batch,
     trajectory_batch,
 )
-from rbjax.solve.simulate import broadcast_inputs, make_model
+from rbjax.solve.simulate import broadcast_inputs
 from rbjax.spectrum import lfe_octave_dB
 
 from _common import (
@@ -102,7 +103,7 @@ def main():
     info = machine_info()
     t_start = time.perf_counter()
     ball = rbjax.JIS_RUBBER_BALL
-    model = make_model()
+    model = Model()
     batch = 100 if quick else 1000
     heights = np.concatenate([HEIGHTS_M, np.linspace(0.1, 1.6, batch - len(HEIGHTS_M))])
     _, h_all, b_all, m_all = broadcast_inputs(heights, ball, model)
@@ -274,7 +275,7 @@ def damped_models(quick):
     out = {}
     for name, options in list(DAMPED.items())[:1] if quick else DAMPED.items():
         refs = [sr.reference_impact(h, ball, **options) for h in HEIGHTS_M]
-        _, h, b, m = broadcast_inputs(np.asarray(HEIGHTS_M), ball, make_model(**options))
+        _, h, b, m = broadcast_inputs(np.asarray(HEIGHTS_M), ball, Model(**options))
         out[name] = {}
         for rtol in rtols:
             res = impact_batch(h, b, m, sweep_solver("tsit5", rtol=rtol, atol=1e-3 * rtol))

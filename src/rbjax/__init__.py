@@ -5,6 +5,7 @@ Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x6
 
 from . import _x64  # noqa: F401  (float64 before anything else touches JAX)
 from .solve.energy import EnergyBalance, energy_balance
+from .solve.options import EvaluationSpec
 from .solve.outcome import (
     STATUS_CODES,
     STATUS_NAMES,
@@ -54,6 +55,7 @@ __all__ = [
     "energy_balance",
     "Model",
     "Solver",
+    "EvaluationSpec",
     "ImpactResult",
     "ImpactScalars",
     "Trajectory",

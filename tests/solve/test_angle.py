@@ -15,7 +15,6 @@ import pytest
 
 import rbjax
 from rbjax.solve.angle import ERROR_TOLERANCE, angle_error_estimate
-from rbjax.solve.simulate import make_model
 
 from scipy_reference import reference_impact
 
@@ -60,7 +59,7 @@ def test_agrees_with_scipy_reference(name):
 def test_error_estimate_flags_what_fixed_steps_cannot_resolve_and_simulate_falls_back():
     # a relaxation time 1/100 of the contact: far too fast for 12 steps in the phase angle
     kw = {"damping": rbjax.Zener(stiffness_ratio=0.5, relaxation_time_s=2e-4)}
-    estimate = jax.vmap(lambda h: angle_error_estimate(h, BALL.as_arrays(), make_model(**kw)))(
+    estimate = jax.vmap(lambda h: angle_error_estimate(h, BALL.as_arrays(), rbjax.Model(**kw)))(
         HEIGHTS
     )
     assert np.all(np.asarray(estimate) > ERROR_TOLERANCE)

@@ -24,7 +24,6 @@ import numpy as np
 import pytest
 
 import rbjax
-from rbjax.solve.simulate import make_model
 
 from scipy_reference import HEIGHTS_M, HISTORY_TIMES_S, HISTORY_RATE_Hz, reference_impact
 
@@ -78,7 +77,7 @@ def _history(name) -> rbjax.Trajectory:
     if name == "adiabatic-paper":  # the ImpactResult.history path (zero padding included)
         return _result(name).history(rate_Hz=RATE_Hz, duration_s=HISTORY_S)
     # rbjax.trajectory on the shared grid (the same compiled shape as test_analytic_limits)
-    return rbjax.trajectory(HEIGHTS_M, HISTORY_TIMES_S, BALL, make_model(**CONFIGS[name]))
+    return rbjax.trajectory(HEIGHTS_M, HISTORY_TIMES_S, BALL, rbjax.Model(**CONFIGS[name]))
 
 
 @pytest.fixture(scope="module", params=SCALAR_CONFIGS)

@@ -122,7 +122,8 @@ def test_tornado_chart_is_written(local, tmp_path):
 
 def test_damping_parameter_sensitivity_matches_reference():
     damping = rbjax.KelvinVoigt(damping_Ns_per_m=20.0)
-    s = local_sensitivity(1.0, damping=damping, wrt=("DAMPING_NS_PER_M", "youngs_pa"), lfe=False)
+    model = rbjax.Model(damping=damping)
+    s = local_sensitivity(1.0, model=model, wrt=("DAMPING_NS_PER_M", "youngs_pa"), lfe=False)
     assert s.parameters == ("youngs_Pa", "damping_Ns_per_m")
     assert s.status[0] == 0
     c, dc = 20.0, 20.0 * 1e-6
@@ -176,7 +177,11 @@ def test_conformance_probability_of_a_uniform_drop_height_against_analytic_fract
     assert 0.1 < p_band < 0.9 and 0.1 < p_rest < 0.9  # a case that can fail either way
 
     res = conformance_probability(
-        2000, {"height_m": ("uniform", lo_h, hi_h)}, seed=5, confidence=0.999, chunk_size=64
+        2000,
+        {"height_m": ("uniform", lo_h, hi_h)},
+        seed=5,
+        confidence=0.999,
+        evaluation=rbjax.EvaluationSpec(chunk_size=64),
     )
     assert res.n_valid == 2000
     for key, p in (("lfe_31.5_dB", p_band), ("restitution", p_rest)):

@@ -95,9 +95,8 @@ def test_evaluate_matches_scipy_reference(references):
     assert evaluation_paths(rbjax.Model(damping=rbjax.KelvinVoigt(5.0))) == ("angle", "sampled")
     assert evaluation_paths(rbjax.Model(), rbjax.Solver()) == ("ode", "ode")
     for method, lfe in (("auto", True), ("ode", False)):  # quadrature + sampled history; the ODE
-        out = evaluate(
-            SAMPLES, chunk_size=64, method=method, lfe=lfe
-        )  # chunk 64 as in the CLI test: one compile
+        spec = rbjax.EvaluationSpec(path=method, chunk_size=64)  # as in the CLI test: one compile
+        out = evaluate(SAMPLES, lfe=lfe, evaluation=spec)
         assert out["status"].tolist() == [0, 0, 0]
         for i, r in enumerate(references):
             for k in [
@@ -111,7 +110,9 @@ def test_evaluate_matches_scipy_reference(references):
 
 def test_exact_derivatives_match_central_differences_of_the_reference(references):
     wrt = ("height_m", "youngs_Pa", "mass_kg")
-    values, jac = evaluate_jacobian(SAMPLES, wrt, lfe=True, chunk_size=64)
+    values, jac = evaluate_jacobian(
+        SAMPLES, wrt, lfe=True, evaluation=rbjax.EvaluationSpec(chunk_size=64)
+    )
     names = [*rbjax.solve.batch.SCALAR_OUTPUTS, *rbjax.solve.batch.lfe_output_names()]
     i, r = 2, references[2]
     for k in names:
@@ -166,10 +167,14 @@ SHARDED_SCRIPT = textwrap.dedent(
     """
     import sys
     import jax, numpy as np
+    from rbjax import EvaluationSpec
     from rbjax.studies.sweep import evaluate
     assert jax.device_count() == 4, jax.devices()
     samples = dict(np.load(sys.argv[1]))
-    out = evaluate(samples, chunk_size=16)  # steps of 4 devices x 16 impacts
+    out = {}
+    for method in ("quadrature", "ode"):  # chunks of 16 impacts, split over the 4 devices
+        run = evaluate(samples, evaluation=EvaluationSpec(path=method, chunk_size=16))
+        out.update({f"{method}:{k}": v for k, v in run.items()})
     np.savez(sys.argv[2], **out)
     """
 )
@@ -198,12 +203,19 @@ def test_sharded_sweep_on_four_cpu_devices_equals_one_device(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     four = np.load(tmp_path / "four.npz")
-    one = evaluate(samples, chunk_size=64)  # this process: one CPU device
     assert jax.device_count() == 1
-    assert four["status"].tolist() == one["status"].tolist() == [0] * n
-    for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m"):
-        # the partitioned program is compiled apart from the one-device one: equal to the last bits
-        np.testing.assert_allclose(four[k], one[k], rtol=1e-14, atol=0, err_msg=k)
+    # both paths: the quadrature (what a sweep of this elastic model runs by default) and the
+    # diffrax ODE (a sweep with a solver, a ball mode or a floor), each against this process
+    for method in ("quadrature", "ode"):
+        # this process: one CPU device
+        one = evaluate(samples, evaluation=rbjax.EvaluationSpec(path=method, chunk_size=64))
+        assert four[f"{method}:status"].tolist() == one["status"].tolist() == [0] * n, method
+        for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m"):
+            # the partitioned program is compiled apart from the one-device one: equal to the
+            # last bits
+            np.testing.assert_allclose(
+                four[f"{method}:{k}"], one[k], rtol=1e-14, atol=0, err_msg=f"{method} {k}"
+            )
 
 
 def test_shipped_example_configs():

@@ -120,8 +120,7 @@ def register(subparsers) -> None:
 
 def load_ball_and_model(args):
     """The ball and model from ``--params`` (if given) with the command-line overrides applied."""
-    from .. import JIS_RUBBER_BALL
-    from ..solve.simulate import make_model
+    from .. import JIS_RUBBER_BALL, Model
 
     if args.params is not None:
         from ..terms.serialize import load_params
@@ -131,7 +130,7 @@ def load_ball_and_model(args):
         except ValueError as err:
             raise ValueError(f"--params {args.params}: {err}") from err
     else:
-        ball, model = JIS_RUBBER_BALL, make_model()
+        ball, model = JIS_RUBBER_BALL, Model()
     if args.youngs_pa is not None:
         ball = ball.replace(youngs_Pa=args.youngs_pa)
     if args.poisson is not None:
@@ -151,7 +150,7 @@ def load_ball_and_model(args):
 
 def _rebuilt(model, **changes):
     """``model`` with some of its options (gas, blocked_force, floor) replaced (validated)."""
-    from ..solve.simulate import make_model
+    from .. import Model
 
     options = dict(
         gas=model.gas,
@@ -163,7 +162,7 @@ def _rebuilt(model, **changes):
         floor=model.floor,
         series=model.series,
     )
-    return make_model(**(options | changes))
+    return Model(**(options | changes))
 
 
 def _simulate(heights, ball, model, method: str, floor=None):

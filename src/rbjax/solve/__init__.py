@@ -16,6 +16,7 @@ from .batch import evaluate, evaluate_jacobian
 from .energy import EnergyBalance, energy_balance
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
 from .ode import impact_batch, recontact_horizon_s, trajectory_batch
+from .options import EvaluationSpec, ModelShortcuts
 from .outcome import (
     STATUS_CODES,
     STATUS_NAMES,
@@ -33,6 +34,8 @@ __all__ = [
     "impact_angle",
     "evaluate",
     "evaluate_jacobian",
+    "EvaluationSpec",
+    "ModelShortcuts",
     "sharded_map",
     "EnergyBalance",
     "energy_balance",

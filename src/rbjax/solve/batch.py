@@ -43,6 +43,7 @@ import numpy as np
 
 from .._validate import check_range
 from .._x64 import require_x64
+from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import lfe_octave_dB
 from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
@@ -51,11 +52,12 @@ from .angle import impact_angle
 from .devices import default_chunk_size, local_devices
 from .inputs import padded_rows
 from .ode import impact_ode, ode_trajectory
+from .options import EvaluationSpec, spec_from_keywords
 from .outcome import STATUS_CODES
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
 from .sharded import sharded_map
-from .simulate import PAPER_DURATION_S, PAPER_RATE_Hz, resolve_method
+from .simulate import PAPER_RATE_Hz, resolve_method
 
 BALL_PARAMETERS = tuple(Ball.PARAMETERS)
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m")
@@ -105,7 +107,6 @@ def nominal_parameters(height_m, ball: Ball, model: Model) -> dict[str, float]:
 
 def lfe_output_names() -> tuple[str, ...]:
     """Output names of the octave-band levels: ``lfe_31.5_dB`` … ``lfe_1000_dB`` (JIS A 1418-2)."""
-    from ..spectrum.bands import OCTAVE_BANDS
 
     return tuple(f"lfe_{band}_dB" for band in OCTAVE_BANDS)
 
@@ -203,23 +204,10 @@ def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, shared, run: C
         out[k][rows] = again[k][: rows.size]
 
 
-def _evaluate(
-    samples,
-    wrt,
-    *,
-    height_m,
-    ball,
-    model,
-    solver,
-    method,
-    lfe,
-    rate_Hz,
-    duration_s,
-    chunk_size,
-    devices,
-    progress,
-) -> dict:
+def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec) -> dict:
     require_x64()
+    solver, method, rate_Hz, duration_s = spec.solver, spec.path, spec.rate_Hz, spec.duration_s
+    chunk_size, devices, progress = spec.chunk_size, spec.devices, spec.progress
     model = Model() if model is None else model
     if not samples:
         raise ValueError("samples is empty: give at least one parameter with an array of values")
@@ -318,46 +306,34 @@ def evaluate(
     height_m=1.0,
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
-    solver: Solver | None = None,
-    method: str = "auto",
     lfe: bool = False,
-    rate_Hz: float = PAPER_RATE_Hz,
-    duration_s: float = PAPER_DURATION_S,
-    chunk_size: int | None = None,
-    devices=None,
-    progress: bool = False,
+    evaluation: EvaluationSpec | None = None,
+    **deprecated,
 ) -> dict[str, np.ndarray]:
     """Impact outputs for N parameter samples, sharded over the devices.
 
     ``samples`` maps parameter names (``parameter_names(model)``, any case) to arrays of length N;
     the other parameters keep the values of ``height_m``, ``ball`` and ``model``. Returns NumPy
     arrays of length N: ``contact_time_s``, ``peak_force_N``, ``restitution``,
-    ``max_deflection_m``, ``status`` and, with ``lfe=True``, ``lfe_<band>_dB`` per octave band.
-    Outputs of flagged solves (status ≠ 0) are NaN. ``method`` (``"auto"``, ``"ode"``,
-    ``"quadrature"``, ``"angle"``) and ``solver`` choose the path as in ``rbjax.simulate`` (see
-    the module docstring).
+    ``max_deflection_m``, ``status`` and, with ``lfe=True``, ``lfe_<band>_dB`` per octave band
+    (of the record ``evaluation.rate_Hz`` × ``evaluation.duration_s``). Outputs of flagged
+    solves (status ≠ 0) are NaN.
 
-    The samples are cut into chunks of ``chunk_size`` impacts (default: sized for the path and
-    the platform, ``rbjax.solve.devices.default_chunk_size``; 8192 for the fast paths on a CPU)
-    and the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices``
-    for how to give JAX one CPU device per core), each device running its own program: the
-    results are those of a one-device run, bit for bit.
+    ``evaluation`` (an ``rbjax.EvaluationSpec``, default ``EvaluationSpec()``) says how: its
+    ``path`` (``"auto"``, ``"ode"``, ``"quadrature"``, ``"angle"``) and ``solver`` choose the
+    path as ``method`` and ``solver`` of ``rbjax.simulate`` (see the module docstring). The
+    samples are cut into chunks of ``chunk_size`` impacts (default: sized for the path and the
+    platform, ``rbjax.solve.devices.default_chunk_size``; 8192 for the fast paths on a CPU) and
+    the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices`` for
+    how to give JAX one CPU device per core), each device running its own program: the results
+    are those of a one-device run, bit for bit.
+
+    ``deprecated``: the keywords ``method``, ``solver``, ``rate_Hz``, ``duration_s``,
+    ``chunk_size``, ``devices`` and ``progress`` of the previous release, accepted for one
+    release (a ``DeprecationWarning``): they build the ``EvaluationSpec``.
     """
-    return _evaluate(
-        samples,
-        (),
-        height_m=height_m,
-        ball=ball,
-        model=model,
-        solver=solver,
-        method=method,
-        lfe=lfe,
-        rate_Hz=rate_Hz,
-        duration_s=duration_s,
-        chunk_size=chunk_size,
-        devices=devices,
-        progress=progress,
-    )
+    spec = spec_from_keywords("evaluate", evaluation, deprecated)
+    return _evaluate(samples, (), height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec)
 
 
 def evaluate_jacobian(
@@ -367,40 +343,23 @@ def evaluate_jacobian(
     height_m=1.0,
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
-    solver: Solver | None = None,
-    method: str = "auto",
     lfe: bool = False,
-    rate_Hz: float = PAPER_RATE_Hz,
-    duration_s: float = PAPER_DURATION_S,
-    chunk_size: int | None = None,
-    devices=None,
-    progress: bool = False,
+    evaluation: EvaluationSpec | None = None,
+    **deprecated,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """``evaluate`` and the exact derivatives of every float output with respect to ``wrt``
     (default: the parameters of ``samples``), by ``jax.jacfwd`` per sample, vmapped and sharded.
 
     Returns ``(values, jacobian)``: ``values`` as ``evaluate``; ``jacobian`` maps each output to
     an (N, len(wrt)) array of ∂output/∂parameter in output units per parameter unit (NaN where
-    the solve was flagged). The ODE path runs with ``Solver(adjoint="forward")``.
+    the solve was flagged). The ODE path runs with ``Solver(adjoint="forward")``. ``evaluation``
+    and ``deprecated`` as in ``evaluate``.
     """
+    spec = spec_from_keywords("evaluate_jacobian", evaluation, deprecated)
     wrt = tuple(samples) if wrt is None else tuple(wrt)
     if not wrt:
         raise ValueError("wrt=() names no parameter; give the parameters to differentiate against")
-    out = _evaluate(
-        samples,
-        wrt,
-        height_m=height_m,
-        ball=ball,
-        model=model,
-        solver=solver,
-        method=method,
-        lfe=lfe,
-        rate_Hz=rate_Hz,
-        duration_s=duration_s,
-        chunk_size=chunk_size,
-        devices=devices,
-        progress=progress,
-    )
+    out = _evaluate(samples, wrt, height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec)
     jacobian = {k[2:]: out.pop(k) for k in [k for k in out if k.startswith("d:")]}
     jacobian.pop("lfe_dB", None)
     return out, jacobian

@@ -5,8 +5,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
-from typing import Any, NamedTuple
+import warnings
+from typing import NamedTuple, Unpack
 
 import equinox as eqx
 import jax
@@ -15,14 +15,11 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from .._validate import check_choice, check_range, is_traced
+from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.ball_mode import BallMode
-from ..terms.damping import AbstractDamping
-from ..terms.floors.kinds import AbstractFloor
-from ..terms.forces import CubicStiffening
 from ..terms.model import Model, Solver
-from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
-from .angle import angle_unsupported
+from .angle import angle_unsupported, impact_angle
+from .devices import cached_jit, default_chunk_size, device_map
 from .inputs import (
     PAPER_DURATION_S,
     PAPER_RATE_Hz,
@@ -32,46 +29,25 @@ from .inputs import (
     padded_rows,
 )
 from .ode import impact_batch, trajectory_batch
+from .options import PATHS, ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
+from .quadrature import DEFAULT_NODES, check_quadrature, impact_quadrature
+from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
 
 #: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
 #: ``quadrature_unsupported``), else ``angle`` where that allows it (``angle_unsupported``: the
 #: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
-METHODS = ("auto", "ode", "quadrature", "angle")
+METHODS = PATHS
 
 
-class _Unset:
-    """The default of a keyword option not given (``None`` is a value some options refuse)."""
-
-    def __repr__(self) -> str:
-        return "<not given>"
-
-
-UNSET: Any = _Unset()
-
-
-def make_model(
-    *,
-    gas="adiabatic",
-    blocked_force="paper",
-    damping=None,
-    stiffening=None,
-    max_deflection_ratio=2.0,
-    ball_mode=None,
-    floor=None,
-    series=None,
-) -> Model:
-    """A ``Model`` from the keyword options of ``simulate`` (validated)."""
-    return Model(
-        gas=gas,
-        blocked_force=blocked_force,
-        damping=damping,
-        stiffening=stiffening,
-        max_deflection_ratio=max_deflection_ratio,
-        ball_mode=ball_mode,
-        floor=floor,
-        series=series,
+def make_model(**shortcuts: Unpack[ModelShortcuts]) -> Model:
+    """Deprecated (one release): ``rbjax.Model(**shortcuts)``, field for field."""
+    warnings.warn(
+        "make_model(...) is deprecated: use rbjax.Model(...) (the same fields)",
+        DeprecationWarning,
+        stacklevel=2,
     )
+    return Model(**shortcuts)
 
 
 def quadrature_unsupported(model: Model) -> str | None:
@@ -205,7 +181,6 @@ class ImpactResult(eqx.Module):
         """Octave-band L_FE (paper Eq. 11; ``rbjax.spectrum.levels.lfe_octave_dB``) of the force
         record of ``rate_Hz`` over ``duration_s``, from its contact samples (exact: the rest is
         zero); shape (..., 6), NaN where the solve failed."""
-        from ..spectrum.levels import lfe_octave_dB
 
         return lfe_octave_dB(
             self.history(pad=False).force_N,
@@ -215,7 +190,6 @@ class ImpactResult(eqx.Module):
 
     def lfe_third_octave_dB(self) -> jax.Array:
         """One-third-octave-band L_FE of the force record, as ``lfe_octave_dB``; shape (..., 18)."""
-        from ..spectrum.levels import lfe_third_octave_dB
 
         return lfe_third_octave_dB(
             self.history(pad=False).force_N,
@@ -235,18 +209,11 @@ def simulate(
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
     *,
-    gas: str = UNSET,
-    blocked_force: str = UNSET,
-    damping: AbstractDamping | Sequence[AbstractDamping] | None = None,
-    stiffening: CubicStiffening | None = None,
-    max_deflection_ratio: float = UNSET,
-    ball_mode: BallMode | None = None,
-    floor: AbstractFloor | None = None,
-    series: SeriesKelvinVoigt | None = None,
     solver: Solver | None = None,
     method: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
+    **shortcuts: Unpack[ModelShortcuts],
 ) -> ImpactResult:
     """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2), or on the
     ``floor`` given (``rbjax.terms.floors.kinds``; the force is then the force that floor receives).
@@ -254,9 +221,11 @@ def simulate(
     The model is a :class:`~rbjax.terms.model.Model`, the one calling convention of rbjax
     (``trajectory``, ``fit``, ``batch``, the studies take the same): ``simulate(h, fit.ball,
     fit.model)`` runs a fitted model. The keywords ``gas``, ``blocked_force``, ``damping``,
-    ``stiffening``, ``max_deflection_ratio``, ``ball_mode``, ``series`` and ``floor`` are a thin
-    shortcut that builds the ``Model`` (``make_model``) when no ``model`` is given; giving both is
-    a ``ValueError``.
+    ``stiffening``, ``max_deflection_ratio``, ``ball_mode``, ``series`` and ``floor``
+    (``rbjax.solve.options.ModelShortcuts``) are a thin shortcut that builds the ``Model``
+    (``Model(**shortcuts)``) when no ``model`` is given; giving both is a ``ValueError`` naming
+    them (a term's ``None`` is its default, not a shortcut). Only ``simulate`` has them: every
+    other function takes a ``Model``.
 
     ``height_m`` may be a scalar or an array (the solve is vmapped); ball and damping fields
     may be arrays too and broadcast against it. Works inside ``jax.jit``, ``jax.vmap`` and
@@ -288,33 +257,7 @@ def simulate(
     per usable core). The command line does it for you.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
-    options = {
-        "gas": gas,
-        "blocked_force": blocked_force,
-        "damping": damping,
-        "stiffening": stiffening,
-        "max_deflection_ratio": max_deflection_ratio,
-        "ball_mode": ball_mode,
-        "floor": floor,
-        "series": series,
-    }
-    given = {
-        k: v
-        for k, v in options.items()
-        if v is not UNSET
-        and not (v is None and k in ("damping", "stiffening", "ball_mode", "floor", "series"))
-    }
-    if model is None:
-        model = make_model(**given)
-    elif not isinstance(model, Model):
-        raise ValueError(
-            f"model={model!r} must be an rbjax.Model (or None, to build one from the keywords)"
-        )
-    elif given:
-        raise ValueError(
-            f"simulate got model= and the keyword options {sorted(given)}: give the options in "
-            f"the Model (Model(..., {', '.join(sorted(given))}=...)) or leave model out"
-        )
+    model = model_from_shortcuts("simulate", model, shortcuts)
     path = resolve_method(method, model, solver)
     solver = Solver() if solver is None else solver
     return simulate_model(
@@ -369,16 +312,12 @@ def _staged() -> bool:
 
 def _check_quadrature(path: str, height_m, ball, model) -> None:
     if path == "quadrature":
-        from .quadrature import DEFAULT_NODES, check_quadrature
-
         check_quadrature(height_m, ball, model, DEFAULT_NODES)
 
 
 @eqx.filter_jit
 def _fast_program(path: str, height_m, ball, model):
     """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
-    from .angle import impact_angle
-    from .quadrature import impact_quadrature
 
     shape, height, ball, model = broadcast_inputs(height_m, ball, model)
     solve = impact_quadrature if path == "quadrature" else impact_angle
@@ -435,8 +374,6 @@ class _Rows(NamedTuple):
 def _rows_program(path: str, spec: tuple, solver: Solver):
     """The scalar solve of a chunk of rows on ``path`` (one function object per configuration:
     ``devices.device_map`` jits it once and compiles it once per device and chunk shape)."""
-    from .angle import impact_angle
-    from .quadrature import impact_quadrature
 
     treedef, static, is_row = spec
 
@@ -457,7 +394,6 @@ def _run_rows(path: str, batch: _Rows, solver: Solver, devices=None):
     """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
     batch fits one chunk of one device (JAX arrays), else chunks split over the local
     ``devices`` (default: all; NumPy arrays)."""
-    from .devices import cached_jit, default_chunk_size, device_map
 
     fn = _rows_program(path, batch.spec, solver)
     devices = jax.local_devices() if devices is None else list(devices)
@@ -548,12 +484,6 @@ def force_history(
     ``Solver()`` is given and the contact times are concrete and shorter than the record; it
     solves the diffrax ODE with ``solver`` otherwise, as ``"ode"`` always does.
     """
-    from .sampled import (
-        pad_record,
-        sampled_history_unsupported,
-        sampled_solve,
-        substeps_for_contact,
-    )
 
     check_choice("method", method, ("auto", "ode"))
     check_inputs(height_m, ball, rate_Hz, duration_s)

@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
+from ..solve.options import EvaluationSpec
 from .executors import Parallel, Task, run_tasks
 from .sensitivity import batch_evaluator
 
@@ -39,6 +40,18 @@ MAX_STEPS_PER_CHUNK = 8
 CLUSTER_WIDTH = 16
 #: Prefix of a derivative's key in a chunk's flat outputs.
 _D = "d:"
+
+
+def spec_of(settings: Mapping) -> EvaluationSpec:
+    """The ``EvaluationSpec`` of an evaluator's ``settings`` (``evaluate``'s keywords)."""
+    return settings.get("evaluation") or EvaluationSpec()
+
+
+def on_devices(settings: Mapping, devices, progress: bool) -> dict:
+    """``settings`` evaluated on ``devices`` (``None``: all of the process that runs them), with
+    or without progress bars."""
+    spec = spec_of(settings).replace(devices=devices, progress=progress)
+    return {**settings, "evaluation": spec}
 
 
 def evaluate_chunk(rows: dict, gradients: bool, settings: dict, n_rows: int) -> dict:
@@ -126,7 +139,7 @@ def evaluate_rows(
     n = row_count(samples)
     a, b = (0, n) if span is None else span
     lfe = bool(settings.get("lfe"))
-    chunk = max(int(settings.get("chunk_size") or 1024), 1)  # a task: whole steps of this
+    chunk = max(int(spec_of(settings).chunk_size or 1024), 1)  # a task: whole steps of this
     local = parallel.scheduler is None and parallel.executor is None
     width = parallel.local_workers if local else CLUSTER_WIDTH
     pieces = [(a, b)] if parallel.in_process else _pieces(a, b, chunk, width, 2 * lfe)
@@ -142,7 +155,7 @@ def evaluate_rows(
         out = flatten(batch_evaluator(rows, gradients, **settings), gradients)
         return {k: v[: b - a] for k, v in out.items()}
 
-    remote = settings | {"devices": None, "progress": False}
+    remote = on_devices(settings, None, False)
 
     def second_pass(extra: np.ndarray) -> list[Task]:
         return [

@@ -120,9 +120,10 @@ from ..solve.batch import (  # noqa: F401  (re-exported: the sweep's public name
     parameter_names,
     sharded_map,
 )
+from ..solve.options import EvaluationSpec
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.model import Solver
-from ..terms.serialize import to_json
+from ..terms.serialize import model_from_dict, to_json
 from . import sensitivity as sens
 from .chunks import task_evaluator
 from .executors import Parallel
@@ -156,7 +157,6 @@ def load_config(path) -> dict:
 
 
 def _base(config: dict):
-    from ..terms.serialize import model_from_dict
 
     ball_fields = config.get("ball", {})
     if not isinstance(ball_fields, dict):
@@ -194,11 +194,13 @@ def run_study(config: dict, *, evaluator: Callable | None, progress: bool, devic
         height_m=height_m,
         ball=ball,
         model=model,
-        solver=solver,
         seed=int(config.get("seed", 0)),
-        chunk_size=None if config.get("chunk_size") is None else int(config["chunk_size"]),
-        devices=devices,
-        progress=progress,
+        evaluation=EvaluationSpec(
+            solver=solver,
+            chunk_size=None if config.get("chunk_size") is None else int(config["chunk_size"]),
+            devices=devices,
+            progress=progress,
+        ),
         evaluator=evaluator,
     )
     if kind == "conformance":

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from .chunks import evaluate_rows, row_count, unflatten
+from .. import __version__
+from .chunks import evaluate_rows, on_devices, row_count, unflatten
 from .executors import Parallel
 from .sweep import run_study
 
@@ -150,7 +151,7 @@ def run_part(
         a, b = part_rows(n, part, parts)
         calls.append({"rows": [a, b], "n": n, "gradients": call.gradients})
         if b > a:
-            settings = call.settings | {"devices": devices, "progress": progress}
+            settings = on_devices(call.settings, devices, progress)
             label = f"part {part}/{parts}" + (" gradients" if call.gradients else "")
             flat = evaluate_rows(
                 parallel,
@@ -162,7 +163,6 @@ def run_part(
                 label=label,
             )
             arrays.update({f"{k}/{name}": v for name, v in flat.items()})
-    from .. import __version__
 
     meta = {
         "format": PART_FORMAT,

@@ -19,10 +19,11 @@ import numpy as np
 
 from ..._validate import as_float, check_range
 from ...solve.batch import canonical_name
-from ...solve.simulate import make_model
+from ...solve.options import EvaluationSpec
+from ...spectrum.standards import CLAUSE, RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS
 from ...terms.ball import JIS_RUBBER_BALL, Ball
-from ...terms.model import Model, Solver
-from ._common import batch_evaluator
+from ...terms.model import Model
+from ._common import batch_evaluator, old_keywords
 
 DISTRIBUTION_KINDS = {
     "uniform": ("low", "high"),
@@ -128,7 +129,6 @@ class ConformanceProbability:
     samples: dict = dataclasses.field(repr=False)
 
     def to_dict(self) -> dict:
-        from ...spectrum.standards import CLAUSE
 
         return {
             "method": "monte-carlo conformance",
@@ -158,7 +158,6 @@ def conformance_flags(values: Mapping, tolerances=None) -> dict[str, np.ndarray]
     ``rbjax.spectrum.standards.check_conformance`` (lower ≤ value ≤ upper of
     ``RUBBER_BALL_TOLERANCES``). ``values`` holds arrays of the band levels ``lfe_<band>_dB``,
     ``contact_time_s``, ``restitution``, ``mass_kg``, ``height_m``."""
-    from ...spectrum.standards import RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS
 
     tol = RUBBER_BALL_TOLERANCES if tolerances is None else tolerances
     inside = lambda t, v: (t.lower <= v) & (v <= t.upper)  # noqa: E731
@@ -188,17 +187,11 @@ def conformance_probability(
     seed: int = 0,
     height_m: float = 1.0,
     ball: Ball = JIS_RUBBER_BALL,
-    gas: str = "adiabatic",
-    blocked_force: str = "paper",
-    damping=None,
-    stiffening=None,
     model: Model | None = None,
-    solver: Solver | None = None,
     confidence: float = 0.95,
-    chunk_size: int | None = None,
-    devices=None,
-    progress: bool = False,
+    evaluation: EvaluationSpec | None = None,
     evaluator: Callable | None = None,
+    **deprecated,
 ) -> ConformanceProbability:
     """Probability that the ball meets the rubber-ball tolerances when its parameters vary.
 
@@ -207,21 +200,27 @@ def conformance_probability(
     ``{"kind": "lognormal", "median", "sigma"}`` (or a tuple ``(kind, a, b)``), e.g.
     ``{"height_m": ("uniform", 0.99, 1.01), "mass_kg": ("normal", 2.5, 0.05),
     "youngs_Pa": ("lognormal", 1.6e6, 0.1)}``. Each of ``n_samples`` draws is simulated (the
-    others keep ``height_m``, ``ball`` and the model), its L_FE per octave band (Eq. 11, §2.4),
+    others keep ``height_m``, ``ball`` and ``model``, an ``rbjax.Model``, default ``Model()``),
+    its L_FE per octave band (Eq. 11, §2.4),
     contact time, restitution, mass and drop height are checked against
     ``rbjax.spectrum.standards.RUBBER_BALL_TOLERANCES`` (ISO 16283-2 Table A.1 =
     ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), and the pass fractions come with Wilson score
     intervals. The L_FE limits hold for the standard drop height, so vary ``height_m`` around 1 m.
-    Draws whose solve is flagged (status ≠ 0) are left out and counted (``n_valid``). ``evaluator``:
-    as in :func:`~rbjax.studies.sensitivity.global_sensitivity` (default:
-    ``rbjax.solve.batch.evaluate`` in this process).
+    Draws whose solve is flagged (status ≠ 0) are left out and counted (``n_valid``).
+    ``evaluation`` (an ``rbjax.EvaluationSpec``: solve path, ``Solver``, chunks, devices,
+    progress) and ``evaluator``: as in :func:`~rbjax.studies.sensitivity.global_sensitivity`
+    (default: ``rbjax.solve.batch.evaluate`` in this process). ``deprecated``: the keywords of
+    the previous release (``gas``, ``blocked_force``, ``damping``, ``stiffening``, ``solver``,
+    ``chunk_size``, ``devices``, ``progress``), accepted for one release with a
+    ``DeprecationWarning`` (the model's with ``model=`` too: a ``ValueError``).
     """
+    model, evaluation, unknown = old_keywords(
+        "conformance_probability", model, evaluation, deprecated
+    )
+    if unknown:
+        raise TypeError(f"conformance_probability() got unexpected keyword arguments {unknown}")
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
-    if model is None:
-        model = make_model(
-            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
-        )
     if not isinstance(distributions, Mapping) or not distributions:
         raise ValueError(
             f"distributions={distributions!r} must be a non-empty mapping of parameter name "
@@ -236,11 +235,8 @@ def conformance_probability(
         height_m=height_m,
         ball=ball,
         model=model,
-        solver=solver,
         lfe=True,
-        chunk_size=chunk_size,
-        devices=devices,
-        progress=progress,
+        evaluation=evaluation,
     )
     n = int(n_samples)
     values = dict(out)

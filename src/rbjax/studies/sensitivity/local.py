@@ -23,14 +23,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from ...solve.batch import assemble, canonical_name, lfe_output_names, parameter_names
+from ...solve.options import model_from_shortcuts
+from ...solve.outcome import STATUS_NAMES
 from ...solve.simulate import (
     PAPER_DURATION_S,
     PAPER_RATE_Hz,
     check_inputs,
-    make_model,
     simulate_model,
     trajectory,
 )
+from ...spectrum.levels import lfe_octave_dB
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
 from ...terms.parameters import parameter_table
@@ -66,7 +68,6 @@ class Sensitivity:
 
     @property
     def status_name(self) -> list[str]:
-        from ...solve.outcome import STATUS_NAMES
 
         return [STATUS_NAMES[int(s)] for s in self.status]
 
@@ -167,7 +168,6 @@ def _local_jacobian_fn(
 ) -> Callable:
     """Jitted (θ, ball, model) → (values, tangents per wrt parameter, status); one compile per
     setup."""
-    from ...spectrum.levels import lfe_octave_dB
 
     def outputs(theta, ball, model):
         height, ball, model = assemble(theta, None, ball, model)
@@ -204,15 +204,12 @@ def local_sensitivity(
     ball: Ball = JIS_RUBBER_BALL,
     *,
     wrt=None,
-    gas: str = "adiabatic",
-    blocked_force: str = "paper",
-    damping=None,
-    stiffening=None,
     model: Model | None = None,
     lfe: bool = True,
     solver: Solver | None = None,
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
+    **deprecated,
 ) -> Sensitivity:
     """Jacobian of the impact outputs w.r.t. the parameters, by forward-mode AD (paper §2).
 
@@ -222,11 +219,14 @@ def local_sensitivity(
         wrt: parameter names (any letter case), default all: ``height_m``, ``radius_m``,
             ``wall_m``, ``mass_kg``, ``youngs_Pa``, ``poisson``, the fields of ``damping``
             (e.g. ``damping_Ns_per_m``) and ``beta`` with ``stiffening``.
-        gas, blocked_force, damping, stiffening: the model, as in ``rbjax.simulate`` (or pass
-            ``model``, e.g. from ``rbjax.terms.serialize.load_params``).
+        model: an ``rbjax.Model`` (default ``Model()``), e.g. from
+            ``rbjax.terms.serialize.load_params``.
         lfe: also differentiate L_FE in the octave bands 31.5 Hz–1 kHz (Eq. 11, §2.4).
         solver: integration settings (its adjoint is set to ``"forward"``).
         rate_Hz, duration_s: the force record for L_FE (default the paper's 44.1 kHz × 1 s).
+        deprecated: ``gas``, ``blocked_force``, ``damping``, ``stiffening`` of the previous
+            release, accepted for one release (a ``DeprecationWarning``): they build the
+            ``Model``; with ``model=`` too they are a ``ValueError`` naming both.
 
     Returns:
         A ``Sensitivity``; heights whose solve is flagged (status ≠ 0) have NaN values and
@@ -236,10 +236,7 @@ def local_sensitivity(
     heights = np.atleast_1d(np.asarray(height_m, dtype=np.float64))
     if heights.ndim != 1:
         raise ValueError(f"height_m has shape {np.shape(height_m)}; expected a scalar or 1-D array")
-    if model is None:
-        model = make_model(
-            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
-        )
+    model = model_from_shortcuts("local_sensitivity", model, deprecated, deprecated=True)
     valid = parameter_names(model)
     wrt = (
         valid

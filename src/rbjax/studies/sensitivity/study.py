@@ -19,10 +19,10 @@ from ...solve.batch import (
     canonical_name,
     lfe_output_names,
 )
-from ...solve.simulate import make_model
+from ...solve.options import EvaluationSpec
 from ...terms.ball import JIS_RUBBER_BALL, Ball
-from ...terms.model import Model, Solver
-from ._common import batch_evaluator, check_ranges, is_lfe
+from ...terms.model import Model
+from ._common import batch_evaluator, check_ranges, is_lfe, old_keywords
 from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
@@ -86,17 +86,9 @@ def global_sensitivity(
     outputs=("contact_time_s", "peak_force_N", "restitution", "lfe"),
     height_m: float = 1.0,
     ball: Ball = JIS_RUBBER_BALL,
-    gas: str = "adiabatic",
-    blocked_force: str = "paper",
-    damping=None,
-    stiffening=None,
     model: Model | None = None,
-    solver: Solver | None = None,
-    path: str = "auto",
     seed: int = 0,
-    chunk_size: int | None = None,
-    devices=None,
-    progress: bool = False,
+    evaluation: EvaluationSpec | None = None,
     evaluator: Callable | None = None,
     **options,
 ) -> SobolResult | MorrisResult | FastResult | PawnResult | DGSMResult:
@@ -112,35 +104,36 @@ def global_sensitivity(
         method: ``"sobol"``, ``"morris"``, ``"fast"``, ``"pawn"`` or ``"dgsm"``.
         outputs: among ``contact_time_s``, ``peak_force_N``, ``restitution``,
             ``max_deflection_m``, ``lfe_<band>_dB`` and ``"lfe"`` (all octave bands).
-        height_m, ball, gas, blocked_force, damping, stiffening: the nominal impact (or pass
-            ``model``); parameters not in ``ranges`` keep these values.
-        solver, path: the solve path, as ``rbjax.solve.batch.evaluate``'s ``solver`` and
-            ``method`` (default: the fastest exact path the model allows).
+        height_m, ball, model: the nominal impact (an ``rbjax.Model``, default ``Model()``);
+            parameters not in ``ranges`` keep these values.
         seed: of the design and of SALib's bootstrap.
-        chunk_size, devices, progress: batching over the devices (``rbjax.solve.devices``;
-            ``chunk_size`` default: a size per solve path).
+        evaluation: an ``rbjax.EvaluationSpec``: the solve path and ``Solver`` (default: the
+            fastest exact path the model allows), the L_FE record, the batching over the
+            devices (``rbjax.solve.devices``; ``chunk_size`` default: a size per solve path),
+            progress bars.
         evaluator: evaluates the design's rows, called as ``evaluator(samples, gradients,
             **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
             ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweep`` passes
             one that splits the rows into tasks for worker processes or a Dask cluster.
         options: the method's keyword options (``method_options(method)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
-            ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``.
+            ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``. The
+            keywords of the previous release are accepted for one release (a
+            ``DeprecationWarning``): ``gas``, ``blocked_force``, ``damping``, ``stiffening``
+            build the ``Model`` (with ``model=`` too: a ``ValueError``), ``solver``, ``path``,
+            ``chunk_size``, ``devices``, ``progress`` the ``EvaluationSpec``.
 
     Returns:
         the method's result object (``rbjax.studies.sensitivity.results``, ``DGSMResult``):
         ``.driver(output)`` names the parameter that drives an output's spread, ``.table()``,
         ``.plot()``, ``.to_dict()``, ``.salib`` (SALib's own results).
     """
+    model, evaluation, options = old_keywords("global_sensitivity", model, evaluation, options)
     valid = method_options(method)
     unknown = sorted(set(options) - set(valid))
     if unknown:
         raise ValueError(
             f"options {unknown} are not known for method={method!r}; valid: {', '.join(valid)}"
-        )
-    if model is None:
-        model = make_model(
-            gas=gas, blocked_force=blocked_force, damping=damping, stiffening=stiffening
         )
     ranges = check_ranges(ranges, lambda name: canonical_name(name, model))
     names, lfe = impact_outputs(outputs)
@@ -153,12 +146,8 @@ def global_sensitivity(
         height_m=height_m,
         ball=ball,
         model=model,
-        solver=solver,
-        method=path,
         lfe=lfe,
-        chunk_size=chunk_size,
-        devices=devices,
-        progress=progress,
+        evaluation=evaluation,
     )
 
     evaluator = batch_evaluator if evaluator is None else evaluator

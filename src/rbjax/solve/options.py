@@ -1,0 +1,168 @@
+"""Settings objects of the solve layer, and the one way to give a model.
+
+:class:`EvaluationSpec`: how a batch of impacts is evaluated (the solve path and its ``Solver``,
+the force record of the L_FE, the chunks, the devices, progress bars), the settings that
+:func:`rbjax.solve.batch.evaluate`, :func:`~rbjax.solve.batch.evaluate_jacobian` and the studies
+pass along as one object instead of relaying each keyword (as diffrax passes a ``SaveAt``).
+
+:class:`ModelShortcuts`: the keyword shortcuts of :func:`rbjax.simulate` that build a
+:class:`~rbjax.terms.model.Model`; :func:`model_from_shortcuts` builds it, and refuses a mix of
+``model=`` and shortcuts by name (a function may not silently drop either).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Mapping, Sequence
+from typing import Any, TypedDict
+
+from .._validate import check_choice, check_range
+from ..terms.ball_mode import BallMode
+from ..terms.damping import AbstractDamping
+from ..terms.floors.kinds import AbstractFloor
+from ..terms.forces import CubicStiffening
+from ..terms.model import Model, Solver
+from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
+from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz
+
+#: The solve paths (``"auto"``: the fastest exact path the model allows; see
+#: ``rbjax.solve.simulate.resolve_method``).
+PATHS = ("auto", "ode", "quadrature", "angle")
+
+
+@dataclasses.dataclass(frozen=True)
+class EvaluationSpec:
+    """How a batch of impacts is evaluated (``rbjax.solve.batch.evaluate``, the studies).
+
+    Attributes:
+        path: the solve path of the scalar outputs, ``"auto"`` (default: the fastest exact path
+            the model allows), ``"ode"``, ``"quadrature"`` or ``"angle"`` (as ``method`` of
+            ``rbjax.simulate``).
+        solver: an ``rbjax.Solver``: asks for the diffrax ODE with it (default: none given).
+        rate_Hz, duration_s: the force record of the L_FE (default the paper's 44.1 kHz × 1 s).
+        chunk_size: impacts per chunk (default: sized for the path and the platform,
+            ``rbjax.solve.devices.default_chunk_size``).
+        devices: the local JAX devices the chunks are split over (default: all).
+        progress: progress bars on stderr.
+    """
+
+    path: str = "auto"
+    solver: Solver | None = None
+    rate_Hz: float = PAPER_RATE_Hz
+    duration_s: float = PAPER_DURATION_S
+    chunk_size: int | None = None
+    devices: Sequence | None = None
+    progress: bool = False
+
+    def __post_init__(self):
+        check_choice("path", self.path, PATHS)
+        if self.solver is not None and not isinstance(self.solver, Solver):
+            raise ValueError(f"solver={self.solver!r} must be an rbjax.Solver or None")
+        check_range("rate_Hz", self.rate_Hz, lower=0.0)
+        check_range("duration_s", self.duration_s, lower=0.0)
+        chunk = self.chunk_size
+        if chunk is not None and not (isinstance(chunk, int) and not isinstance(chunk, bool)):
+            raise ValueError(f"chunk_size={chunk!r} is outside the valid range: an integer ≥ 1")
+        if chunk is not None and chunk < 1:
+            raise ValueError(f"chunk_size={chunk!r} is outside the valid range: an integer ≥ 1")
+        if not isinstance(self.progress, bool):
+            raise ValueError(f"progress={self.progress!r} must be True or False")
+
+    def replace(self, **changes) -> EvaluationSpec:
+        """A copy with ``changes`` (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+#: The keywords of ``evaluate`` before ``EvaluationSpec`` (``method`` is its ``path``).
+_SPEC_KEYWORDS = {
+    "method": "path",
+    "path": "path",
+    "solver": "solver",
+    "rate_Hz": "rate_Hz",
+    "duration_s": "duration_s",
+    "chunk_size": "chunk_size",
+    "devices": "devices",
+    "progress": "progress",
+}
+
+
+def spec_from_keywords(
+    function: str, evaluation: EvaluationSpec | None, keywords: Mapping[str, Any]
+) -> EvaluationSpec:
+    """``evaluation`` (default ``EvaluationSpec()``), or one built from the keywords of the old
+    signature of ``function`` (deprecated: a ``DeprecationWarning``; one release). A mix, or an
+    unknown keyword, is a named error."""
+    unknown = sorted(set(keywords) - set(_SPEC_KEYWORDS))
+    if unknown:
+        raise TypeError(f"{function}() got unexpected keyword arguments {unknown}")
+    if evaluation is not None and not isinstance(evaluation, EvaluationSpec):
+        raise ValueError(f"evaluation={evaluation!r} must be an rbjax.EvaluationSpec")
+    if not keywords:
+        return EvaluationSpec() if evaluation is None else evaluation
+    if evaluation is not None:
+        raise ValueError(
+            f"{function} got evaluation= and the keywords {sorted(keywords)}: give them in the "
+            f"EvaluationSpec (EvaluationSpec(..., {', '.join(sorted(keywords))}=...))"
+        )
+    warnings.warn(
+        f"{function}({', '.join(f'{k}=' for k in sorted(keywords))}...) is deprecated: pass "
+        f"evaluation=rbjax.EvaluationSpec(...) (method= is its path=)",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    return EvaluationSpec(**{_SPEC_KEYWORDS[k]: v for k, v in keywords.items()})
+
+
+class ModelShortcuts(TypedDict, total=False):
+    """The keyword shortcuts of ``rbjax.simulate``: the fields of an ``rbjax.Model``."""
+
+    gas: str
+    blocked_force: str
+    damping: AbstractDamping | Sequence[AbstractDamping] | None
+    stiffening: CubicStiffening | None
+    max_deflection_ratio: float
+    ball_mode: BallMode | None
+    floor: AbstractFloor | None
+    series: SeriesKelvinVoigt | None
+
+
+#: The names of the shortcuts (the fields of ``Model``).
+SHORTCUTS = tuple(ModelShortcuts.__annotations__)
+#: The shortcuts whose ``None`` is their default (no such term): ``None`` counts as not given.
+OPTIONAL_TERMS = ("damping", "stiffening", "ball_mode", "floor", "series")
+
+
+def model_from_shortcuts(
+    function: str, model: Model | None, shortcuts: Mapping[str, Any], *, deprecated: bool = False
+) -> Model:
+    """The ``Model`` of a call of ``function``: ``model``, or one built from the keyword
+    ``shortcuts`` (``Model(**shortcuts)``; ``Model()`` with neither). A mix of ``model=`` and
+    shortcuts is a ``ValueError`` naming both (a term's ``None`` is no shortcut: it is the
+    default); an unknown keyword a ``TypeError``. With
+    ``deprecated``, shortcuts warn (``DeprecationWarning``: functions other than ``simulate``
+    take a ``Model`` only, the shortcuts accepted for one release)."""
+    unknown = sorted(set(shortcuts) - set(SHORTCUTS))
+    if unknown:
+        raise TypeError(f"{function}() got unexpected keyword arguments {unknown}")
+    shortcuts = {k: v for k, v in shortcuts.items() if not (v is None and k in OPTIONAL_TERMS)}
+    if model is not None and not isinstance(model, Model):
+        raise ValueError(
+            f"model={model!r} must be an rbjax.Model (or None, to build one from the keywords)"
+        )
+    if model is not None and shortcuts:
+        given = ", ".join(sorted(shortcuts))
+        raise ValueError(
+            f"{function} got model= and the keyword options {sorted(shortcuts)}: give the "
+            f"options in the Model (Model(..., {given}=...)) or leave model out"
+        )
+    if model is not None:
+        return model
+    if shortcuts and deprecated:
+        warnings.warn(
+            f"{function}({', '.join(f'{k}=' for k in sorted(shortcuts))}...) is deprecated: "
+            "pass model=rbjax.Model(...)",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+    return Model(**shortcuts)
