@@ -16,6 +16,10 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 
+from .spectrum.bands import OCTAVE_BANDS
+from .spectrum.levels import lfe_octave_dB
+from .spectrum.standards import RUBBER_BALL_TOLERANCES
+
 if (
     "matplotlib.pyplot" not in sys.modules
     and not os.environ.get("DISPLAY")
@@ -149,7 +153,6 @@ def _band_values(lfe, bands):
 def tolerance_limits(bands: Sequence[str]):
     """Lower and upper L_FE limits (dB) per octave band from ``standards.RUBBER_BALL_TOLERANCES``
     (ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2); NaN for bands without a limit (1 kHz)."""
-    from .spectrum.standards import RUBBER_BALL_TOLERANCES
 
     table = RUBBER_BALL_TOLERANCES.lfe_octave_dB
     lower = [table[b].lower if b in table else np.nan for b in bands]
@@ -165,7 +168,6 @@ def plot_lfe_bands(lfe_octave_dB, ax=None, tolerances=True, label=None, **line_k
     standard drop height of 1 m (JIS A 1418-2 / ISO 10140-5 Annex F, via
     ``rbjax.spectrum.standards``).
     """
-    from .spectrum.bands import OCTAVE_BANDS
 
     fig, ax = _axes(ax)
     bands = list(OCTAVE_BANDS)
@@ -463,8 +465,6 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
     of ``results`` whose floor is rigid), drawn in black. ``axes``: three axes (a new figure is
     made without them). Returns the figure.
     """
-    from .spectrum.bands import OCTAVE_BANDS
-    from .spectrum.levels import lfe_octave_dB
 
     if blocked is None:
         rigid = [r for r in results.values() if r.model.floor.rigid]  # type: ignore[attr-defined]
@@ -523,8 +523,6 @@ def plot_fit(result, out_dir) -> list[Path]:
     """Write ``histories.png`` (measured vs fitted with residuals), ``lfe_bands.png`` and
     ``correlations.png`` of a ``FitResult`` into ``out_dir``; return their paths."""
     import matplotlib.pyplot as plt
-
-    from .spectrum.bands import OCTAVE_BANDS
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

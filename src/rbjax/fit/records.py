@@ -13,6 +13,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import data
+from ..data import Recording, describe_conditioning
+from ..spectrum.levels import lfe_octave_dB
+
 #: Level (fraction of the peak) at which contact start and end are read from a history:
 #: the same estimator is applied to measured and predicted (filtered) histories.
 FEATURE_FRACTION = 0.05
@@ -72,7 +76,6 @@ class FitData:
 
     def conditioning_report(self) -> str:
         """What conditioning did to each recording, and the ones left out (text, a line each)."""
-        from ..data import describe_conditioning
 
         lines = [
             f"  {c['source']} ({c['height_m']:g} m): {describe_conditioning(c)}"
@@ -93,7 +96,6 @@ def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_k
     with its reason (:func:`prepare_data` leaves it out and reports it); ``strict=True``:
     it is refused (``rbjax.data.ClippedRecordError``).
     """
-    from .. import data
 
     items = [paths_or_dir] if isinstance(paths_or_dir, (str, Path)) else list(paths_or_dir)
     recs = data.load(items, strict=strict, **load_kwargs)
@@ -111,7 +113,6 @@ def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_k
 
 def _with_lowpass(recs, lowpass_Hz):
     """The recordings with the chain's cutoff set (excluded entries as they are)."""
-    from ..data import Recording
 
     cutoff = None if lowpass_Hz is None else float(lowpass_Hz)
     return [r.replace(lowpass_Hz=cutoff) if isinstance(r, Recording) else r for r in recs]
@@ -139,7 +140,6 @@ def prepare_data(
     ``recordings``: Recording objects, or paths/a directory (read by :func:`load_data`).
     ``lowpass_Hz``: ``"auto"`` (as declared by the recordings), a cutoff in Hz, or None.
     """
-    from .. import data
 
     if isinstance(recordings, FitData):
         return recordings
@@ -230,7 +230,6 @@ def pulse_features(force_N, rate_Hz: float, n_pad: int, fraction: float = FEATUR
     paper Eq. 11 in octave bands (``rbjax.spectrum.levels.lfe_octave_dB``) of the record
     zero-padded to ``n_pad`` samples (1 s, as in the paper's §2.4).
     """
-    from ..spectrum.levels import lfe_octave_dB
 
     x = jnp.asarray(force_N)
     n = x.shape[-1]

@@ -10,6 +10,8 @@ import numpy as np
 from ..spectrum.bands import OCTAVE_BANDS
 from ..terms.ball import Ball
 from ..terms.model import Model
+from ..terms.serialize import ball_to_dict, model_to_dict
+from ..text import fmt, format_table
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,7 +115,6 @@ class FitResult:
 
     def summary(self) -> str:
         """A short human-readable report (parameters, identifiability, per-height table)."""
-        from ..text import fmt, format_table
 
         lines = [
             f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}): "
@@ -172,7 +173,6 @@ def model_fields(fit) -> dict:
     """The JSON of what a fit (:class:`FitResult`, ``SummaryFitResult``) says of its model:
     name, blocked force, gas, ball and model (``rbjax.terms.serialize`` format), parameters,
     correlations, identifiability."""
-    from ..terms.serialize import ball_to_dict, model_to_dict
 
     names, matrix = fit.correlations
     return {

@@ -17,6 +17,7 @@ import numpy as np
 from .._validate import as_float
 from ..solve.outcome import G_N_PER_KG
 from ..terms.ball import Ball
+from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import Model
 from .problem import Problem, realign
 from .result import FitResult
@@ -30,7 +31,6 @@ def start_values(problem: Problem, model: Model, ball: Ball, ref_mask, nu: float
     t_c ≈ π√(M/k) (a linear spring-mass half period), k → E by Eqs. 1–3; each damping law's
     own ``start`` rule from the restitution read off the impulse, e = ∫F dt/(M v0) − 1 (Eq. 10).
     """
-    from ..terms.forces import reissner_stiffness_N_per_m
 
     d = problem.data
     meas = problem.measured

@@ -30,6 +30,7 @@ from .._progress import progress as say
 from .._validate import as_float, check_choice
 from ..solve.outcome import G_N_PER_KG
 from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import GAS_OPTIONS
 from ..terms.parameters import replace
 from .engine import BLOCKED_FORCES
@@ -70,7 +71,6 @@ def start_values(table: SummaryTable, model, ball: Ball, nu: float) -> dict:
     """Start values from the figures: E from the contact time of the lowest height (a linear
     spring, t_c ≈ π√(M/k); else from the peak force, F ≈ v0√(kM); else the ball's), k → E by
     Eqs. 1–3; each term's ``start`` rule from the restitution (median, else 0.85)."""
-    from ..terms.forces import reissner_stiffness_N_per_m
 
     mass = as_float(ball.mass_kg)
     v0 = np.sqrt(2 * G_N_PER_KG * table.heights_m)

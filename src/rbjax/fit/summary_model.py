@@ -25,6 +25,7 @@ import numpy as np
 from ..solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, as_arrays
 from ..solve.sampled import sampled_history_unsupported, sampled_solve, substeps_for_contact
 from ..solve.simulate import simulate, trajectory
+from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.model import Model, Solver
 from ..terms.parameters import replace
 from .summary_table import OCTAVE_FIGURES, SCALAR_FIGURES, THIRD_OCTAVE_FIGURES
@@ -62,8 +63,6 @@ def figures_of(
     octave = [f for f in figures if f in OCTAVE_FIGURES]
     third = [f for f in figures if f in THIRD_OCTAVE_FIGURES]
     if octave or third:
-        from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
-
         if sampled_history_unsupported(model) is None:
             force = sampled_solve(
                 heights_m, ball, model, PAPER_RATE_Hz, num_samples, substeps

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..terms.ball import Ball
 from ..terms.model import Model
+from ..text import fmt, format_table
 from .result import model_fields, parameter_lines
 
 #: How each figure is shown: (label, unit, scale from SI to the unit shown).
@@ -86,7 +87,6 @@ class SummaryFitResult:
         }
 
     def summary(self) -> str:
-        from ..text import fmt, format_table
 
         lines = [
             f"model {self.model_name} (blocked force {self.blocked_force}, gas {self.gas}) fitted "

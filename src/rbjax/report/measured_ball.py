@@ -15,6 +15,7 @@ from pathlib import Path
 
 from .._progress import progress as say
 from ..data.examples import examples_dir
+from ..studies.summary_selection import select_summary
 
 #: The paper's measured ball as a summary table (bundled).
 EXAMPLE_TABLE = examples_dir().parent / "paper-measured-ball" / "summary.csv"
@@ -32,8 +33,6 @@ def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..studies.summary_selection import select_summary
 
     say(
         f"reproduce: the paper's measured ball: fitting {', '.join(models)} to the paper's "

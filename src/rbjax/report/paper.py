@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .._validate import as_float
+from ..spectrum.bands import OCTAVE_BANDS, band_edges_Hz
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.forces import gas_force_N, shell_force_N
 
@@ -63,7 +64,6 @@ def _at(runs, heights, name, h):
 
 def comparison_rows(runs, heights) -> list[dict]:
     """Rows of the report: paper value, rbjax gas on/off, relative differences."""
-    from ..spectrum.bands import OCTAVE_BANDS
 
     rows = []
 
@@ -177,7 +177,6 @@ def diff_text(row, gas) -> str:
 
 def explain_comparison(runs, heights, comparison) -> dict[str, str]:
     """One paragraph per compared quantity; every number in it is computed here."""
-    from ..spectrum.bands import OCTAVE_BANDS, band_edges_Hz
 
     ball = JIS_RUBBER_BALL
     on, off = runs["adiabatic"], runs["none"]

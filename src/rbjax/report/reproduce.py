@@ -26,8 +26,27 @@ from .. import __version__
 from .._progress import progress as say
 from .._validate import check_range
 from ..solve.simulate import PAPER_RATE_Hz, simulate
+from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
+from ..spectrum.levels import (
+    contact_resonance_Hz,
+    force_spectrum_dB,
+    lfe_increase_per_doubling_dB,
+    lfe_octave_dB,
+    lfe_third_octave_dB,
+    lfe_total_dB,
+)
+from ..spectrum.standards import RUBBER_BALL_TOLERANCES, check_conformance
+from ..studies.growth import (
+    LINEAR_SOURCE_dB,
+    growth_per_doubling_dB,
+    growth_table,
+    recording_growth,
+)
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.forces import gas_force_N, shell_force_N
+from ..terms.serialize import jsonable
+from ..terms.shell_modes import THEORIES, shell_frequencies_Hz
+from .measured_ball import measured_ball, report_section
 from .paper import (
     DEFAULT_HEIGHTS_M,
     FIG9_HEIGHTS_M,
@@ -55,13 +74,6 @@ def _heights(heights_m) -> np.ndarray:
 
 def _run(heights: np.ndarray, gas: str) -> dict:
     """Simulate all heights with one gas option; spectra and band levels of the 1 s records."""
-    from ..spectrum.levels import (
-        contact_resonance_Hz,
-        lfe_increase_per_doubling_dB,
-        lfe_octave_dB,
-        lfe_third_octave_dB,
-        lfe_total_dB,
-    )
 
     res = simulate(heights, gas=gas)
     hist = res.history()  # the paper's 44.1 kHz x 1 s grid (§2.4)
@@ -104,8 +116,6 @@ def _growth(runs, heights) -> dict:
     """Growth of L_FE per doubling (``rbjax.studies.growth``): the bundled recordings (one point per
     drop) and the paper's model, gas on and off, from the runs' octave bands (§4.2, Fig. 11).
     The recordings are left out (with a note) if they cannot be read."""
-    from ..spectrum.bands import OCTAVE_BANDS
-    from ..studies.growth import growth_per_doubling_dB, recording_growth
 
     out: dict = {}
     try:
@@ -126,7 +136,6 @@ def _growth(runs, heights) -> dict:
 def _shell_modes() -> dict:
     """The JIS ball's fundamental axisymmetric mode (n = 2) by the three theories of
     ``rbjax.terms.shell_modes``, beside the paper's ~60 Hz (§4.1)."""
-    from ..terms.shell_modes import THEORIES, shell_frequencies_Hz
 
     return {
         t: shell_frequencies_Hz(JIS_RUBBER_BALL, 2, t, n_roots=1).fundamental_Hz for t in THEORIES
@@ -137,8 +146,6 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
     from matplotlib.figure import Figure
 
     from .. import plot
-    from ..spectrum.bands import OCTAVE_BANDS
-    from ..spectrum.levels import force_spectrum_dB
 
     ball = JIS_RUBBER_BALL
     files = []
@@ -319,7 +326,6 @@ def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
 
 
 def _contact_time_tolerance():
-    from ..spectrum.standards import RUBBER_BALL_TOLERANCES
 
     tol = RUBBER_BALL_TOLERANCES.contact_time
     return tol.lower, tol.upper
@@ -328,7 +334,6 @@ def _contact_time_tolerance():
 def _report(
     runs, heights, comparison, explanations, conformance, files, elapsed_s, growth=None, modes=None
 ) -> str:
-    from ..spectrum.bands import OCTAVE_BANDS
 
     ball = JIS_RUBBER_BALL
     lines = [
@@ -457,7 +462,6 @@ def _report(
 def _growth_section(growth, modes) -> list[str]:
     """report.md: the growth-per-doubling table (recordings vs the paper's model) and the shell
     modes beside the paper's 60 Hz."""
-    from ..studies.growth import LINEAR_SOURCE_dB, growth_table
 
     lines: list[str] = []
     if growth:
@@ -511,9 +515,6 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
         The content of ``results.json``: per-height results for ``gas`` ``adiabatic`` and
         ``none``, the comparison with the paper, the conformance at 1 m, and the file names.
     """
-    from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
-    from ..spectrum.standards import check_conformance
-    from ..terms.serialize import jsonable
 
     start = time.perf_counter()
     heights = _heights(heights_m)
@@ -544,7 +545,6 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
         )
     growth = _growth(runs, heights)
     modes = _shell_modes()
-    from .measured_ball import measured_ball, report_section
 
     measured = measured_ball(out, progress=progress)
     say("reproduce: [3/4] drawing figures 3-12", enabled=progress)

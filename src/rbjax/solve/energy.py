@@ -30,6 +30,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
 from .ode import final_state, impact_status, solve_phases
+from .simulate import broadcast_inputs, check_inputs
 from .vector_field import body_velocity_m_per_s, split_energy
 
 
@@ -92,7 +93,6 @@ def energy_balance(
     Models with a ``BallMode`` or a ``SeriesKelvinVoigt`` are not covered (their own energy
     is not accounted for): ``ValueError``.
     """
-    from .simulate import broadcast_inputs, check_inputs
 
     check_inputs(height_m, ball)
     model = Model() if model is None else model

@@ -48,8 +48,10 @@ from ..spectrum.standards import (
 )
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.declare import Parameter
+from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import Model
-from ..terms.parameters import replace
+from ..terms.parameters import parameter_table, replace
+from ..terms.serialize import ball_to_dict, model_to_dict
 
 GEOMETRIES = {
     "jis": JIS_RUBBER_BALL,
@@ -191,7 +193,6 @@ class DesignResult:
         return dict(zip(ITEMS, (t.unit for t in _TOLERANCES)))[item]
 
     def to_dict(self) -> dict:
-        from ..terms.serialize import ball_to_dict, model_to_dict
 
         return {
             "kind": "design",
@@ -326,7 +327,6 @@ def design(
 
 
 def _start_values(model, ball) -> dict:
-    from ..terms.forces import reissner_stiffness_N_per_m
 
     k = float(reissner_stiffness_N_per_m(ball))
     return model.term_starts(k, float(ball.mass_kg), 0.8, 0.02, math.sqrt(2 * 9.80665))
@@ -335,7 +335,6 @@ def _start_values(model, ball) -> dict:
 def _value_of(name, ball, model) -> float:
     if name in ("youngs_Pa", "wall_m"):
         return float(getattr(ball, name))
-    from ..terms.parameters import parameter_table
 
     return next(r.value for r in parameter_table(1.0, ball, model) if r.name == name)
 

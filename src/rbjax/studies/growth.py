@@ -28,7 +28,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..data import load_examples
+from ..fit import prepare_data
+from ..solve.simulate import PAPER_RATE_Hz, check_inputs, resolve_method, simulate, simulate_model
+from ..spectrum.bands import OCTAVE_BANDS
+from ..spectrum.levels import lfe_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.model import Solver
 
 __all__ = [
     "LINEAR_SOURCE_dB",
@@ -146,7 +152,6 @@ def growth_per_doubling_dB(
         :class:`Growth`. Raises :class:`GrowthError` (a ``ValueError``) for fewer than two
         distinct heights, mismatched shapes or non-positive heights.
     """
-    from ..spectrum.bands import OCTAVE_BANDS
 
     h = np.asarray(heights_m, dtype=float)
     y = np.asarray(lfe_dB_by_band, dtype=float)
@@ -221,9 +226,6 @@ def recording_lfe_dB(
     recordings (``rbjax.data.load_examples()``). ``average=True``: one coherent average per
     height instead of one point per drop.
     """
-    from ..data import load_examples
-    from ..fit import prepare_data
-    from ..spectrum.levels import lfe_octave_dB
 
     recs = load_examples() if recordings is None else recordings
     data = prepare_data(recs, average=average, window_s=window_s, pre_onset_s=pre_onset_s)
@@ -238,7 +240,6 @@ def recording_growth(
 ) -> Growth:
     """Growth per doubling of recorded L_FE (default: the bundled emulated recordings, one
     point per drop, so the standard error includes the drop-to-drop scatter)."""
-    from ..spectrum.bands import OCTAVE_BANDS
 
     h, lfe = recording_lfe_dB(recordings, average=average)
     return growth_per_doubling_dB(h, lfe, OCTAVE_BANDS, ref_height_m=ref_height_m, label=label)
@@ -253,8 +254,6 @@ def model_lfe_dB(
     ``FitResult.ball``), or None for ``rbjax.simulate(heights, ball, **simulate_kwargs)``.
     Failed solves give NaN rows.
     """
-    from ..solve.simulate import PAPER_RATE_Hz, simulate
-    from ..spectrum.levels import lfe_octave_dB
 
     if model is None:
         res = simulate(np.asarray(heights_m, dtype=float), ball, **simulate_kwargs)
@@ -264,8 +263,6 @@ def model_lfe_dB(
                 "model_lfe_dB: pass either model or simulate options, not both "
                 f"({sorted(simulate_kwargs)})"
             )
-        from ..solve.simulate import check_inputs, resolve_method, simulate_model
-        from ..terms.model import Solver
 
         h = np.asarray(heights_m, dtype=float)
         check_inputs(h, ball, PAPER_RATE_Hz, 1.0)
@@ -293,7 +290,6 @@ def model_growth(
     ``model_growth(h)`` (the paper's elastic model), ``model_growth(h, gas="none")``, or
     ``model_growth(h, fit.ball, fit.model)`` for a fitted model.
     """
-    from ..spectrum.bands import OCTAVE_BANDS
 
     h = np.asarray(heights_m, dtype=float).reshape(-1)
     if np.unique(h).size < 2:

@@ -11,6 +11,7 @@ from jaxtyping import ArrayLike
 
 from .._validate import is_traced
 from .declare import POSITIVE, Parameter, check_declared
+from .forces import reissner_stiffness_N_per_m
 
 
 class Ball(eqx.Module):
@@ -72,7 +73,6 @@ class Ball(eqx.Module):
     @property
     def stiffness_N_per_m(self):
         """Reissner's point-load stiffness of the shell, 4Eh²/(R√(3(1−ν²))) (corrected Eqs. 1–3)."""
-        from .forces import reissner_stiffness_N_per_m
 
         return reissner_stiffness_N_per_m(self)
 

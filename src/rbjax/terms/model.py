@@ -13,7 +13,7 @@ from jaxtyping import ArrayLike
 
 from .._validate import as_float, check_choice, check_range, is_traced
 from .ball_mode import BallMode
-from .damping import AbstractDamping
+from .damping import DAMPING_MODELS, AbstractDamping
 from .declare import Parameter, check_declared
 from .floors.kinds import AbstractFloor, Rigid
 from .forces import CubicStiffening
@@ -331,7 +331,6 @@ def superset_model(
     off values. The ball mode is opt-in: held off it is exact (w ≡ 0) but carries two states
     and three Jacobian columns through every solve.
     """
-    from .damping import DAMPING_MODELS
 
     laws = tuple(DAMPING_MODELS.values()) if laws is None else tuple(laws)
     have = {type(d) for d in base.damping}
