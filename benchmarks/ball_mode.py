@@ -30,7 +30,7 @@ import numpy as np
 
 import rbjax
 from rbjax.data import examples_dir
-from rbjax.fit import fit, prepare_data
+from rbjax.fit import FitOptions, fit, prepare_data
 from rbjax.spectrum import OCTAVE_BANDS
 from rbjax.studies.selection import held_out_rows, shared_structure
 
@@ -78,8 +78,7 @@ def held_out(data, superset, quick: bool):
                 data,
                 name,
                 blocked_force="momentum",
-                fit_heights=FIT_HEIGHTS,
-                superset=superset,
+                options=FitOptions(fit_heights=FIT_HEIGHTS, superset=superset),
                 start=start,
                 progress=False,
             )

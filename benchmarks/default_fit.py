@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from rbjax.data import examples_dir
-from rbjax.fit import fit, prepare_data
+from rbjax.fit import FitOptions, fit, prepare_data
 from rbjax.spectrum import OCTAVE_BANDS
 from rbjax.studies.selection import held_out_rows, select_model
 
@@ -42,7 +42,7 @@ def main() -> None:
         data,
         rec.model_name,
         blocked_force=rec.blocked_force,
-        fit_heights=FIT_HEIGHTS,
+        options=FitOptions(fit_heights=FIT_HEIGHTS),
         progress=False,
     )
     rows = []
@@ -66,7 +66,13 @@ def main() -> None:
     sampled = fit(data, rec.model_name, blocked_force=rec.blocked_force, progress=False)
     t_sampled = time.perf_counter() - t1
     t1 = time.perf_counter()
-    ode = fit(data, rec.model_name, blocked_force=rec.blocked_force, method="ode", progress=False)
+    ode = fit(
+        data,
+        rec.model_name,
+        blocked_force=rec.blocked_force,
+        options=FitOptions(path="ode"),
+        progress=False,
+    )
     t_ode = time.perf_counter() - t1
     compare = {}
     print(

@@ -25,7 +25,7 @@ import rbjax
 from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Zener
 from rbjax.cli import main
 from rbjax.data import examples_dir
-from rbjax.fit import fit, model_histories, parameter_names
+from rbjax.fit import FitOptions, fit, model_histories, parameter_names
 
 from scipy_reference import reference_impact
 from synthetic_records import (
@@ -187,7 +187,7 @@ def test_e_and_nu_are_flagged_as_not_separately_identifiable(recovered):
 
 def test_a_prior_on_nu_makes_it_determined_by_the_prior(recovered):
     data, _ = recovered["paper"]
-    res = fit(data, "paper", poisson_prior=(0.3, 0.05), progress=False)
+    res = fit(data, "paper", options=FitOptions(poisson_prior=(0.3, 0.05)), progress=False)
     nu = res.parameters["poisson"]
     assert not nu.fixed
     # the data say nothing about ν alone: the posterior is the prior
@@ -203,7 +203,11 @@ def test_a_prior_on_nu_makes_it_determined_by_the_prior(recovered):
 def test_other_optimizers_reach_the_same_minimum(optimizer, recovered):
     data, lm = recovered["paper"]
     res = fit(
-        data, "paper", optimizer=optimizer, start={"youngs_Pa": 2.5e6}, progress=False, max_steps=60
+        data,
+        "paper",
+        start={"youngs_Pa": 2.5e6},
+        options=FitOptions(optimizer=optimizer, max_steps=60),
+        progress=False,
     )
     assert res.converged, res.message
     e = lm.parameters["youngs_Pa"]
@@ -212,7 +216,9 @@ def test_other_optimizers_reach_the_same_minimum(optimizer, recovered):
 
 def test_max_steps_zero_evaluates_the_start_and_says_so(recovered):
     data, lm = recovered["paper"]
-    start = fit(data, "paper", start={"youngs_Pa": 2.5e6}, max_steps=0, progress=False)
+    start = fit(
+        data, "paper", start={"youngs_Pa": 2.5e6}, options=FitOptions(max_steps=0), progress=False
+    )
     assert not start.converged and "not converged" in start.message
     assert start.residual_rms_N > 2 * lm.residual_rms_N
 
@@ -222,7 +228,13 @@ def test_the_histories_reported_are_those_of_the_parameters_reported(recovered):
     start was evaluated at ν = 0.45, so the start is evaluated again there (the reported
     histories were once those of ν = 0.45, 2 % of the peak away)."""
     data, _ = recovered["hunt-crossley"]
-    res = fit(data, "hunt-crossley", blocked_force="momentum", max_steps=0, progress=False)
+    res = fit(
+        data,
+        "hunt-crossley",
+        blocked_force="momentum",
+        options=FitOptions(max_steps=0),
+        progress=False,
+    )
     assert res.parameters["poisson"].value == 0.5
     values = {n: p.value for n, p in res.parameters.items()}
     force, _, _ = model_histories(
@@ -251,7 +263,7 @@ def test_held_out_heights_are_predicted_not_fitted(recovered):
         data,
         "hunt-crossley",
         blocked_force="momentum",
-        fit_heights=[0.1, 0.4, 1.0, 1.6],
+        options=FitOptions(fit_heights=[0.1, 0.4, 1.0, 1.6]),
         start=full,
         progress=False,
     )
@@ -276,7 +288,7 @@ def test_bad_input_names_the_parameter():
     with pytest.raises(ValueError, match="poisson=0.7"):
         fit(data, "paper", fix={"poisson": 0.7})
     with pytest.raises(ValueError, match="optimizer='newton'"):
-        fit(data, "paper", optimizer="newton")
+        fit(data, "paper", options=FitOptions(optimizer="newton"))
     assert parameter_names("zener+stiffening") == (
         "youngs_Pa",
         "poisson",

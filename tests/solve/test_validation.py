@@ -11,6 +11,10 @@ import rbjax
 
 from scipy_reference import HEIGHTS_M, reference_impact
 
+# A smoke test (tests/conftest.py: compiled with most optimisations off): errors and status codes;
+# the accuracy of the paths is tests/solve's other modules.
+pytestmark = pytest.mark.xla_smoke
+
 JIS = rbjax.JIS_RUBBER_BALL
 GOOD = dict(radius_m=0.089, wall_m=0.032, mass_kg=2.5, youngs_Pa=1.6e6, poisson=0.5)
 
@@ -234,10 +238,10 @@ def test_sweep_samples_are_validated_jointly():
     ],
 )
 def test_bad_fit_options(kwargs, name):
-    from rbjax.fit import fit
+    from rbjax.fit import FitOptions, fit
 
     with pytest.raises(ValueError, match=name):
-        fit(None, "paper", **kwargs)  # rejected before any data are read
+        fit(None, "paper", options=FitOptions(**kwargs))  # rejected before any data are read
 
 
 def test_record_features_of_a_cut_off_pulse_are_nan_not_made_up():

@@ -215,7 +215,7 @@ def _check_model_and_fix(model, fix):
 
 def run(args) -> int:
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
-    from ..fit import fit
+    from ..fit import FitOptions, fit
 
     if args.summary is not None or not args.paths:
         from ._summary_fit import run_summary
@@ -227,6 +227,7 @@ def run(args) -> int:
     if parallel is not None:
         prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
+    options = FitOptions(optimizer=args.optimizer, path=args.method)
     selection = None
     if args.model is None:
         from ..studies.selection import BLOCKED_FORCES, select_model
@@ -240,8 +241,7 @@ def run(args) -> int:
             blocked_forces=forces,
             gas=args.gas,
             fix=fix,
-            optimizer=args.optimizer,
-            method=args.method,
+            options=options,
             workers=parallel,
             progress=not args.quiet,
         )
@@ -254,8 +254,7 @@ def run(args) -> int:
             blocked_force=args.blocked_force or "paper",
             gas=args.gas,
             fix=fix,
-            optimizer=args.optimizer,
-            method=args.method,
+            options=options,
             progress=not args.quiet,
         )
     extra = {"conditioning": list(data.conditioning), "excluded": list(data.excluded)}

@@ -22,6 +22,7 @@ from .layout import (
     parse_model_name,
     parse_model_terms,
 )
+from .options import FitOptions
 from .prediction import model_histories, predict
 from .prediction import parameter_names_of as parameter_names
 from .program import OPTIMIZERS
@@ -34,6 +35,7 @@ __all__ = [
     "OPTIMIZERS",
     "STIFFENING_SUFFIX",
     "FitData",
+    "FitOptions",
     "FitResult",
     "ParameterEstimate",
     "Prediction",

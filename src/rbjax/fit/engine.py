@@ -33,29 +33,27 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import check_choice, check_range
+from .._validate import check_choice
 from .._x64 import require_x64
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import GAS_OPTIONS, Model, Solver
+from ..terms.model import GAS_OPTIONS, Model
 from ..terms.parameters import replace
 from .estimates import Estimates, estimates
 from .freedom import Freedom, free_parameters, prior_row
+from .options import FitOptions, options_from_keywords
 from .physical import at_bounds, ball_mode_structure, series_structure
 from .problem import STEPS_PER_ROUND, per_height_rows, realign
-from .program import OPTIMIZERS
 from .result import FitResult
-from .rounds import MAX_ROUNDS, optimise, pick_best
+from .rounds import MAX_ROUNDS, Rounds, optimise, pick_best
 from .setup import FitSetup, set_up
 from .start import Starts, evaluate_starts, start_plan
 
-SCALES = ("noise", "peak")
 BLOCKED_FORCES = ("paper", "momentum")
-EXTRA_TERMS = ("contact_time", "peak_force", "lfe")
 
 
 def fit(
@@ -67,19 +65,9 @@ def fit(
     ball: Ball = JIS_RUBBER_BALL,
     fix: Mapping[str, float] | None = None,
     start: Mapping[str, float] | FitResult | None = None,
-    hold_poisson: float = 0.5,
-    poisson_prior: tuple[float, float] | None = None,
-    optimizer: str = "lm",
-    fit_heights: Sequence[float] | None = None,
-    height_error: bool = False,
-    scale: str = "noise",
-    decimate: int = 1,
-    extra_weights: Mapping[str, float] | None = None,
-    max_steps: int | None = None,
+    options: FitOptions | None = None,
     progress: bool = True,
-    solver: Solver | None = None,
-    superset: Model | None = None,
-    method: str = "auto",
+    **deprecated,
 ) -> FitResult:
     """Fit E, ν and the parameters of ``model``'s terms to force histories of all records.
 
@@ -98,30 +86,16 @@ def fit(
         fix: name → value of parameters held (E, ν, the terms' parameters, or R, h, M).
         start: name → start value, or a previous :class:`FitResult` of the same model and data
             (warm start).
-        hold_poisson: value at which ν is held when the Jacobian shows E and ν are not
-            separately identifiable (always, for this model: §2.1 Eqs. 1–3).
-        poisson_prior: (mean, std) of a Gaussian prior on ν instead of holding it.
-        optimizer: ``lm`` (optimistix Levenberg–Marquardt) or ``gauss-newton`` (optimistix).
-        fit_heights: heights (m) whose records enter the fit (default all); the others are
-            predicted (onset-aligned, nothing fitted to them) and reported as held out.
-        height_error: also fit each record's drop-height error, bounded by ±1 cm.
-        scale: residual of record k divided by its noise rms (``noise``) or peak (``peak``).
-        decimate: use every n-th sample in the residual.
-        extra_weights: {"contact_time": w, "peak_force": w, "lfe": w}: extra residual rows
-            w·(relative error) for contact time and peak, w·(ΔL_FE in dB) per octave band.
-        max_steps: optimiser steps in all (default 40 per round, at most 8 rounds; 0 evaluates
-            the start only).
+        options: a :class:`~rbjax.fit.options.FitOptions` (default ``FitOptions()``): the
+            optimiser and its step budget, the residual's scale, decimation and extra rows, the
+            prediction's path and ``Solver``, ν held or given a prior, drop-height errors, the
+            heights fitted, a shared superset program.
         progress: print one line per optimiser round to stderr.
-        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then runs
-            on the diffrax ODE.
-        method: ``auto`` (default: the force at the records' own samples by fixed steps,
-            :mod:`rbjax.fit.record_forces`, where the model allows it; the diffrax ODE with its
-            events for moving floors or when a ``solver`` is given, the reason in the notes),
-            ``samples`` or ``ode`` (the reference).
-        superset: a model containing every term of ``model`` (e.g.
-            ``rbjax.terms.model.superset_model``): the fit runs in its compiled program with the
-            terms ``model`` lacks held at their values, so fits of different models share one
-            program (model selection does this).
+        deprecated: the keywords of the previous release that are now fields of ``FitOptions``
+            (``optimizer``, ``scale``, ``decimate``, ``extra_weights``, ``max_steps``,
+            ``method`` (its ``path``), ``solver``, ``hold_poisson``, ``poisson_prior``,
+            ``height_error``, ``fit_heights``, ``superset``), accepted for one release with a
+            ``DeprecationWarning``; with ``options=`` too, a ``ValueError`` naming them.
 
     The information criteria use the history residuals, AIC = N_eff ln(RSS/N) + 2p and
     BIC = N_eff ln(RSS/N) + p ln N_eff (p: free parameters incl. onsets), with the same
@@ -129,98 +103,34 @@ def fit(
     autocorrelation of the pre-contact noise), so that they are comparable across models.
     """
     require_x64()
-    poisson_prior, max_steps = _check_arguments(
-        blocked_force=blocked_force,
-        gas=gas,
-        optimizer=optimizer,
-        scale=scale,
-        ball=ball,
-        decimate=decimate,
-        hold_poisson=hold_poisson,
-        poisson_prior=poisson_prior,
-        extra_weights=extra_weights,
-        max_steps=max_steps,
-    )
+    options = options_from_keywords("fit", options, deprecated)
+    _check_arguments(blocked_force=blocked_force, gas=gas, ball=ball)
     setup = set_up(
-        data,
-        model,
-        blocked_force=blocked_force,
-        gas=gas,
-        ball=ball,
-        fix=fix,
-        poisson_prior=poisson_prior,
-        fit_heights=fit_heights,
-        height_error=height_error,
-        scale=scale,
-        decimate=decimate,
-        extra_weights=extra_weights,
-        solver=solver,
-        superset=superset,
-        method=method,
+        data, model, blocked_force=blocked_force, gas=gas, ball=ball, fix=fix, options=options
     )
     plan = start_plan(setup, model, start)
     if setup.why_ode:
         say(f"{setup.label}: on the diffrax ODE ({setup.why_ode})", enabled=progress)
     starts = evaluate_starts(setup, plan)
-    freedom = free_parameters(setup, starts, hold_poisson)
-    optimum = _optimise(
-        setup, starts, freedom, optimizer=optimizer, max_steps=max_steps, progress=progress
-    )
+    freedom = free_parameters(setup, starts, options.hold_poisson)
+    optimum = _optimise(setup, starts, freedom, options, progress=progress)
     optimum = _align_held_out(setup, optimum)
     return _result(
-        setup, freedom, optimum, estimates(setup, freedom, optimum.theta, optimum.out), optimizer
+        setup,
+        freedom,
+        optimum,
+        estimates(setup, freedom, optimum.theta, optimum.out),
+        options.optimizer,
     )
 
 
-def _check_arguments(
-    *,
-    blocked_force,
-    gas,
-    optimizer,
-    scale,
-    ball,
-    decimate,
-    hold_poisson,
-    poisson_prior,
-    extra_weights,
-    max_steps,
-):
-    """The arguments of :func:`fit` that need neither the model nor the data, checked:
-    (the ν prior as floats, the optimiser's step budget)."""
+def _check_arguments(*, blocked_force, gas, ball) -> None:
+    """The arguments of :func:`fit` that qualify a model name, and the ball, checked (its
+    options are checked by :class:`~rbjax.fit.options.FitOptions`)."""
     check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
     check_choice("gas", gas, GAS_OPTIONS)
-    check_choice("optimizer", optimizer, OPTIMIZERS)
-    check_choice("scale", scale, SCALES)
     if not isinstance(ball, Ball):
         raise ValueError(f"ball={ball!r} must be an rbjax.Ball")
-    if not (isinstance(decimate, int) and decimate >= 1):
-        raise ValueError(f"decimate={decimate!r} must be an integer >= 1")
-    if not -1.0 < hold_poisson <= 0.5:
-        raise ValueError(f"hold_poisson={hold_poisson!r} is outside the valid range (-1, 0.5]")
-    if poisson_prior is not None:
-        mean, std = (float(x) for x in poisson_prior)
-        if not (-1.0 < mean < 0.5 and std > 0):
-            raise ValueError(
-                f"poisson_prior={poisson_prior!r}: need (mean, std) with -1 < mean < 0.5 "
-                "and std > 0"
-            )
-        poisson_prior = (mean, std)
-    for k, weight in (extra_weights or {}).items():
-        if k not in EXTRA_TERMS:
-            raise ValueError(f"extra_weights: unknown term {k!r}; valid: {', '.join(EXTRA_TERMS)}")
-        check_range(f"extra_weights[{k!r}]", weight, lower=0.0, lower_open=False)
-    if max_steps is None:
-        max_steps = STEPS_PER_ROUND * MAX_ROUNDS
-    elif not (
-        isinstance(max_steps, (int, np.integer))
-        and not isinstance(max_steps, bool)
-        and max_steps >= 0
-    ):
-        raise ValueError(
-            f"max_steps={max_steps!r} is outside the valid range: an integer ≥ 0 "
-            "(0: evaluate the start only)"
-        )
-    return poisson_prior, max_steps
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -240,7 +150,7 @@ class _Optimum:
 
 
 def _optimise(
-    setup: FitSetup, starts: Starts, freedom: Freedom, *, optimizer, max_steps, progress
+    setup: FitSetup, starts: Starts, freedom: Freedom, options: FitOptions, *, progress: bool
 ) -> _Optimum:
     """Every start optimised (ν in each as the identifiability check left it): rounds of LM
     in the whitened frame of each round's start; the best converged start is kept."""
@@ -252,20 +162,20 @@ def _optimise(
     for th in thetas:
         th[inu] = freedom.nu
     lanes = optimise(
-        problem,
+        setup,
         thetas,
         starts.outs,
         freedom.free,
         freedom.free_idx,
-        setup.constants,
-        fit_mask,
         weights_of=lambda r: problem.weights(fit_mask, setup.extra, prior_row(setup, freedom, r)),
         reevaluate=nu_moved or setup.poisson_prior is not None,
-        optimizer=optimizer,
-        max_steps=max_steps,
-        progress=progress,
-        label=setup.label,
-        shown=[n for n in freedom.physical_free],
+        settings=Rounds(
+            optimizer=options.optimizer,
+            max_steps=options.steps_budget(STEPS_PER_ROUND * MAX_ROUNDS),
+            progress=progress,
+            label=setup.label,
+            shown=tuple(freedom.physical_free),
+        ),
     )
     best = pick_best(lanes)
     n_ok = sum(lane.converged for lane in lanes)

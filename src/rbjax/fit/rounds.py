@@ -17,7 +17,7 @@ import numpy as np
 from .._progress import progress as say
 from . import uncertainty as unc
 from .physical import BOUND_TOLERANCE
-from .problem import Problem
+from .setup import FitSetup
 
 #: Most re-centrings of the whitened coordinates (rounds of ``STEPS_PER_ROUND`` steps).
 MAX_ROUNDS = 8
@@ -45,28 +45,32 @@ class Lane:
         return 0.5 * float(r @ r) if np.all(np.isfinite(r)) else math.inf
 
 
+@dataclasses.dataclass(frozen=True)
+class Rounds:
+    """How :func:`optimise` runs: the optimiser (``rbjax.fit.program.OPTIMIZERS``), its step
+    budget in all, progress lines (one per start and round, named ``label``, showing the
+    parameters ``shown``)."""
+
+    optimizer: str
+    max_steps: int
+    progress: bool = False
+    label: str = "fit"
+    shown: tuple[str, ...] = ()
+
+
 def optimise(
-    problem: Problem,
-    thetas,
-    outs,
-    free,
-    free_idx,
-    constants,
-    fit_mask,
-    *,
-    weights_of,
-    reevaluate,
-    optimizer,
-    max_steps,
-    progress,
-    label,
-    shown,
+    setup: FitSetup, thetas, outs, free, free_idx, *, weights_of, reevaluate, settings: Rounds
 ) -> list[Lane]:
     """Rounds of the compiled optimiser for every start (one call per round), each round in the
     whitened frame of that start's current point, until each start's remaining Gauss–Newton
     step is below ``unc.STEP_TOLERANCE_SIGMA`` σ, its steps are spent, or its prediction
     fails. ``outs``: the evaluations at ``thetas`` (evaluated again with ``weights_of`` where
-    ``reevaluate``). A start that is done is not run again."""
+    ``reevaluate``); ``free``, ``free_idx``: the free parameters' mask and θ positions;
+    ``settings``: the optimiser, its budget and the progress lines. A start that is done is not
+    run again."""
+    problem, constants, fit_mask = setup.problem, setup.constants, setup.fit_mask
+    optimizer, max_steps, progress = settings.optimizer, settings.max_steps, settings.progress
+    label, shown = settings.label, settings.shown
     lay = problem.layout
     n = len(lay.names)
     if reevaluate:  # the residuals' weights depend on the residuals (the ν prior's row)

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
 
 import numpy as np
 
 from ..terms.ball import Ball
 from ..terms.model import Model
 from .layout import CONSTANT_PARAMETERS, FitLayout, fitted_parameter_names
+from .options import FitOptions
 from .problem import Problem, candidate_model, embed, fit_path, fit_solver
 from .records import FitData, prepare_data
 
@@ -103,43 +103,30 @@ class FitSetup:
 
 
 def set_up(
-    data,
-    model,
-    *,
-    blocked_force,
-    gas,
-    ball: Ball,
-    fix,
-    poisson_prior,
-    fit_heights,
-    height_error,
-    scale,
-    decimate,
-    extra_weights: Mapping[str, float] | None,
-    solver,
-    superset,
-    method,
+    data, model, *, blocked_force: str, gas: str, ball: Ball, fix, options: FitOptions
 ) -> FitSetup:
     """The model and the parameters it holds (checked), the records, and the problem built on
-    them (see :func:`rbjax.fit.engine.fit` for the arguments)."""
+    them (see :func:`rbjax.fit.engine.fit` for the arguments, ``options`` its
+    :class:`~rbjax.fit.options.FitOptions`)."""
     model_name, candidate = candidate_model(model, blocked_force, gas)
     fittable = fitted_parameter_names(candidate)
     fixed = validate_fix(set(fittable) | set(CONSTANT_PARAMETERS[:3]), fix)
+    poisson_prior, extra_weights = options.poisson_prior, options.extra_weights
     if "poisson" in fixed and poisson_prior is not None:
         raise ValueError("poisson is both fixed and given a prior; choose one")
     data = prepare_data(data)
     ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
-    fit_mask = _height_mask(data, fit_heights)
-    structure = embed(candidate, superset, ball)
-    path, why_ode = fit_path(method, structure, solver)
+    fit_mask = _height_mask(data, options.fit_heights)
+    structure = embed(candidate, options.superset, ball)
+    path, why_ode = fit_path(options.path, structure, options.solver)
     problem = Problem(
         data,
         ball,
         structure,
-        fit_solver(solver),
-        height_error=height_error,
-        decimate=decimate,
-        scale=scale,
+        fit_solver(options.solver),
+        height_error=options.height_error,
+        decimate=options.decimate,
+        scale=options.scale,
         path=path,
         feature_rows=any(w > 0 for w in (extra_weights or {}).values()),
     )

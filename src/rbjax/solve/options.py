@@ -17,6 +17,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any, TypedDict
 
+from .._settings import from_old_keywords
 from .._validate import check_choice, check_range
 from ..terms.ball_mode import BallMode
 from ..terms.damping import AbstractDamping
@@ -93,25 +94,9 @@ def spec_from_keywords(
     """``evaluation`` (default ``EvaluationSpec()``), or one built from the keywords of the old
     signature of ``function`` (deprecated: a ``DeprecationWarning``; one release). A mix, or an
     unknown keyword, is a named error."""
-    unknown = sorted(set(keywords) - set(_SPEC_KEYWORDS))
-    if unknown:
-        raise TypeError(f"{function}() got unexpected keyword arguments {unknown}")
-    if evaluation is not None and not isinstance(evaluation, EvaluationSpec):
-        raise ValueError(f"evaluation={evaluation!r} must be an rbjax.EvaluationSpec")
-    if not keywords:
-        return EvaluationSpec() if evaluation is None else evaluation
-    if evaluation is not None:
-        raise ValueError(
-            f"{function} got evaluation= and the keywords {sorted(keywords)}: give them in the "
-            f"EvaluationSpec (EvaluationSpec(..., {', '.join(sorted(keywords))}=...))"
-        )
-    warnings.warn(
-        f"{function}({', '.join(f'{k}=' for k in sorted(keywords))}...) is deprecated: pass "
-        f"evaluation=rbjax.EvaluationSpec(...) (method= is its path=)",
-        DeprecationWarning,
-        stacklevel=3,
+    return from_old_keywords(
+        function, "evaluation", EvaluationSpec, evaluation, keywords, _SPEC_KEYWORDS
     )
-    return EvaluationSpec(**{_SPEC_KEYWORDS[k]: v for k, v in keywords.items()})
 
 
 class ModelShortcuts(TypedDict, total=False):

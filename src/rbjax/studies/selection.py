@@ -27,6 +27,7 @@ import numpy as np
 from .._progress import progress as say
 from .._x64 import require_x64
 from ..fit import MODEL_NAMES, FitResult, fit, parse_model_terms, predict, prepare_data
+from ..fit.options import OLD_KEYWORDS, options_from_keywords
 from ..terms.model import Model, superset_model
 from .executors import Parallel, Task, run_tasks
 
@@ -90,15 +91,21 @@ def held_out_rows(result, heights) -> list[HeldOut]:
 
 def fit_task(data, model, blocked_force, fit_heights, start, fit_kwargs) -> FitResult:
     """One fit of a selection as a task of its own (a module-level function, so that a worker
-    process or a Dask worker can run it): :func:`rbjax.fit.fit` without progress lines."""
+    process or a Dask worker can run it): :func:`rbjax.fit.fit` without progress lines, its
+    ``options`` (in ``fit_kwargs``) with ``fit_heights`` and the ``superset`` of ``fit_kwargs``."""
+    kwargs = dict(fit_kwargs)
+    superset = kwargs.pop("superset", None)
+    old = {k: kwargs.pop(k) for k in list(kwargs) if k in OLD_KEYWORDS}  # deprecated keywords
+    options = options_from_keywords("select_model", kwargs.pop("options", None), old)
+    options = options.replace(fit_heights=fit_heights, superset=superset)
     return fit(
         data,
         model,
         blocked_force=blocked_force,
-        fit_heights=fit_heights,
         start=start,
+        options=options,
         progress=False,
-        **fit_kwargs,
+        **kwargs,
     )
 
 
@@ -465,7 +472,7 @@ def select_model(
         scheduler: address of a Dask scheduler to send the fits to instead (``rbjax[cluster]``;
             see :mod:`rbjax.studies.executors`).
         progress: one line per full fit and per fold on stderr.
-        fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``optimizer``, ``method``, …).
+        fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
     Returns:
         The :class:`Selection`.
