@@ -7,7 +7,6 @@ import warnings
 from collections.abc import Iterable
 
 import numpy as np
-from scipy.fft import next_fast_len
 
 from .errors import DataError, DataWarning
 from .recording import Recording, require_same_rate
@@ -79,6 +78,8 @@ def average(
     shifts = [(o - ref) * rate for o in onsets]  # samples to advance each record
 
     if domain == "frequency":
+        from scipy.fft import next_fast_len  # lazy: scipy.fft costs 0.3 s at import (RESULTS.md)
+
         N = next_fast_len(m + int(math.ceil(max(abs(d) for d in shifts))) + 64, real=True)
         f = np.fft.rfftfreq(N, d=1.0 / rate)
         acc = np.zeros(f.size, dtype=np.complex128)

@@ -14,7 +14,6 @@ import warnings
 from typing import NamedTuple
 
 import numpy as np
-import scipy.signal
 
 from ..spectrum.filters import butter_lowpass_sos
 from .crossings import estimate_noise_rms_N, quiet_level, rising_crossing
@@ -267,6 +266,8 @@ def condition(
     # --- optional causal low-pass
     lp_out = recording.lowpass_Hz
     if lowpass_Hz is not None:
+        import scipy.signal  # lazy: scipy.signal costs 0.6–1.7 s at import (benchmarks/RESULTS.md)
+
         x = scipy.signal.sosfilt(butter_lowpass_sos(4, lowpass_Hz, rate), x)
         lp_out = float(lowpass_Hz) if lp_out is None else min(lp_out, float(lowpass_Hz))
         notes.append(f"causal 4th-order Butterworth low-pass at {float(lowpass_Hz):g} Hz applied")

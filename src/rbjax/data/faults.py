@@ -14,7 +14,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import scipy.optimize
 
 from .conditioning import default_threshold, find_impacts
 from .crossings import quiet_level, segment_stats
@@ -100,6 +99,8 @@ def _best_hum(base, y, t, mains):
     hum with its harmonics fitted together (bounded search within one grid step); the
     searches use every k-th quiet sample (about ``SEARCH_RATE_HZ``), the final fit all.
     """
+    import scipy.optimize  # lazy: scipy.optimize costs 0.3–0.8 s at import (benchmarks/RESULTS.md)
+
     coef, _ = _fit(base, y)
     full = (base, y, t)
     k = max(

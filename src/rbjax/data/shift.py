@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.fft import next_fast_len
 
 __all__ = ["fractional_shift"]
 
@@ -43,6 +42,8 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
     if d == 0:
         return x.copy()
     if method == "fourier":
+        from scipy.fft import next_fast_len  # lazy: scipy.fft costs 0.3 s at import (RESULTS.md)
+
         N = next_fast_len(
             n + int(math.ceil(abs(d))) + 64, real=True
         )  # zero padding: no wrap-around

@@ -9,7 +9,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from scipy.io import wavfile
 
 from .channels import check_calibration, integer_newtons
 from .errors import DataError
@@ -68,6 +67,8 @@ def read_wav(
       DataError: empty, truncated or not a WAV file, an unsupported format, a missing
         channel or calibration, clipping, non-finite or too few samples.
     """
+    from scipy.io import wavfile  # lazy: scipy.io costs 0.1–0.2 s at import (RESULTS.md)
+
     source = as_source(path)
     _check_riff_header(path, source)
     with warnings.catch_warnings(record=True) as caught:

@@ -22,7 +22,6 @@ import math
 import jax
 import jax.numpy as jnp
 import numpy as np
-import scipy.signal
 
 from .. import _x64  # noqa: F401  (float64 on)
 
@@ -57,6 +56,8 @@ def butter_lowpass_sos(
         raise ValueError(
             f"cutoff_Hz={cutoff_Hz!r} must lie in (0, rate_Hz/2) = (0, {rate_Hz / 2:g}) Hz"
         )
+    import scipy.signal  # lazy: scipy.signal costs 0.6–1.7 s at import (benchmarks/RESULTS.md)
+
     return scipy.signal.butter(order, cutoff_Hz, fs=rate_Hz, output="sos")
 
 
@@ -97,6 +98,8 @@ def sosfilt_jax(sos, x) -> jax.Array:
 
 def lowpass_np(x, cutoff_Hz: float, rate_Hz: float, order: int = 4) -> np.ndarray:
     """Causal Butterworth low-pass of ``x`` along its last axis (``scipy.signal.sosfilt``)."""
+    import scipy.signal  # lazy: scipy.signal costs 0.6–1.7 s at import (benchmarks/RESULTS.md)
+
     return scipy.signal.sosfilt(
         butter_lowpass_sos(order, cutoff_Hz, rate_Hz), np.asarray(x, dtype=np.float64)
     )

@@ -26,7 +26,6 @@ import time
 from collections.abc import Callable, Mapping
 
 import numpy as np
-from scipy.stats import norm
 
 from ..._validate import check_range
 from ._common import (
@@ -155,6 +154,8 @@ def dgsm_measures(
         missing = [o for o in outputs if o not in grads or grads[o].shape != (n, d)]
         if missing:
             raise ValueError(f"jacobian returned no ({n}, {d}) derivatives for {missing}")
+
+    from scipy.stats import norm  # lazy: scipy.stats costs 0.5–1.5 s at import (RESULTS.md)
 
     z = float(norm.ppf(0.5 + confidence / 2.0))
     widths2 = np.array([(hi - lo) ** 2 for lo, hi in ranges.values()])
