@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from rbjax.studies.design import ITEMS, design
+from rbjax.studies.design import ITEMS, DesignSearch, design
 
 from _common import finish_machine_info, machine_info, write_json
 
@@ -28,10 +28,10 @@ def main() -> None:
     )
     for model, geometry in CASES:
         t0 = time.perf_counter()
-        result = design(model, geometry, n_starts=8)
+        result = design(model, geometry, search=DesignSearch(n_starts=8))
         t8 = time.perf_counter() - t0
         t0 = time.perf_counter()
-        wide = design(model, geometry, n_starts=32, seed=1)
+        wide = design(model, geometry, search=DesignSearch(n_starts=32, seed=1))
         t32 = time.perf_counter() - t0
         agreement = max(
             abs(result.optimiser_margins[k] - result.normalised_margins[k]) for k in ITEMS

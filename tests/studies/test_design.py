@@ -6,9 +6,20 @@ import numpy as np
 import pytest
 
 from rbjax.spectrum.standards import RUBBER_BALL_TOLERANCES, check_conformance
-from rbjax.studies.design import GEOMETRIES, ITEMS, _density, design, normalised_margins
+from rbjax.studies.design import (
+    GEOMETRIES,
+    ITEMS,
+    DesignSearch,
+    _density,
+    design,
+    normalised_margins,
+)
 
 from cli_runner import run_cli
+
+# A smoke test (tests/conftest.py: compiled with most optimisations off): margins and bad input;
+# the design itself: benchmarks/design_check.py.
+pytestmark = pytest.mark.xla_smoke
 
 
 def test_normalised_margins_are_the_checks_margins_over_the_half_widths():
@@ -37,13 +48,14 @@ def test_items_and_geometries():
     ("kwargs", "needle"),
     [
         ({"geometry": "din"}, "geometry='din'"),
-        ({"n_starts": 0}, "n_starts=0"),
+        ({"search": {"n_starts": 0}}, "n_starts=0"),
         ({"model": "maxwell"}, "model='maxwell'"),
     ],
 )
 def test_bad_design_input_is_named(kwargs, needle):
     with pytest.raises(ValueError, match=needle):
-        design(**kwargs)
+        search = DesignSearch(**kwargs.pop("search", {}))
+        design(search=search, **kwargs)
 
 
 def test_cli_help_of_the_new_commands():

@@ -61,15 +61,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
-    from ..studies.design import design
+    from ..studies.design import DesignSearch, design
 
     geometries = ("jis", "iso") if args.geometry == "both" else (args.geometry,)
     results = [
         design(
             args.model,
             g,
-            n_starts=args.starts,
-            steps=args.steps,
+            search=DesignSearch(n_starts=args.starts, steps=args.steps),
             vary_wall=args.vary_wall,
             gas=args.gas,
             progress=not args.quiet,

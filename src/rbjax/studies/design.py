@@ -34,7 +34,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import as_float, check_choice
+from .._settings import from_old_keywords
+from .._validate import as_float, check_choice, check_range
 from ..fit.layout import FIT_RANGES, fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
 from ..solve.inputs import as_arrays
@@ -247,18 +248,42 @@ class DesignResult:
         return path
 
 
+@dataclasses.dataclass(frozen=True)
+class DesignSearch:
+    """How :func:`design` searches: ``n_starts`` starts (an integer ≥ 1; the first at the ball's
+    E and the terms' start rules, the others drawn uniformly in φ over :data:`DESIGN_RANGES`,
+    seeded by ``seed``), each ``steps`` Adam steps (an integer ≥ 0) of ``learning_rate`` (> 0,
+    in φ)."""
+
+    n_starts: int = 8
+    steps: int = 150
+    learning_rate: float = 0.08
+    seed: int = 0
+
+    def __post_init__(self):
+        if not (isinstance(self.n_starts, int) and self.n_starts >= 1):
+            raise ValueError(
+                f"n_starts={self.n_starts!r} is outside the valid range: an integer ≥ 1"
+            )
+        if not (isinstance(self.steps, int) and self.steps >= 0):
+            raise ValueError(f"steps={self.steps!r} is outside the valid range: an integer ≥ 0")
+        check_range("learning_rate", self.learning_rate, lower=0.0)
+
+
+#: The fields of ``DesignSearch`` (``design``'s keywords of the previous release).
+SEARCH_FIELDS = tuple(f.name for f in dataclasses.fields(DesignSearch))
+
+
 def design(
     model: str = "paper",
     geometry: str = "jis",
     *,
-    n_starts: int = 8,
-    steps: int = 150,
-    learning_rate: float = 0.08,
+    search: DesignSearch | None = None,
     vary_wall: bool = False,
     gas: str = "adiabatic",
     blocked_force: str = "paper",
-    seed: int = 0,
     progress: bool = False,
+    **deprecated,
 ) -> DesignResult:
     """Maximise the smallest margin to the rubber-ball table at 1 m (see the module docstring).
 
@@ -266,18 +291,21 @@ def design(
         model: a model name (``paper``, ``kelvin-voigt``, ``hunt-crossley``, ``zener``,
             ``+stiffening``; coupled models (``+ball-mode``) run on the ODE, slowly).
         geometry: ``jis`` or ``iso`` (:data:`GEOMETRIES`).
-        n_starts: starts (the first at the ball's E and the terms' start rules, the others
-            drawn uniformly in φ over :data:`DESIGN_RANGES`, seeded).
-        steps, learning_rate: Adam's steps and step size (in φ).
+        search: a :class:`DesignSearch` (default ``DesignSearch()``): starts, Adam's steps and
+            step size, seed.
         vary_wall: also vary the wall thickness (``WALL_RANGE_M``), the mass following it.
+        gas, blocked_force: the model name's options (as :func:`rbjax.fit.fit`).
+        deprecated: ``n_starts``, ``steps``, ``learning_rate``, ``seed`` of the previous
+            release, accepted for one release (a ``DeprecationWarning``): they build the
+            ``DesignSearch``.
     """
     import optax  # type: ignore[import-untyped]
 
+    search = from_old_keywords(
+        "design", "search", DesignSearch, search, deprecated, {k: k for k in SEARCH_FIELDS}
+    )
+    n_starts, steps, learning_rate, seed = (getattr(search, k) for k in SEARCH_FIELDS)
     check_choice("geometry", geometry, tuple(GEOMETRIES))
-    if not (isinstance(n_starts, int) and n_starts >= 1):
-        raise ValueError(f"n_starts={n_starts!r} is outside the valid range: an integer ≥ 1")
-    if not (isinstance(steps, int) and steps >= 0):
-        raise ValueError(f"steps={steps!r} is outside the valid range: an integer ≥ 0")
     t0 = time.perf_counter()
     parse_model_terms(model)
     ball = GEOMETRIES[geometry]

@@ -87,7 +87,6 @@ def global_sensitivity(
     height_m: float = 1.0,
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
-    seed: int = 0,
     evaluation: EvaluationSpec | None = None,
     evaluator: Callable | None = None,
     **options,
@@ -106,7 +105,6 @@ def global_sensitivity(
             ``max_deflection_m``, ``lfe_<band>_dB`` and ``"lfe"`` (all octave bands).
         height_m, ball, model: the nominal impact (an ``rbjax.Model``, default ``Model()``);
             parameters not in ``ranges`` keep these values.
-        seed: of the design and of SALib's bootstrap.
         evaluation: an ``rbjax.EvaluationSpec``: the solve path and ``Solver`` (default: the
             fastest exact path the model allows), the L_FE record, the batching over the
             devices (``rbjax.solve.devices``; ``chunk_size`` default: a size per solve path),
@@ -115,7 +113,8 @@ def global_sensitivity(
             **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
             ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweep`` passes
             one that splits the rows into tasks for worker processes or a Dask cluster.
-        options: the method's keyword options (``method_options(method)``), e.g.
+        options: ``seed`` (default 0: of the design and of SALib's bootstrap; every method has
+            it) and the method's keyword options (``method_options(method)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
             ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``. The
             keywords of the previous release are accepted for one release (a
@@ -129,6 +128,7 @@ def global_sensitivity(
         ``.plot()``, ``.to_dict()``, ``.salib`` (SALib's own results).
     """
     model, evaluation, options = old_keywords("global_sensitivity", model, evaluation, options)
+    seed = options.pop("seed", 0)
     valid = method_options(method)
     unknown = sorted(set(options) - set(valid))
     if unknown:
