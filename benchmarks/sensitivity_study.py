@@ -57,6 +57,7 @@ from _common import (
 )
 
 # isort: split
+import rbjax
 from rbjax import plot as _plot  # noqa: F401  (a headless backend before pyplot)
 from rbjax.studies.sensitivity import global_sensitivity
 
@@ -238,7 +239,7 @@ def part_convergence(out: dict, quick: bool) -> None:
                     second_order=False,
                     seed=rep,
                     n_bootstrap=100,
-                    chunk_size=1024,
+                    evaluation=rbjax.EvaluationSpec(chunk_size=1024),
                 )
                 for rep in range(replicates)
             ]
