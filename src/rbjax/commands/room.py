@@ -10,12 +10,17 @@ struck by the rubber ball, its normalisation to V0 = 50 m³, T0 = 0.5 s (ISO 162
 rating L_iA,Fmax (ISO 717-2:2020 Annex D), by the chain of rbjax.room: force → floor →
 radiation → diffuse room → Fast detector.
 
---floor is a plate preset (concrete-150mm, ...) or floor file: an infinite-plate floor is the
-radiating slab (sides --length-x-m × --length-y-m, in-situ loss f^-1/2 unless --loss-factor);
-a modal floor file also needs the slab below it (--slab-material, --slab-thickness-m).
---reverberation-s takes one value or one per band (comma-separated).
+The bare slab is given either by --slab-material and --slab-thickness-m or by --floor, a plate
+preset (concrete-150mm, ...) or plate file; its plan is --slab-length-m × --slab-width-m (in-situ
+loss f^-1/2 unless --loss-factor). The ball strikes it at its centre unless --drive-x-m,
+--drive-y-m; in the bands up to 100 Hz the slab's own modes (simply supported edges) carry the
+sound (--slab-model modal, the default), above them the infinite plate. A modal floor file
+(--floor FILE, e.g. a floating floor) also needs the slab below it (--slab-material,
+--slab-thickness-m). --reverberation-s takes one value or one per band (comma-separated).
 
 examples:
+  rbjax room --slab-material concrete --slab-thickness-m 0.2 --slab-length-m 4 \
+--slab-width-m 5 --room-volume-m3 50 --reverberation-s 0.5
   rbjax room --floor concrete-150mm --room-volume-m3 50 --reverberation-s 0.5
   rbjax room --floor concrete-200mm --room-volume-m3 40 \
 --reverberation-s 1.2,0.9,0.8,0.7,0.6,0.6 --json
@@ -41,9 +46,10 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--floor",
-        required=True,
+        default=None,
         metavar="NAME|FILE",
-        help="floor preset name or .toml/.json floor file",
+        help="floor preset name or .toml/.json floor file (or give the bare slab by "
+        "--slab-material and --slab-thickness-m)",
     )
     p.add_argument(
         "--room-volume-m3",
@@ -72,8 +78,40 @@ def register(subparsers) -> None:
         choices=(1, 3),
         help="1: octave bands (default), 3: one-third octaves",
     )
-    p.add_argument("--length-x-m", type=float, default=4.0, help="slab side x, m (default 4)")
-    p.add_argument("--length-y-m", type=float, default=5.0, help="slab side y, m (default 5)")
+    p.add_argument(
+        "--slab-length-m",
+        "--length-x-m",
+        dest="length_x_m",
+        type=float,
+        default=4.0,
+        help="slab side x, m (> 0; default 4)",
+    )
+    p.add_argument(
+        "--slab-width-m",
+        "--length-y-m",
+        dest="length_y_m",
+        type=float,
+        default=5.0,
+        help="slab side y, m (> 0; default 5)",
+    )
+    p.add_argument(
+        "--drive-x-m",
+        type=float,
+        default=None,
+        help="where the ball strikes, from a corner along x, m (default: the centre)",
+    )
+    p.add_argument(
+        "--drive-y-m",
+        type=float,
+        default=None,
+        help="where the ball strikes, from a corner along y, m (default: the centre)",
+    )
+    p.add_argument(
+        "--slab-model",
+        choices=("modal", "infinite"),
+        default="modal",
+        help="the bare slab in the bands up to 100 Hz: its modes (default) or the infinite plate",
+    )
     p.add_argument(
         "--loss-factor",
         type=float,
@@ -83,13 +121,15 @@ def register(subparsers) -> None:
     p.add_argument(
         "--slab-material",
         default=None,
-        help="material of the slab below a modal floor (rbjax.terms MATERIALS)",
+        help="material of the bare slab, or of the slab below a modal floor (rbjax.terms "
+        "MATERIALS)",
     )
     p.add_argument(
         "--slab-thickness-m",
         type=float,
         default=None,
-        help="thickness of the slab below a modal floor, m",
+        help="thickness of the bare slab, or of the slab below a modal floor, m "
+        "(0 < t ≤ the shorter side / 10)",
     )
     p.add_argument(
         "--plot",
@@ -102,32 +142,65 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
-    from ..room import ReceivingRoom, RoomChainError, Slab, impact_sound
+    from ..room import Chain, ReceivingRoom, RoomChainError, Slab, impact_sound
     from ..terms.floors.kinds import AbstractModalFloor, InfinitePlate
     from ..terms.floors.presets import load_named_floor
 
-    name, floor = load_named_floor(args.floor)
     sides = dict(
-        length_x_m=args.length_x_m, length_y_m=args.length_y_m, loss_factor=args.loss_factor
+        length_x_m=args.length_x_m,
+        length_y_m=args.length_y_m,
+        loss_factor=args.loss_factor,
+        drive_x_m=args.drive_x_m,
+        drive_y_m=args.drive_y_m,
     )
-    if isinstance(floor, InfinitePlate):
-        slab, modal = Slab.of_plate(floor, **sides), None
-    elif isinstance(floor, AbstractModalFloor):
-        if args.slab_material is None or args.slab_thickness_m is None:
-            raise RoomChainError(
-                "a modal floor needs the slab that radiates: give --slab-material and "
-                "--slab-thickness-m"
-            )
-        slab, modal = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides), floor
-    else:
+    given_slab = args.slab_material is not None or args.slab_thickness_m is not None
+    if given_slab and (args.slab_material is None or args.slab_thickness_m is None):
         raise RoomChainError(
-            f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; "
-            "valid: a plate preset or file, or a modal floor file"
+            "the slab needs both --slab-material and --slab-thickness-m "
+            f"(given: --slab-material={args.slab_material!r}, "
+            f"--slab-thickness-m={args.slab_thickness_m!r})"
         )
+    if args.floor is None:
+        if not given_slab:
+            raise RoomChainError(
+                "give the floor: --floor (a preset or file) or the bare slab by --slab-material "
+                "and --slab-thickness-m"
+            )
+        name = f"{args.slab_material} {1e3 * args.slab_thickness_m:g} mm"
+        slab = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides)
+        modal = None
+    else:
+        name, floor = load_named_floor(args.floor)
+        if isinstance(floor, InfinitePlate):
+            if given_slab:
+                raise RoomChainError(
+                    f"--floor={args.floor!r} is a plate: it is the slab; give either it or "
+                    "--slab-material and --slab-thickness-m"
+                )
+            slab, modal = Slab.of_plate(floor, **sides), None
+        elif isinstance(floor, AbstractModalFloor):
+            if not given_slab:
+                raise RoomChainError(
+                    "a modal floor needs the slab that radiates: give --slab-material and "
+                    "--slab-thickness-m"
+                )
+            slab = Slab.of_material(args.slab_material, args.slab_thickness_m, **sides)
+            modal = floor
+        else:
+            raise RoomChainError(
+                f"--floor={args.floor!r} ({floor.name}) has no structure that radiates; "
+                "valid: a plate preset or file, or a modal floor file"
+            )
     room = ReceivingRoom(args.room_volume_m3, args.reverberation_s)
     progress(f"room below {name}: ball from {args.height_m:g} m, V = {args.room_volume_m3:g} m³")
     res = impact_sound(
-        slab, room, floor=modal, height_m=args.height_m, fraction=args.fraction, name=name
+        slab,
+        room,
+        floor=modal,
+        height_m=args.height_m,
+        fraction=args.fraction,
+        name=name,
+        chain=Chain(slab=args.slab_model),
     )
     if args.plot:
         res.plot(args.plot)

@@ -63,6 +63,7 @@ from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractFloor, AbstractModalFloor
 from ..terms.model import Model, Solver
 from .detector import cascade, maximum_over_time
+from .finite_slab import modal_band_energies_J, mode_orders, slab_modes
 from .injection import (
     floating_band_energies_J,
     modal_energies_J,
@@ -89,6 +90,8 @@ from .standards import (
 REFERENCE_PRESSURE_Pa = 20e-6
 #: The band range of each fraction (nominal mid-band frequencies, Hz).
 BAND_RANGES_Hz = {1: (31.5, 1000.0), 3: (25.0, 1250.0)}
+#: The bands of nominal frequency up to this follow the finite slab's modes (``Chain.slab``).
+MODAL_BANDS_UP_TO_Hz = 100.0
 
 
 class RoomLevels(eqx.Module):
@@ -121,6 +124,21 @@ def bands(fraction: int) -> tuple[list[str], np.ndarray, tuple[np.ndarray, np.nd
     )
 
 
+def modal_bands(fraction: int) -> np.ndarray:
+    """Which of the chain's bands follow the finite slab's modes (``Chain(slab="modal")``):
+    those of nominal frequency ≤ ``MODAL_BANDS_UP_TO_Hz``."""
+    labels, _, _ = bands(fraction)
+    return np.array([float(x) <= MODAL_BANDS_UP_TO_Hz for x in labels])
+
+
+def slab_mode_orders(slab: Slab, fraction: int) -> tuple[int, int]:
+    """The mode set of the finite slab in the modal bands of ``fraction``
+    (``rbjax.room.finite_slab.mode_orders`` at their highest edge): give it as ``orders=`` to
+    ``room_levels`` where the slab's values are traced."""
+    _, _, edges = bands(fraction)
+    return mode_orders(slab, float(np.max(edges[1][modal_bands(fraction)])))
+
+
 def _check_floor(floor: AbstractFloor | None, slab: Slab | None) -> None:
     if floor is None:
         if slab is None:
@@ -151,9 +169,34 @@ def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver
     return int(math.ceil(float(np.max(np.asarray(res.contact_time_s))) * rate_Hz)) + 2
 
 
-def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_fft):
+def _modal_slab_sources(slab: Slab, force, rate_Hz, edges, chain: Chain, orders, modal):
+    """The finite slab's sources in the modal bands: one per (mode, band) pair, mode-major; the
+    energy W_kb, the mode's decay ω_k η_k and radiation rate ω_k η_rad,k, and the membership."""
+    index = np.flatnonzero(modal)
+    fk, inverse_mass, _, eta, eta_rad = slab_modes(slab, orders)
+    if chain.radiation == "unity":
+        eta_rad = radiation_loss_factor(fk, 1.0, slab.mass_per_area_kg_per_m2)
+        eta = slab.structural_loss(fk) + 2.0 * eta_rad
+    energy = modal_band_energies_J(
+        force, rate_Hz, fk, eta, inverse_mass, edges[0][index], edges[1][index]
+    )
+    omega = 2.0 * jnp.pi * fk
+    member = np.zeros((len(modal), energy.size))
+    for j, b in enumerate(index):
+        member[b, j :: len(index)] = 1.0
+    return (
+        energy.reshape(-1),
+        jnp.repeat(omega * eta, len(index)),
+        jnp.repeat(omega * eta_rad, len(index)),
+        jnp.asarray(member),
+    )
+
+
+def _sources(floor, slab: Slab, force, rate_Hz, fraction, chain: Chain, n_fft, orders):
     """Per source (band or mode): injected energy W, floor decay a, radiation rate ω η_rad and
-    the (bands × sources) membership."""
+    the (bands × sources) membership. The bare slab with ``orders``: the finite slab's modes in
+    the modal bands (``modal_bands``), the infinite plate in the others."""
+    _, centres, edges = bands(fraction)
     fc = critical_frequency_Hz(
         slab.thickness_m, slab.youngs_Pa, slab.density_kg_per_m3, slab.poisson
     )
@@ -195,7 +238,12 @@ def _sources(floor, slab: Slab, force, rate_Hz, centres, edges, chain: Chain, n_
     f = jnp.asarray(centres)
     radiate = rad_rate(f)
     decay = 2.0 * jnp.pi * f * slab.structural_loss(f) + 2.0 * radiate
-    return energy, decay, radiate, jnp.eye(len(centres))
+    if floor is not None or orders is None:
+        return energy, decay, radiate, jnp.eye(len(centres))
+    modal = modal_bands(fraction)
+    parts = _modal_slab_sources(slab, force, rate_Hz, edges, chain, orders, modal)
+    plate = (jnp.where(jnp.asarray(modal), 0.0, energy), decay, radiate, jnp.eye(len(centres)))
+    return tuple(jnp.concatenate([p, q], axis=-1) for p, q in zip(parts, plate))
 
 
 def room_levels(
@@ -212,14 +260,21 @@ def room_levels(
     n_samples: int,
     solver: Solver = Solver(),
     n_fft: int | None = None,
+    orders: tuple[int, int] | None = None,
 ) -> RoomLevels:
     """The chain's arrays for the ball on ``floor`` (``None``: on the bare ``slab``) over
     ``n_samples`` force samples (``contact_samples``); pure JAX, differentiable in the slab,
     room, ball, height and the parameters of a ``FloatingFloor`` (``jax.jvp``/``jax.jacfwd``
     with ``Solver(adjoint="forward")``). ``n_fft``: the frequency grid of a modal floor's
     energies (``rbjax.room.injection.modal_grid_size``, the default where the floor's values
-    are concrete; give it where they are traced)."""
+    are concrete; give it where they are traced). ``orders``: the finite slab's mode set for
+    the ball on the bare slab with ``Chain(slab="modal")`` (``slab_mode_orders``, the default
+    where the slab's values are concrete; give it where they are traced)."""
     _check_floor(floor, slab)
+    if floor is None and chain.slab == "modal" and orders is None:
+        orders = slab_mode_orders(slab, fraction)
+    if floor is not None or chain.slab != "modal":
+        orders = None
     labels, centres, edges = bands(fraction)
     t_band = room.reverberation_per_band(labels)
     impact_floor = slab.plate if floor is None else floor
@@ -234,7 +289,7 @@ def room_levels(
         n_fft = modal_grid_size(floor, rate_Hz, n_samples)
     force, slab, volume, t_band, floor = as_arrays((force, slab, room.volume_m3, t_band, floor))
     return _levels_of_force(
-        force, slab, volume, t_band, floor, chain, fraction, float(rate_Hz), n_fft
+        force, slab, volume, t_band, floor, chain, fraction, float(rate_Hz), n_fft, orders
     )
 
 
@@ -249,12 +304,12 @@ def _levels_of_force(
     fraction: int,
     rate_Hz: float,
     n_fft: int | None,
+    orders: tuple[int, int] | None,
 ) -> RoomLevels:
     """Steps 2–5 of the chain on the force samples: one compiled program per floor kind,
     chain, fraction, force length and grid (the values are traced)."""
-    _, centres, edges = bands(fraction)
     energy, decay, radiate, member = _sources(
-        floor, slab, force, rate_Hz, centres, edges, chain, n_fft
+        floor, slab, force, rate_Hz, fraction, chain, n_fft, orders
     )
     b = decay_rate_per_s(t_band)
     kappa = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s**2 / volume_m3

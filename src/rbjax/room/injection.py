@@ -82,7 +82,9 @@ def modal_grid_size(floor: AbstractModalFloor, rate_Hz: float, n_samples: int) -
     )
 
 
-def _dtft_Ns(force_N, rate_Hz: float, freq_Hz):
+def dtft_Ns(force_N, rate_Hz: float, freq_Hz):
+    """F(f) = Σ_n F_n e^{−2πj f n/rate}/rate: the spectrum of the samples at any ``freq_Hz``
+    (N·s)."""
     n = jnp.arange(force_N.shape[-1])
     phase = jnp.exp(-2j * jnp.pi * jnp.asarray(freq_Hz)[:, None] * n[None, :] / rate_Hz)
     return phase @ force_N / rate_Hz
@@ -114,7 +116,7 @@ def modal_energies_J(force_N, rate_Hz: float, floor: AbstractModalFloor, n_fft: 
         one,
         (mass, jnp.where(resolved, omega, 0.5 * jnp.pi * rate_Hz), jnp.where(resolved, eta, 1.0)),
     )
-    spectrum = _dtft_Ns(x, rate_Hz, fk)
+    spectrum = dtft_Ns(x, rate_Hz, fk)
     narrow = (spectrum.real**2 + spectrum.imag**2) / (2.0 * mass)
     return jnp.where(resolved, grid, narrow)
 

@@ -175,10 +175,11 @@ def _warnings(
                 "diffuse-field level is a room average there"
             )
     floor_t60 = 6.0 * math.log(10.0) / np.asarray(lv.floor_decay_per_s)
-    if not chain.floor_decay and floor is None and np.any(floor_t60 > SHORT_DECAY_SHARE * t_band):
-        slow = [
-            lab for lab, tf, tr in zip(labels, floor_t60, t_band) if tf > SHORT_DECAY_SHARE * tr
-        ]
+    # the slowest source of each band (its bands' sources: a band, or the finite slab's modes)
+    heard = (np.asarray(lv.membership) > 0.0) & (np.asarray(lv.injected_J) > 0.0)[None, :]
+    band_t60 = np.max(np.where(heard, floor_t60[None, :], 0.0), axis=1)
+    if not chain.floor_decay and floor is None and np.any(band_t60 > SHORT_DECAY_SHARE * t_band):
+        slow = [lab for lab, tf, tr in zip(labels, band_t60, t_band) if tf > SHORT_DECAY_SHARE * tr]
         out.append(
             f"the floor's decay is not short against T in bands {', '.join(slow)} Hz: use "
             "Chain(floor_decay=True)"

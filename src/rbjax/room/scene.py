@@ -19,6 +19,10 @@ from jaxtyping import ArrayLike
 from .._validate import as_float, check_choice, check_range, is_traced
 from ..terms.floors.kinds import InfinitePlate
 from ..terms.floors.materials import material
+from .finite_slab import EDGE_CONDITIONS
+
+#: A thin plate: each side at least this many thicknesses.
+THIN_PLATE_RATIO = 10.0
 
 
 class RoomChainError(ValueError):
@@ -37,8 +41,15 @@ class Slab(eqx.Module):
             value of heavy (concrete, masonry) structures η_s = f^{-1/2} (f in Hz; Craik,
             *Sound Transmission through Buildings using SEA*, 1996, §4: 0.13 at 63 Hz, 0.045
             at 500 Hz).
+        drive_x_m, drive_y_m: where the ball strikes, measured from a corner (``None``: the
+            centre): the drive point of the finite slab's modes (``rbjax.room.finite_slab``);
+            strictly inside the slab.
+        edge: the edge condition of the finite slab's modes; ``"simply-supported"`` (the one
+            offered: ``rbjax.room.finite_slab.EDGE_CONDITIONS``). Static.
 
-    All fields are JAX leaves: the levels are differentiable in each of them.
+    The slab must be thin: 0 < thickness ≤ min(l_x, l_y)/10 (Kirchhoff plate theory; a thicker
+    one is outside every model here). The other fields are JAX leaves: the levels are
+    differentiable in each of them.
     """
 
     thickness_m: ArrayLike
@@ -48,6 +59,9 @@ class Slab(eqx.Module):
     length_x_m: ArrayLike = 4.0
     length_y_m: ArrayLike = 5.0
     loss_factor: ArrayLike | None = None
+    drive_x_m: ArrayLike | None = None
+    drive_y_m: ArrayLike | None = None
+    edge: str = eqx.field(static=True, default="simply-supported")
 
     def __check_init__(self):
         for name in ("thickness_m", "youngs_Pa", "density_kg_per_m3", "length_x_m", "length_y_m"):
@@ -55,6 +69,25 @@ class Slab(eqx.Module):
         check_range("poisson", self.poisson, lower=-1.0, upper=0.5, upper_open=False)
         if self.loss_factor is not None:
             check_range("loss_factor", self.loss_factor, lower=0.0)
+        check_choice("edge", self.edge, EDGE_CONDITIONS)
+        sides = (self.length_x_m, self.length_y_m)
+        if not is_traced((self.thickness_m, sides)):
+            thinnest = min(as_float(x) for x in sides) / THIN_PLATE_RATIO
+            check_range(
+                "thickness_m", self.thickness_m, lower=0.0, upper=thinnest, upper_open=False
+            )
+        for name, side in (("drive_x_m", self.length_x_m), ("drive_y_m", self.length_y_m)):
+            value = getattr(self, name)
+            if value is not None and not is_traced((value, side)):
+                check_range(name, value, lower=0.0, upper=as_float(side))
+
+    @property
+    def drive_point_m(self):
+        """(x₀, y₀): the drive point (the centre where not given)."""
+        return (
+            0.5 * jnp.asarray(self.length_x_m) if self.drive_x_m is None else self.drive_x_m,
+            0.5 * jnp.asarray(self.length_y_m) if self.drive_y_m is None else self.drive_y_m,
+        )
 
     @classmethod
     def of_material(cls, name: str, thickness_m, **sides) -> Slab:
@@ -143,15 +176,23 @@ class Chain:
             ``rbjax.room.injection.floating_band_energies_J``) or ``"modes"`` (its two
             drive-point modes radiate as the slab would, each in its own band only: a rough
             check, not a prediction; the result warns).
+        slab: how the bare slab under the ball is followed in the bands of nominal frequency
+            ≤ 100 Hz (the 31.5 and 63 Hz octaves, the thirds 25–100 Hz), where a slab of
+            ordinary size has few modes: ``"modal"`` (default: the modes of the finite slab,
+            ``rbjax.room.finite_slab``, each radiating with its own σ) or ``"infinite"`` (the
+            infinite plate's band energy and ISO 12354-1's σ, as in the bands above). A
+            floating floor's insertion always drives the slab's infinite-plate field.
     """
 
     radiation: str = "iso12354"
     floor_decay: bool = True
     detector: str | None = "fast"
     floating: str = "insertion"
+    slab: str = "modal"
 
     def __post_init__(self):
         check_choice("radiation", self.radiation, ("iso12354", "unity"))
         check_choice("floor_decay", self.floor_decay, (True, False))
         check_choice("detector", self.detector, ("fast", None))
         check_choice("floating", self.floating, ("insertion", "modes"))
+        check_choice("slab", self.slab, ("modal", "infinite"))
