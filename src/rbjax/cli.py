@@ -86,8 +86,6 @@ def _one_line(message) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); return the exit code."""
-    from .data import DataError
-
     parser = build_parser()
     try:
         try:
@@ -99,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         _enable_compile_cache()
         return int(args.func(args) or 0)
-    except (UsageError, DataError, ValueError, OSError) as err:
+    except (UsageError, ValueError, OSError) as err:  # rbjax.data.DataError is a ValueError
         print(f"rbjax: error: {_one_line(err)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

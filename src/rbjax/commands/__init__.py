@@ -10,7 +10,10 @@ handling) and sets ``func`` to a callable ``func(args) -> int`` (the exit code):
         p.set_defaults(func=run)
 
 Modules whose name starts with ``_`` and modules without ``register`` are skipped, so a
-package-private helper module can live here too. Helpers for the commands: :func:`emit_json`
+package-private helper module can live here too. A command module imports the library (and
+NumPy) inside its ``run``, never at its top or in ``register``: ``rbjax --help`` and
+``rbjax COMMAND --help`` build every parser without importing JAX
+(``tests/commands/test_cli_startup.py``). Helpers for the commands: :func:`emit_json`
 (strict JSON on stdout, NaN → null), :func:`progress` (one line on stderr) and
 :func:`format_table`.
 """
@@ -20,10 +23,13 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from pathlib import Path
 
 from .._progress import progress  # noqa: F401  (re-exported for the commands)
-from ..terms.serialize import jsonable, to_json  # noqa: F401  (re-exported for the commands)
 from ..text import fmt, format_table  # noqa: F401  (re-exported for the commands)
+
+# The parsers are built without importing the library (JAX, SciPy): `rbjax --help` and
+# `rbjax COMMAND --help` answer at once. Each command imports what it runs in its `run`.
 
 
 class UsageError(ValueError):
@@ -148,12 +154,14 @@ def use_cpu_devices(count: int | None = None) -> None:
 
 def emit_json(obj, file=None) -> None:
     """Write ``obj`` as strict JSON (no NaN tokens) to stdout."""
+    from ..terms.serialize import to_json
+
     print(to_json(obj), file=file or sys.stdout)
 
 
 def write_json_file(folder, name: str, obj):
     """Write ``obj`` as strict JSON to ``folder/name`` (the folder is made); return the path."""
-    from pathlib import Path
+    from ..terms.serialize import to_json
 
     path = Path(folder) / name
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -6,7 +6,6 @@ import argparse
 import warnings
 from pathlib import Path
 
-from ..studies.executors import prestart, single_threaded_blas
 from . import add_command, add_parallel_options, parallel_of, progress
 from ._fit_output import finish
 
@@ -214,6 +213,8 @@ def _check_model_and_fix(model, fix):
 
 
 def run(args) -> int:
+    from ..studies.executors import prestart, single_threaded_blas
+
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..fit import FitOptions, fit
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from ..studies.executors import prestart, single_threaded_blas
 from . import add_command, add_parallel_options, emit_json, parallel_of, progress, write_json_file
 from .fit import add_data_options, load_fit_data
 
@@ -98,6 +97,8 @@ def _parse_heights(text):
 
 
 def run(args) -> int:
+    from ..studies.executors import prestart, single_threaded_blas
+
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..studies.selection import BLOCKED_FORCES, held_out_comparison, select_model
 

@@ -3,10 +3,26 @@
 from __future__ import annotations
 
 import math
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from . import add_command, emit_json, fmt, format_table, progress, use_cpu_devices
+
+if TYPE_CHECKING:
+    import numpy as np
+
+#: The floor presets named in --help: rbjax.terms.floors.presets.FLOOR_PRESETS, written out so that
+#: --help imports no library (tests/commands/test_cli_startup.py checks they agree).
+FLOOR_PRESET_NAMES = (
+    "rigid",
+    "concrete-140mm",
+    "concrete-150mm",
+    "concrete-200mm",
+    "clt-140mm",
+    "steel-10mm",
+    "chipboard-22mm",
+    "osb-15mm",
+    "osb-22mm",
+)
 
 DESCRIPTION = """\
 Predict the blocked force of the rubber ball dropped on a rigid floor (paper §2, Eq. 7) for
@@ -38,9 +54,7 @@ examples:
 
 
 def register(subparsers) -> None:
-    from ..terms.floors.presets import FLOOR_PRESETS
-
-    description = DESCRIPTION.format(presets=", ".join(FLOOR_PRESETS))
+    description = DESCRIPTION.format(presets=", ".join(FLOOR_PRESET_NAMES))
     p = add_command(
         subparsers,
         "simulate",
@@ -177,6 +191,8 @@ def _simulate(heights, ball, model, method: str, floor=None):
 def _octave_lfe(result):
     """(L_FE total, octave, third-octave) of every impact of ``result`` (NaN if every solve
     failed)."""
+    import numpy as np
+
     from ..solve.simulate import PAPER_RATE_Hz
     from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
     from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
@@ -202,6 +218,8 @@ def floor_outputs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
     the rigid floor, per height and band) for a model on a moving floor."""
+    import numpy as np
+
     from ..solve.energy import energy_balance
     from ..terms.floors.kinds import Rigid
 
@@ -220,6 +238,8 @@ def simulate_rows(
     ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran. On a floor
     that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
     floor's type), ``floor_energy_J`` and ``lfe_ratio_dB`` (``floor_outputs``)."""
+    import numpy as np
+
     from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
     from ..spectrum.standards import check_conformance
 

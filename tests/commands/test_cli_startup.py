@@ -1,0 +1,74 @@
+"""An instant command line: ``rbjax --help``, ``rbjax COMMAND --help`` and ``rbjax --version``
+answer without importing JAX, NumPy, SciPy or Matplotlib, and ``import rbjax`` (even with
+every layer) pulls no SciPy submodule nor Matplotlib (benchmarks/RESULTS.md, "Start-up time").
+Each check runs in a fresh interpreter: in this one the library is loaded already."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+
+from rbjax.cli import command_modules
+from rbjax.commands.simulate import FLOOR_PRESET_NAMES
+from rbjax.terms.floors.presets import FLOOR_PRESETS
+
+HEAVY = ("jax", "jaxlib", "numpy", "scipy", "matplotlib", "diffrax", "equinox")
+
+
+def run_python(code: str) -> dict:
+    proc = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_help_and_version_import_no_library():
+    out = run_python(
+        f"""
+        import contextlib, io, json, sys
+        from rbjax.cli import command_modules, main
+
+        codes = {{}}
+        for argv in (["--help"], ["--version"], *([c, "--help"] for c in command_modules())):
+            with contextlib.redirect_stdout(io.StringIO()) as text:
+                codes[" ".join(argv)] = (main(argv), len(text.getvalue()))
+        heavy = sorted(m for m in sys.modules if m.split(".")[0] in {HEAVY!r})
+        print(json.dumps({{"codes": codes, "heavy": heavy}}))
+        """
+    )
+    assert out["heavy"] == []
+    assert len(out["codes"]) == len(command_modules()) + 2 >= 10
+    # every one answers (a usage text, or "rbjax 0.1.0")
+    assert all(code == 0 and size > 10 for code, size in out["codes"].values()), out["codes"]
+
+
+def test_the_help_names_the_floor_presets():
+    # written out in the command so that --help imports no library
+    assert FLOOR_PRESET_NAMES == FLOOR_PRESETS
+
+
+def test_import_rbjax_pulls_no_scipy_submodule_nor_matplotlib():
+    out = run_python(
+        """
+        import json, sys
+        import rbjax
+        bare = sorted(m for m in sys.modules if m.split(".")[0] in ("jax", "scipy"))
+        import jax
+        import rbjax.data, rbjax.fit, rbjax.report, rbjax.room, rbjax.solve, rbjax.studies
+        rbjax.simulate
+        heavy = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "matplotlib"))
+        scipy_parts = sorted({m.split(".")[1] for m in heavy if m.count(".") and m[:6] == "scipy."})
+        print(json.dumps({"bare": bare, "x64": bool(jax.config.jax_enable_x64),
+                          "matplotlib": [m for m in heavy if m.startswith("matplotlib")],
+                          "scipy": scipy_parts}))
+        """
+    )
+    assert out["bare"] == []  # import rbjax alone: the names load on first use
+    assert out["x64"]  # float64 on, though JAX was imported after rbjax
+    assert out["matplotlib"] == []
+    # at most SciPy's own internals (JAX's dependencies may import some); no SciPy module the
+    # library uses where it is needed (signal, stats, optimize, fft, io, linalg)
+    assert not set(out["scipy"]) & {"signal", "stats", "optimize", "fft", "io", "linalg"}
