@@ -15,8 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .._settings import from_old_keywords
-from .._validate import check_choice, check_range
+from .._validate import check_choice, check_range, from_old_keywords
 from ..terms.model import Model, Solver
 from .problem import FIT_METHODS
 from .program import OPTIMIZERS

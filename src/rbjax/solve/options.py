@@ -17,8 +17,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any, TypedDict
 
-from .._settings import from_old_keywords
-from .._validate import check_choice, check_range
+from .._validate import check_choice, check_range, from_old_keywords
 from ..terms.ball_mode import BallMode
 from ..terms.damping import AbstractDamping
 from ..terms.floors.kinds import AbstractFloor

@@ -34,8 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._progress import progress as say
-from .._settings import from_old_keywords
-from .._validate import as_float, check_choice, check_range
+from .._validate import as_float, check_choice, check_range, from_old_keywords
 from ..fit.layout import FIT_RANGES, fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
 from ..solve.inputs import as_arrays
