@@ -13,6 +13,7 @@ pass along as one object instead of relaying each keyword (as diffrax passes a `
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any, TypedDict
@@ -113,6 +114,9 @@ class ModelShortcuts(TypedDict, total=False):
 
 #: The names of the shortcuts (the fields of ``Model``).
 SHORTCUTS = tuple(ModelShortcuts.__annotations__)
+#: Every keyword ``Model`` takes: accepted as a shortcut too (a field added to ``Model`` is a
+#: shortcut at once; ``ModelShortcuts`` types the usual ones).
+MODEL_KEYWORDS = tuple(p for p in inspect.signature(Model.__init__).parameters if p != "self")
 #: The shortcuts whose ``None`` is their default (no such term): ``None`` counts as not given.
 OPTIONAL_TERMS = ("damping", "stiffening", "ball_mode", "floor", "series")
 
@@ -126,7 +130,7 @@ def model_from_shortcuts(
     default); an unknown keyword a ``TypeError``. With
     ``deprecated``, shortcuts warn (``DeprecationWarning``: functions other than ``simulate``
     take a ``Model`` only, the shortcuts accepted for one release)."""
-    unknown = sorted(set(shortcuts) - set(SHORTCUTS))
+    unknown = sorted(set(shortcuts) - set(MODEL_KEYWORDS))
     if unknown:
         raise TypeError(f"{function}() got unexpected keyword arguments {unknown}")
     shortcuts = {k: v for k, v in shortcuts.items() if not (v is None and k in OPTIONAL_TERMS)}
