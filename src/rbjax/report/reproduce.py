@@ -44,6 +44,7 @@ from ..studies.growth import (
 )
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.forces import gas_force_N, shell_force_N
+from ..terms.model import Model
 from ..terms.serialize import jsonable
 from ..terms.shell_modes import THEORIES, shell_frequencies_Hz
 from .measured_ball import measured_ball, report_section
@@ -75,7 +76,7 @@ def _heights(heights_m) -> np.ndarray:
 def _run(heights: np.ndarray, gas: str) -> dict:
     """Simulate all heights with one gas option; spectra and band levels of the 1 s records."""
 
-    res = simulate(heights, gas=gas)
+    res = simulate(heights, model=Model(gas=gas))
     hist = res.history()  # the paper's 44.1 kHz x 1 s grid (§2.4)
     force = np.asarray(hist.force_N)
     ok = np.asarray(res.status) == 0
@@ -143,8 +144,10 @@ def _shell_modes() -> dict:
 
 
 def _figures(out: Path, runs, heights, comparison, growth=None) -> list[str]:
+    # lazy: matplotlib.figure costs ~0.9 s at import
     from matplotlib.figure import Figure
 
+    # lazy: rbjax.plot imports matplotlib (0.1–0.2 s; pyplot ~1 s)
     from .. import plot
 
     ball = JIS_RUBBER_BALL
@@ -407,6 +410,7 @@ def _report(
             + " | ".join(fnum(v) for v in runs[g]["lfe_octave_dB"][i1])
             + " |"
         )
+    # lazy: rbjax.plot imports matplotlib (0.1–0.2 s; pyplot ~1 s)
     from ..plot import tolerance_limits
 
     lo, hi = tolerance_limits(OCTAVE_BANDS)
