@@ -27,6 +27,10 @@ from rbjax.terms.serialize import save_params
 from cli_runner import run_cli
 from scipy_reference import reference_impact
 
+# A smoke test (tests/conftest.py: compiled with most optimisations off): the command line's
+# plumbing; its numbers are the solve paths', held at the default level in tests/solve.
+pytestmark = pytest.mark.xla_smoke
+
 HEIGHTS_M = [0.1, 1.0, 1.6]
 ARGS = ["simulate", "--height-m", *map(str, HEIGHTS_M)]
 OCTAVES = ("31.5", "63", "125", "250", "500", "1000")

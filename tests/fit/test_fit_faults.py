@@ -36,6 +36,10 @@ from synthetic_records import (
     write_uff,
 )
 
+# A smoke test (tests/conftest.py: compiled with most optimisations off): fits compared with fits
+# at the same level; the recovery of the fit: tests/fit/test_fit.py.
+pytestmark = pytest.mark.xla_smoke
+
 MODEL = {"model": "kelvin-voigt", "blocked_force": "momentum", "progress": False}
 
 
@@ -194,9 +198,13 @@ def test_the_same_drops_at_other_rates_condition_to_the_same_records(drops, rate
     b = prepare_data(recordings(long_records(rate)[1], rate))
     assert b.rate_Hz == rate and b.conditioning[0]["rate_Hz"] == rate
     fa, fb = record_features(a.force_N, a.rate_Hz), record_features(b.force_N, b.rate_Hz)
-    # independent noise (0.19 N rms after the chain) on pulses of 0.5 to 2 kN; the octave
-    # bands above the chain's 1250 Hz cutoff (2 and 4 kHz) hold mostly noise
+    # README "What the loader handles", row "48 kHz, 25.6 kHz": the conditioned records match
+    # 44.1 kHz's, peak to 0.2 %, contact time to 20 µs (measured 0.09 %, 4 µs), L_FE to 0.03 dB
+    # at 31.5–250 Hz (measured 0.023) and 0.11 dB at 500 Hz and 1 kHz (measured 0.105 at 500 Hz:
+    # the 10 cm drop at 25.6 kHz, a band at −2 dB; 0.097 at 1 kHz). The octave bands are
+    # 31.5–1000 Hz; independent noise (0.19 N rms after the chain) on pulses of 0.5 to 2 kN
+    # weighs most in the quiet upper bands.
     np.testing.assert_allclose(fb["peak_force_N"], fa["peak_force_N"], rtol=2e-3)
     np.testing.assert_allclose(fb["contact_time_s"], fa["contact_time_s"], atol=2e-5)
-    np.testing.assert_allclose(fb["lfe_octave_dB"][:, :4], fa["lfe_octave_dB"][:, :4], atol=0.05)
-    np.testing.assert_allclose(fb["lfe_octave_dB"][:, 4:], fa["lfe_octave_dB"][:, 4:], atol=0.2)
+    np.testing.assert_allclose(fb["lfe_octave_dB"][:, :4], fa["lfe_octave_dB"][:, :4], atol=0.03)
+    np.testing.assert_allclose(fb["lfe_octave_dB"][:, 4:], fa["lfe_octave_dB"][:, 4:], atol=0.11)

@@ -33,6 +33,10 @@ psutil = pytest.importorskip("psutil")
 from rbjax.cli import main  # noqa: E402
 from rbjax.studies.sweep import run_sweep  # noqa: E402
 
+# A smoke test (tests/conftest.py: compiled with most optimisations off): one program on a cluster
+# against the same program in this process.
+pytestmark = pytest.mark.xla_smoke
+
 #: Seconds a started process gets to stop after SIGTERM before SIGKILL; to start, to finish.
 STOP_S = 10.0
 START_S = 60.0
