@@ -8,15 +8,25 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.signal
 
 import rbjax.data as D
+from rbjax import JIS_RUBBER_BALL, KelvinVoigt
+from rbjax.data import examples_dir
 
+from scipy_reference import reference_impact
 from synthetic_records import (
+    CONTACT_START_S,
     CUTOFF_HZ,
+    FAULT_BALL_E_PA,
+    FAULT_DAMPING_NS_PER_M,
     FAULT_START_S,
     HEIGHTS_M,
+    NOISE_N,
     RATE_HZ,
+    SOS,
     long_records,
+    sampled_force,
     with_faults,
     write_int_wav,
 )
@@ -49,9 +59,47 @@ def test_a_clean_record_is_left_as_it_is(drop):
     log = clean.conditioning
     assert log["polarity"] == "as recorded" and log["drift_N_per_s"] is None and log["hum"] is None
     assert log["further_impacts"] == [] and abs(log["offset_N"]) < 0.05
-    # and so are the shipped emulated recordings (noise and all)
-    for r in D.load_examples():
+    # README "What the loader handles": every shipped record comes back bitwise unchanged, the
+    # 30 emulated recordings (noise and all) and the raw WAV whose rebound ``condition`` cuts
+    shipped = [
+        *D.load_examples(),
+        *D.load([examples_dir() / "raw_h100_two_impacts.wav"], height_m=1.0),
+    ]
+    assert len(shipped) == 31
+    for r in shipped:
         np.testing.assert_array_equal(D.clean(r).force_N, r.force_N)
+
+
+def test_clean_simulated_records_of_three_lengths_come_back_bitwise_unchanged():
+    """README "What the loader handles", mains hum: no false repair on 3 × 288 simulated clean
+    records of 0.06, 0.1 and 0.3 s. The records: the six drops of the fault tests (the scipy
+    solution of Eq. 7, tests/synthetic_records.py) at 48 noise seeds each (0.8 N white noise
+    through the 1250 Hz chain), contact 10 ms (+ a fraction of a sample) into the record."""
+    ball = JIS_RUBBER_BALL.replace(youngs_Pa=FAULT_BALL_E_PA)
+    damping = KelvinVoigt(FAULT_DAMPING_NS_PER_M)
+    refs = [
+        reference_impact(h, ball, damping=damping, blocked_force="momentum", rtol=1e-11)
+        for h in HEIGHTS_M
+    ]
+    checked = 0
+    for record_s in (0.06, 0.1, 0.3):
+        t = np.arange(int(round(record_s * RATE_HZ))) / RATE_HZ
+        for seed in range(48):
+            rng = np.random.default_rng(seed)
+            for h, ref in zip(HEIGHTS_M, refs, strict=True):
+                start = CONTACT_START_S + rng.uniform(0, 1 / RATE_HZ)
+                noisy = sampled_force(ref, t - start) + rng.normal(0.0, NOISE_N, t.size)
+                rec = D.Recording(
+                    source=f"h{round(100 * h):03d}_s{seed}.csv",
+                    height_m=h,
+                    rate_Hz=RATE_HZ,
+                    force_N=scipy.signal.sosfilt(SOS, noisy),
+                    lowpass_Hz=CUTOFF_HZ,
+                )
+                out = D.clean(rec)
+                np.testing.assert_array_equal(out.force_N, rec.force_N, err_msg=rec.source)
+                checked += 1
+    assert checked == 3 * 288
 
 
 def test_offset_and_drift_are_removed_and_logged(drop):

@@ -82,18 +82,29 @@ def _record_samples(h, shift_s, model):
 _RECORD_SAMPLES = jax.jit(record_samples, static_argnums=(4, 5, 6))
 
 
+#: README "Fitting measured force histories", the sampled path: it agrees with the independent
+#: scipy references to ≤ 1e-6 of the peak force at every sample, "measured ~1e-11 without the
+#: ball mode, ~2e-9 with it": asserted at 10× the measured figures.
+SAMPLED_REL = {"ball mode": 2e-8, "no ball mode": 1e-10}
+
+
+def _sampled_rel(case):
+    return SAMPLED_REL["ball mode" if "ball-mode" in case else "no ball mode"]
+
+
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("shift_s", [0.0100, 0.01034567])
 def test_samples_match_the_scipy_reference_at_every_sample(case, shift_s):
-    """≤ 1e-6 of the peak force at every sample (README: the sampled path agrees to ~1e-9),
-    the first sample by the box rule of the fit, on and off the sample grid."""
+    """The stated agreement at every sample (README "Fitting measured force histories", the
+    sampled path), the first sample by the box rule of the fit, on and off the sample grid."""
     model, reference = CASES[case]
     t = np.arange(N) / RATE_HZ
     for h in (0.1, 1.6):
         force, _, status = _record_samples(h, shift_s, model)
         expected = sampled_force(reference(h, JIS_RUBBER_BALL), t - shift_s)
         assert int(status) == 0
-        assert np.max(np.abs(np.asarray(force) - expected)) <= 1e-6 * np.max(expected), (case, h)
+        err = np.max(np.abs(np.asarray(force) - expected)) / np.max(expected)
+        assert err <= _sampled_rel(case), (case, h, err)
 
 
 @pytest.mark.parametrize(
@@ -130,9 +141,11 @@ TRUE = {
 
 
 def test_sampled_and_ode_paths_of_the_fit_agree():
-    """The fit's force on both paths (README: ≤ 1e-6 of the peak force at every sample): the
-    sampled path and the diffrax ODE with its events (``rbjax.fit.program.sample_force``, the
-    ``method="ode"`` prediction) at the records' samples, onsets off the grid."""
+    """The fit's force on both paths (README "Fitting measured force histories", the sampled
+    path: "and with the fit's diffrax path to the same", ~2e-9 of the peak force with the ball
+    mode, asserted at 10×): the sampled path and the diffrax ODE with its events
+    (``rbjax.fit.program.sample_force``, the ``method="ode"`` prediction) at the records'
+    samples, onsets off the grid."""
     model, _ = CASES["hunt-crossley+ball-mode/momentum"]
     t = np.arange(N) / RATE_HZ
     shifts = 0.0100 + np.linspace(0.0, 1.0, len(HEIGHTS_M)) / RATE_HZ
@@ -145,7 +158,8 @@ def test_sampled_and_ode_paths_of_the_fit_agree():
     )
     f_ode = np.asarray(ode(np.array(HEIGHTS_M), shifts))
     f_sampled = np.asarray(sampled(np.array(HEIGHTS_M), shifts))
-    assert np.max(np.abs(f_sampled - f_ode)) <= 1e-6 * np.max(np.abs(f_ode))
+    err = np.max(np.abs(f_sampled - f_ode)) / np.max(np.abs(f_ode))
+    assert err <= SAMPLED_REL["ball mode"], err
 
 
 def test_ball_mode_jacobian_matches_finite_differences_of_the_reference(ball_mode_data):

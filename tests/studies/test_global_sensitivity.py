@@ -56,11 +56,14 @@ def within(ci, value):
 
 def test_sobol_indices_of_the_ishigami_function_on_the_sobol_sequence():
     first, total, s2, v = ishigami_indices()
-    res = sobol_indices(ishigami, PI_RANGES, 2048, n_bootstrap=100, confidence=0.99)
+    res = sobol_indices(ishigami, PI_RANGES, 2048, n_bootstrap=100, confidence=0.95)
     assert res.design == "sobol" and res.n_evaluations == 2048 * 8 and res.n_valid["y"] == 2048
-    np.testing.assert_allclose(res.variance["y"], v, rtol=0.03)
-    np.testing.assert_allclose(res.first_order["y"], first, atol=0.03)
-    np.testing.assert_allclose(res.total_order["y"], total, atol=0.03)
+    # The tolerances of the Monte Carlo test this replaced (20 000 random base points, 0.02,
+    # intervals at 95 %): the Sobol' sequence's 2048 points do better (measured: variance 1e-4
+    # relative, first and total order within 0.003, second order within 0.0022).
+    np.testing.assert_allclose(res.variance["y"], v, rtol=0.02)
+    np.testing.assert_allclose(res.first_order["y"], first, atol=0.02)
+    np.testing.assert_allclose(res.total_order["y"], total, atol=0.02)
     assert within(res.first_order_ci["y"], first) and within(res.total_order_ci["y"], total)
     upper = np.triu_indices(3, 1)
     np.testing.assert_allclose(res.second_order["y"][upper], s2[upper], atol=0.05)
@@ -74,7 +77,11 @@ def test_sobol_indices_of_the_ishigami_function_on_the_sobol_sequence():
 
 
 def test_sobol_indices_of_a_linear_model_both_designs():
-    for design, n in (("sobol", 1024), ("random", 1000)):
+    # Intervals at 95 % and indices within 0.02, as before the SALib rewrite. The random design
+    # (Monte Carlo, error ~ 1/√N) takes the 20 000 base points of that test: at 1000 its total
+    # index of a is 0.018 off and its 95 % interval misses (one of six intervals missing is no
+    # surprise at 95 %: 1 − 0.95⁶ = 26 %); the Sobol' sequence's 1024 points are within 1e-4.
+    for design, n in (("sobol", 1024), ("random", 20_000)):
         res = sobol_indices(
             linear,
             LINEAR_RANGES,
@@ -82,12 +89,13 @@ def test_sobol_indices_of_a_linear_model_both_designs():
             second_order=False,
             design=design,
             n_bootstrap=100,
-            confidence=0.99,
+            confidence=0.95,
         )
         assert res.n_evaluations == n * 5 and res.second_order is None
         assert within(res.first_order_ci["y"], LINEAR_S) and within(
             res.total_order_ci["y"], LINEAR_S
         ), design
+        np.testing.assert_allclose(res.first_order["y"], LINEAR_S, atol=0.02, err_msg=design)
         np.testing.assert_allclose(res.total_order["y"], LINEAR_S, atol=0.02, err_msg=design)
     assert res.driver("y") == "a"
 
@@ -103,14 +111,15 @@ def test_sobol_drops_base_points_with_failed_evaluations():
 
 def test_morris_elementary_effects_of_a_linear_function():
     res = morris_screening(linear, LINEAR_RANGES, 20, seed=3)
-    # effect per full range: coefficient × width, with no spread for a linear function
-    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-9)
-    np.testing.assert_allclose(res.mu_star["y"], np.abs(COEF * WIDTH), atol=1e-9)
-    np.testing.assert_allclose(res.sigma["y"], 0.0, atol=1e-9)
+    # effect per full range: coefficient × width, with no spread for a linear function (exact
+    # but for round-off: measured ≤ 1.2e-15; 1e-12 as before the SALib rewrite)
+    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-12)
+    np.testing.assert_allclose(res.mu_star["y"], np.abs(COEF * WIDTH), atol=1e-12)
+    np.testing.assert_allclose(res.sigma["y"], 0.0, atol=1e-12)
     assert res.n_evaluations == 20 * 4 and res.driver("y") == "a"
     picked = morris_screening(linear, LINEAR_RANGES, 20, optimal_trajectories=5, seed=3)
     assert picked.n_trajectories == 5 and picked.n_evaluations == 5 * 4
-    np.testing.assert_allclose(picked.mu["y"], COEF * WIDTH, atol=1e-9)
+    np.testing.assert_allclose(picked.mu["y"], COEF * WIDTH, atol=1e-12)
 
 
 def test_morris_leaves_out_trajectories_with_a_failed_evaluation():
@@ -119,7 +128,7 @@ def test_morris_leaves_out_trajectories_with_a_failed_evaluation():
 
     res = morris_screening(f, LINEAR_RANGES, 40, seed=1)
     assert 2 <= res.n_valid["y"] < 40
-    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-9)
+    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-12)
 
 
 def test_fast_indices_of_the_linear_model_and_the_ishigami_function():
