@@ -9,9 +9,13 @@ term of ``Chain`` that can be left out:
 2. **floor** (``rbjax.room.injection``): the energy it injects, W, and how the floor holds it:
    a resonant slab (``floor=None``: the ball on the bare ``Slab``, point impedance
    Z = 8√(B′m″); SEA) holds the band energy W_b = E_F,b/Z, decaying at
-   a_b = ω_b(η_s + 2η_rad); a floating floor over the slab (``FloatingFloor``,
-   ``Chain(floating="insertion")``, the default) is an insertion: the ball strikes the screed
-   (its force from the two-mode floor), the layer passes F_slab = T F to the slab,
+   a_b = ω_b(η_s + 2η_rad); in the bands of nominal frequency ≤ 100 Hz (``Chain(slab="modal")``,
+   the default) the finite slab's modes instead (``rbjax.room.finite_slab``: simply supported
+   edges, the drive point of the ``Slab``), one source per mode and band holding W_kb, decaying
+   at ω_kη_k and radiating with the mode's own σ_k; a floating floor over the slab
+   (``FloatingFloor``, ``Chain(floating="insertion")``, the default) is an insertion: the ball
+   strikes the screed (its force from the two-mode floor), the layer passes F_slab = T F to the
+   slab (its infinite-plate field in every band),
    T = 1/(1 − (f/f₀)²/(1 + jη)) (a locally reacting screed: EN 12354-2 Annex C's
    ΔL = 40 lg(f/f₀) above f₀, amplification (1 + η²)/η² at f₀), and the slab holds
    W_b = Σ_b E_F|T|²Δf/Z, decaying and radiating as the bare slab's field; a modal floor
@@ -56,7 +60,7 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 on)
 from ..solve.inputs import as_arrays
-from ..solve.simulate import make_model, simulate, trajectory
+from ..solve.simulate import simulate, trajectory
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
@@ -279,7 +283,7 @@ def room_levels(
     t_band = room.reverberation_per_band(labels)
     impact_floor = slab.plate if floor is None else floor
     model = (
-        make_model(floor=impact_floor)
+        Model(floor=impact_floor)
         if model is None
         else eqx.tree_at(lambda m: m.floor, model, impact_floor)
     )

@@ -9,11 +9,11 @@ import math
 import numpy as np
 
 from .._validate import as_float
-from ..solve.simulate import make_model, simulate, trajectory
+from ..solve.simulate import simulate, trajectory
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractModalFloor
-from ..terms.model import Solver
+from ..terms.model import Model, Solver
 from .chain import RoomLevels, bands, fast_levels_dB, rating_unrounded_dB, room_levels
 from .scene import Chain, ReceivingRoom, Slab
 from .standards import round_rating
@@ -79,7 +79,7 @@ class ImpactSound:
 def _contact_samples(height_m, ball, slab, floor, rate_Hz) -> int:
     """Samples over the contact: twice the rigid-floor contact time (the cheap quadrature),
     doubled while the ball is still in contact at the last sample."""
-    model = make_model(floor=slab.plate if floor is None else floor)
+    model = Model(floor=slab.plate if floor is None else floor)
     n = (
         int(math.ceil(2.0 * float(np.asarray(simulate(height_m, ball).contact_time_s)) * rate_Hz))
         + 2
@@ -150,7 +150,7 @@ def impact_sound(
                 height_m,
                 np.arange(n) / rate_Hz,
                 ball,
-                make_model(floor=slab.plate if floor is None else floor),
+                Model(floor=slab.plate if floor is None else floor),
             ).force_N
         ),
         rate_Hz=float(rate_Hz),
