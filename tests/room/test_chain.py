@@ -68,6 +68,15 @@ def test_levels_and_rating_are_consistent(bare):
     assert bare.LiA_Fmax_dB == round(bare.LiA_Fmax_unrounded_dB)
     assert bare.normalised_dB == pytest.approx(bare.level_dB)  # the reference room itself
     assert any("Schroeder" in w for w in bare.warnings)
+    # the modal overlap f η_s n(f), n = (l_x l_y/2)√(m″/B′) (Cremer, Heckl & Petersson §5.5), of
+    # the bands the infinite plate follows: below 1 in the 125 and 250 Hz octaves of this slab
+    density = 20.0 / 2 * np.sqrt(2300 * 0.15 / (33e9 * 0.15**3 / (12 * (1 - 0.2**2))))
+    overlap = {f: f * f**-0.5 * density for f in (125.9, 251.2, 501.2)}
+    assert overlap[125.9] < 1 < overlap[501.2]
+    few = [b for b, f in zip(("125", "250", "500"), overlap) if overlap[f] < 1]
+    assert any(
+        w.startswith(f"bands {', '.join(few)} Hz follow the infinite plate") for w in bare.warnings
+    )
     # the Fast level against time peaks at the band maximum
     t = np.linspace(0.0, 0.5, 5001)
     np.testing.assert_allclose(bare.fast_levels_dB(t).max(axis=1), bare.level_dB, atol=1e-4)

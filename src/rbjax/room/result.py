@@ -14,7 +14,15 @@ from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.model import Model, Solver
-from .chain import RoomLevels, bands, fast_levels_dB, rating_unrounded_dB, room_levels
+from .chain import (
+    RoomLevels,
+    bands,
+    fast_levels_dB,
+    modal_bands,
+    rating_unrounded_dB,
+    room_levels,
+)
+from .finite_slab import bending_speed_constant
 from .scene import Chain, ReceivingRoom, Slab
 from .standards import round_rating
 
@@ -128,6 +136,8 @@ def impact_sound(
     labels, _, edges = bands(fraction)
     t_band = np.asarray(room.reverberation_per_band(labels))
     warnings = _warnings(lv, labels, edges, room, chain, floor, t_band)
+    if floor is None:
+        warnings += _modal_overlap_warnings(slab, fraction, chain)
     injected = np.asarray(lv.injected_J)
     return ImpactSound(
         bands=tuple(labels),
@@ -156,6 +166,29 @@ def impact_sound(
         rate_Hz=float(rate_Hz),
         chain=chain,
     )
+
+
+def _modal_overlap_warnings(slab: Slab, fraction: int, chain: Chain) -> list[str]:
+    """The bands the infinite plate follows where the slab's modal overlap M = f η_s n(f) is
+    below 1 (n(f) = (l_x l_y/2)√(m″/B′), the plate's modal density: Cremer, Heckl & Petersson
+    §5.5): there the infinite plate is the frequency average of a response that scatters about
+    it from slab to slab and from point to point."""
+    labels, centres, _ = bands(fraction)
+    plate = ~modal_bands(fraction) if chain.slab == "modal" else np.ones(len(labels), dtype=bool)
+    density = (
+        as_float(slab.length_x_m)
+        * as_float(slab.length_y_m)
+        / (2.0 * float(np.asarray(bending_speed_constant(slab))))
+    )
+    overlap = centres * np.asarray(slab.structural_loss(centres)) * density
+    few = [lab for lab, m, p in zip(labels, overlap, plate) if p and m < 1.0]
+    if not few:
+        return []
+    return [
+        f"bands {', '.join(few)} Hz follow the infinite plate where the slab's modal overlap is "
+        "below 1: their levels are a frequency average that a given slab and drive point scatter "
+        "about"
+    ]
 
 
 def _warnings(
