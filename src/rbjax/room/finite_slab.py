@@ -90,9 +90,9 @@ def mode_orders(slab, upper_Hz: float) -> tuple[int, int]:
     cutoff = MODE_CUTOFF * float(upper_Hz)
     # f_m1 = (π/2) c ((m/l_x)² + (1/l_y)²) ≤ cutoff, and the same along y
     lx, ly = (float(np.asarray(x)) for x in (slab.length_x_m, slab.length_y_m))
-    room = 2.0 * cutoff / (math.pi * c)
-    m_max = math.sqrt(max(room - 1.0 / ly**2, 0.0)) * lx
-    n_max = math.sqrt(max(room - 1.0 / lx**2, 0.0)) * ly
+    bound = 2.0 * cutoff / (math.pi * c)
+    m_max = math.sqrt(max(bound - 1.0 / ly**2, 0.0)) * lx
+    n_max = math.sqrt(max(bound - 1.0 / lx**2, 0.0)) * ly
     return max(1, int(math.floor(m_max))), max(1, int(math.floor(n_max)))
 
 
