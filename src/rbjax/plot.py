@@ -47,6 +47,7 @@ __all__ = [
 def _axes(ax, figsize=(6.4, 4.2)):
     if ax is not None:
         return ax.figure, ax
+    # lazy: matplotlib.pyplot costs ~1 s at import
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=figsize, layout="constrained")
@@ -54,6 +55,7 @@ def _axes(ax, figsize=(6.4, 4.2)):
 
 
 def _colours(n: int):
+    # lazy: matplotlib.pyplot costs ~1 s at import
     import matplotlib as mpl
 
     cmap = mpl.colormaps["viridis"]
@@ -261,6 +263,7 @@ def plot_relative_difference(entries: Sequence[Mapping], ax=None, *, title=None)
                 ms=7,
                 mfc="none" if v != variants[0] else colours[e["label"]],
             )
+    # lazy: matplotlib costs 0.1–0.2 s at import
     from matplotlib.lines import Line2D
 
     handles = [
@@ -475,6 +478,7 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
             )
         blocked = rigid[0]
     if axes is None:
+        # lazy: matplotlib.pyplot costs ~1 s at import
         import matplotlib.pyplot as plt
 
         fig, axes = plt.subplots(1, 3, figsize=(14.0, 4.2), layout="constrained")
@@ -522,6 +526,7 @@ def plot_floors(results: Mapping[str, object], blocked=None, axes=None, *, title
 def plot_fit(result, out_dir) -> list[Path]:
     """Write ``histories.png`` (measured vs fitted with residuals), ``lfe_bands.png`` and
     ``correlations.png`` of a ``FitResult`` into ``out_dir``; return their paths."""
+    # lazy: matplotlib.pyplot costs ~1 s at import
     import matplotlib.pyplot as plt
 
     out = Path(out_dir)

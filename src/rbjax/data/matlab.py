@@ -46,6 +46,7 @@ def _is_hdf5(path) -> bool:
 
 
 def _variables_v5(path, source: str) -> dict[str, np.ndarray]:
+    # lazy: scipy.io costs 0.1–0.2 s at import
     from scipy.io import loadmat
     from scipy.io.matlab import MatReadError
 

@@ -25,6 +25,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import jax
+from equinox import _errors  # EQX_ON_ERROR (equinox has no public switch for it)
 
 _LOADED: dict[str, Callable] = {}
 
@@ -85,8 +86,6 @@ def _errors_as_nan():
     solve inside the program gives NaN, which the fit reports as a failure (it never reports
     success on NaN).
     """
-    from equinox import _errors
-
     before = getattr(_errors, "EQX_ON_ERROR", None)
     if before is None:  # a future equinox: leave it alone, export will say if it cannot
         yield
@@ -171,6 +170,7 @@ def _exclusive(lock: Path):
     """An exclusive lock on the file ``lock`` (``fcntl.flock``; released when the process
     dies); where locking is not possible (no ``fcntl``, a read-only store), no lock."""
     try:
+        # lazy: fcntl exists on POSIX only
         import fcntl
 
         lock.parent.mkdir(parents=True, exist_ok=True)

@@ -151,6 +151,7 @@ class FitResult:
     def plot(self, out_dir) -> list[Path]:
         """Write ``histories.png`` (measured vs fitted with residuals), ``lfe_bands.png`` and
         ``correlations.png`` into ``out_dir``; return their paths (``rbjax.plot.plot_fit``)."""
+        # lazy: rbjax.plot imports matplotlib (0.1–0.2 s; pyplot ~1 s)
         from ..plot import plot_fit
 
         return plot_fit(self, out_dir)

@@ -106,6 +106,7 @@ def start_values(table: SummaryTable, model, ball: Ball, nu: float) -> dict:
 
 
 def _solve(program: FigureProgram, phi0, measured, sd, mask):
+    # lazy: scipy.optimize costs 0.3–0.8 s at import
     from scipy.optimize import least_squares
 
     def residual(phi):
@@ -344,6 +345,7 @@ def _undetermined(jw, free, specs, phi) -> dict[str, str]:
     """Free parameters the figures do not pin down, with the reason: a damping or mode
     coefficient run to its bound 0 (its column vanishes), or the last pivot of a column-scaled
     Jacobian whose condition number exceeds ``CONDITION_LIMIT``."""
+    # lazy: scipy.linalg costs 0.3 s at import
     import scipy.linalg
 
     if not free:

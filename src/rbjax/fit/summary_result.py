@@ -131,9 +131,11 @@ class SummaryFitResult:
     def plot(self, out_dir) -> list[Path]:
         """Write ``summary_fit.png`` (each figure against drop height: measured ± 2 sd, fitted
         ± 2 sd) into ``out_dir``; return its path."""
+        # lazy: matplotlib costs 0.1–0.2 s at import (pyplot ~1 s)
         import matplotlib
 
         matplotlib.use("Agg")
+        # lazy: matplotlib.pyplot costs ~1 s at import
         import matplotlib.pyplot as plt
 
         out = Path(out_dir)

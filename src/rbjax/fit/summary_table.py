@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -240,8 +241,6 @@ def read_summary(path) -> SummaryTable:
     if not path.is_file():
         raise SummaryTableError(f"{path}: no such file (a summary table: .csv or .toml)")
     if path.suffix.lower() == ".toml":
-        import tomllib
-
         try:
             doc = tomllib.loads(path.read_text())
         except tomllib.TOMLDecodeError as err:

@@ -29,9 +29,11 @@ BAR_RELATIVE = 0.05
 def measured_ball(out_dir, *, models=MODELS, progress: bool = True) -> dict:
     """Fit, select and predict (see the module docstring); write ``measured_ball.png``
     (measured figures and each model's, the 160 cm peak held out) into ``out_dir``."""
+    # lazy: matplotlib costs 0.1–0.2 s at import (pyplot ~1 s)
     import matplotlib
 
     matplotlib.use("Agg")
+    # lazy: matplotlib.pyplot costs ~1 s at import
     import matplotlib.pyplot as plt
 
     say(

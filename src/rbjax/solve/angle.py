@@ -44,6 +44,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from diffrax._solver.dopri8 import _Dopri8Interpolation  # its table, not in diffrax's API
 
 from .._x64 import require_x64
 from ..terms.ball import Ball
@@ -208,8 +209,6 @@ def _half_turn(y0, setup: _Setup, n_steps: int):
 def _dense_coefficients() -> np.ndarray:
     """Dormand–Prince 8's continuous extension (Hairer, Nørsett & Wanner; diffrax's table):
     y(φ₀ + s h) = y₀ + h Σ_j s·p_j(s) k_j with p_j the rows' polynomials (highest power first)."""
-    from diffrax._solver.dopri8 import _Dopri8Interpolation
-
     return np.asarray(_Dopri8Interpolation.eval_coeffs)
 
 

@@ -56,6 +56,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import numpy as np
+from tqdm import tqdm  # a text bar on stderr, also inside notebooks
 
 from .._validate import check_range
 
@@ -186,8 +187,6 @@ def device_map(
         lo, hi = k * chunk, min((k + 1) * chunk, n)
         for full, part in zip(outs, got):
             full[lo:hi] = np.asarray(part)[: hi - lo]
-
-    from tqdm import tqdm  # a text bar on stderr, also inside notebooks
 
     pending: deque = deque()
     with tqdm(

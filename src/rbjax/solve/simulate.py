@@ -199,6 +199,7 @@ class ImpactResult(eqx.Module):
 
     def plot(self, ax=None, *, rate_Hz: float | None = None):
         """Plot the force histories over the contact (one line per height)."""
+        # lazy: rbjax.plot imports matplotlib (0.1–0.2 s; pyplot ~1 s)
         from ..plot import plot_histories
 
         return plot_histories(self, ax=ax, rate_Hz=rate_Hz)

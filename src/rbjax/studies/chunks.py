@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 import numpy as np
+from tqdm import tqdm
 
 from ..solve.options import EvaluationSpec
 from .executors import Parallel, Task, run_tasks
@@ -180,8 +181,6 @@ def evaluate_rows(
             for p, q in _pieces(0, n, chunk, width, 0)
         ]
     tasks = first or second_pass(np.array([], dtype=int))
-    from tqdm import tqdm
-
     bar = tqdm(
         total=(n if first else 0) + b - a,
         desc=label,

@@ -7,6 +7,7 @@ from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import ArrayLike
 
 from .._validate import is_traced
@@ -81,8 +82,6 @@ def validate_ball(ball: Ball) -> None:
     """Raise ``ValueError`` naming the field if a concrete ball parameter is invalid."""
     check_declared(ball)
     if not (is_traced(ball.wall_m) or is_traced(ball.radius_m)):
-        import numpy as np
-
         h = np.asarray(ball.wall_m, dtype=float)
         r = np.asarray(ball.radius_m, dtype=float)
         if np.any(h >= r):

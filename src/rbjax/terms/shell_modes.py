@@ -61,6 +61,7 @@ import dataclasses
 import math
 
 import numpy as np
+from numpy.polynomial.legendre import Legendre, leggauss
 
 from .._validate import as_float, check_choice
 from .ball import JIS_RUBBER_BALL, Ball
@@ -170,8 +171,6 @@ def membrane_omega(n: int, poisson: float) -> np.ndarray:
 def _thin_matrices(n: int, poisson: float, thickness_ratio: float):
     """Stiffness and mass matrices (2 × 2, unknowns (U, W)) of the Love shell, per unit
     K·2π (stiffness) and ρh·2πa² (mass); thickness_ratio = h/a."""
-    from numpy.polynomial.legendre import Legendre, leggauss
-
     x, wq = leggauss(2 * n + 8)
     p = Legendre.basis(n)
     P, dP = p(x), p.deriv()(x)
@@ -209,6 +208,7 @@ def thin_shell_omega(n: int, poisson: float, thickness_ratio: float) -> np.ndarr
         raise ValueError(f"thickness_ratio={thickness_ratio!r} must be finite and >= 0")
     if n == 0:
         return np.array([math.sqrt(2.0 * (1.0 + poisson))])
+    # lazy: scipy.linalg costs 0.3 s at import
     from scipy.linalg import eigh
 
     stiff, mass = _thin_matrices(n, poisson, thickness_ratio)
@@ -224,6 +224,7 @@ def thin_shell_omega(n: int, poisson: float, thickness_ratio: float) -> np.ndarr
 
 def _bessel(kind: str, n: int, z: np.ndarray):
     """z_n(z), z_n'(z), z_n''(z) for z_n = j_n ('j') or y_n ('y')."""
+    # lazy: scipy.special costs 0.2 s at import
     from scipy.special import spherical_jn, spherical_yn
 
     fn = spherical_jn if kind == "j" else spherical_yn
@@ -299,6 +300,7 @@ def elastic_sphere_omega(
     range holds fewer. ν within 10⁻⁴ of 0.5 is evaluated at ``INCOMPRESSIBLE_POISSON``.
     The rigid translation of n = 1 (Ω = 0) is not a root of the scan.
     """
+    # lazy: scipy.optimize costs 0.3–0.8 s at import
     from scipy.optimize import brentq
 
     _check_poisson(poisson, True)

@@ -98,6 +98,7 @@ def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[f
     (nan, nan) for n = 0."""
     if n == 0:
         return (math.nan, math.nan)
+    # lazy: scipy.stats costs 0.5–1.5 s at import
     from scipy.stats import binomtest
 
     ci = binomtest(int(successes), int(n)).proportion_ci(

@@ -132,6 +132,7 @@ def dgsm_measures(
     check_range("delta", delta, lower=0.0, upper=1.0)
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
+    # lazy: SALib costs 1.7–4 s at import
     from SALib.analyze import dgsm as analyze
     from SALib.sample import finite_diff as sample
 

@@ -107,6 +107,7 @@ def sobol_indices(
     n = check_count("n_base", n_base, 2, power_of_two=design == "sobol", why=why)
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
+    # lazy: SALib costs 1.7–4 s at import
     from SALib.analyze import sobol as analyze
     from SALib.sample import sobol as sample
 
@@ -208,6 +209,7 @@ def morris_screening(
             )
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
+    # lazy: SALib costs 1.7–4 s at import
     from SALib.analyze import morris as analyze
     from SALib.sample import morris as sample
 
@@ -282,6 +284,7 @@ def fast_indices(
     )
     n_bootstrap = check_count("n_bootstrap", n_bootstrap, 2)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
+    # lazy: SALib costs 1.7–4 s at import
     from SALib.analyze import fast as analyze
     from SALib.sample import fast_sampler as sample
 
@@ -329,6 +332,7 @@ def pawn_indices(
     ranges = check_ranges(ranges)
     s = check_count("n_conditioning", n_conditioning, 2)
     n = check_count("n_samples", n_samples, 2 * s, why=f" (at least 2 per slice, {s} slices)")
+    # lazy: SALib costs 1.7–4 s at import
     from SALib.analyze import pawn as analyze
     from SALib.sample import latin as sample
 

@@ -115,8 +115,10 @@ class Sensitivity:
         A bar is the % change of the output (band energy for L_FE) per % change of the
         parameter. Returns the matplotlib figure (``fig.savefig("tornado.png")``).
         """
+        # lazy: matplotlib.pyplot costs ~1 s at import
         import matplotlib.pyplot as plt
 
+        # lazy: rbjax.plot imports matplotlib (0.1–0.2 s; pyplot ~1 s)
         from ... import plot as _plot  # noqa: F401  (selects a headless backend when needed)
 
         outputs = self.outputs if outputs is None else tuple(outputs)
