@@ -98,19 +98,6 @@ class SummaryTable:
     def n_figures(self) -> int:
         return len(self.entries())
 
-    def subset(self, keep) -> SummaryTable:
-        """The table with only the (height index, figure) entries in ``keep`` (the others empty)."""
-        keep = set(keep)
-        values = {
-            f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)])
-            for f, arr in self.values.items()
-        }
-        sd = {
-            f: np.array([v if (i, f) in keep else np.nan for i, v in enumerate(arr)])
-            for f, arr in self.sd.items()
-        }
-        return dataclasses.replace(self, values=values, sd=sd)
-
     def to_dict(self) -> dict:
         return {
             "source": self.source,

@@ -75,7 +75,7 @@ from .outcome import SINGULAR_FRACTION, STATUS_CODES, ImpactScalars, impact_velo
 # --- scalar outputs (impact_quadrature) ---------------------------------------------------------
 #: Chebyshev–Lobatto points of the interpolant on [0, δ_max] and Gauss–Legendre points of the
 #: φ rule for the phase times (one n for both). 12 gives ≤ 1e-12 in every output of the JIS ball
-#: over 0.1–1.6 m (tests/test_simulate_method.py); with fewer the error estimate flags more.
+#: over 0.1–1.6 m (tests/solve/test_simulate_method.py); with fewer the error estimate flags more.
 DEFAULT_NODES = 12
 #: Chebyshev–Lobatto points of the first, bracketing interpolant on [0, d0].
 BRACKET_NODES = 5
@@ -462,7 +462,7 @@ def quadrature_error_estimate(
 
 
 # ------------------------------------------------------------------------------------------------
-# Force histories: nested Gauss–Legendre rules in σ, δ = δ_max(1 − σ²).
+# The entry points: one impact, and a batch (the histories are in quadrature_history.py).
 
 
 def impact_quadrature(

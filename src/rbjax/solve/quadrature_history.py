@@ -3,6 +3,11 @@
 The scalar outputs (contact time, peak force, restitution) come from :mod:`rbjax.solve.quadrature`;
 this module samples the history at given times from the same integrals in δ (see that
 module's docstring for the derivation), with its own nested Gauss–Legendre rules.
+
+A reference implementation, kept for the tests (``tests/solve/test_quadrature.py``: the
+histories against the ODE's) and the accuracy benchmark (``benchmarks/work_precision.py``: the
+reference history): no path of :func:`rbjax.simulate` or the fit calls it. It stays public as
+``rbjax.solve.force_history_quadrature``.
 """
 
 from __future__ import annotations

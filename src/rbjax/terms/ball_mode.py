@@ -61,10 +61,6 @@ class BallMode(eqx.Module):
     def __check_init__(self):
         check_declared(self)
 
-    def modal_mass_kg(self, ball):
-        """m_b = M/μ (infinite when the term is off)."""
-        return ball.mass_kg / self.mode_mass_ratio
-
     def rates(self, states, contact_force_N, ball):
         """(ẇ, ẅ) of the mode's displacement at the contact, driven by −F_c."""
         w, wd = states[0], states[1]
