@@ -32,6 +32,8 @@ from typing import Any
 import jax
 import numpy as np
 
+from .program import run_lanes
+
 __all__ = ["BATCH_SIZES", "LaneBatcher", "LaneExecutor", "current_batcher", "padded_size"]
 
 #: The batch sizes a program is compiled for: a batch of B lanes runs at the smallest size ≥ B
@@ -164,8 +166,6 @@ class LaneExecutor(cf.Executor):
 
     def __init__(self, run: Callable[[Any, Any, Any], Any] | None = None):
         if run is None:
-            from .program import run_lanes
-
             run = run_lanes
         self.batcher = LaneBatcher(run)
         self._threads: list[threading.Thread] = []

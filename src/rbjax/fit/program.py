@@ -42,6 +42,7 @@ import lineax as lx
 import numpy as np
 import optimistix as optx
 
+from ..solve.simulate import trajectory
 from ..spectrum.filters import sosfilt_jax
 from .program_store import load_or_export
 from .record_forces import ball_and_model, record_forces
@@ -60,7 +61,6 @@ def sample_force(height_m, tau_s, rate_Hz, ball, model, solver):
     times the force at the midpoint of the in-contact part (the box average of the jump);
     every other sample is the point value F(τ_i). Continuous and piecewise smooth in s.
     """
-    from ..solve.simulate import trajectory
 
     half = 0.5 / rate_Hz
     inside = jnp.clip((tau_s + half) * rate_Hz, 0.0, 1.0)

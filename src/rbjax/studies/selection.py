@@ -25,10 +25,21 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._progress import progress as say
+from .._validate import check_choice
 from .._x64 import require_x64
-from ..fit import MODEL_NAMES, FitResult, fit, parse_model_terms, predict, prepare_data
+from ..fit import (
+    MODEL_NAMES,
+    FitResult,
+    fit,
+    parse_model_name,
+    parse_model_terms,
+    predict,
+    prepare_data,
+)
 from ..fit.options import OLD_KEYWORDS, options_from_keywords
+from ..spectrum.bands import OCTAVE_BANDS
 from ..terms.model import Model, superset_model
+from ..text import fmt, format_table
 from .executors import Parallel, Task, run_tasks
 
 __all__ = [
@@ -240,8 +251,6 @@ class Selection:
     elapsed_s: float
 
     def table(self) -> str:
-        from ..spectrum.bands import OCTAVE_BANDS
-        from ..text import fmt, format_table
 
         header = [
             "model",
@@ -306,7 +315,6 @@ class Selection:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        from ..spectrum.bands import OCTAVE_BANDS
 
         return {
             "recommended": {
@@ -413,8 +421,6 @@ def candidate_pairs(
 ) -> list[tuple[str, str]]:
     """(model, blocked force) pairs: ``"name"`` pairs with every blocked force,
     ``"name/paper"`` or ``"name/momentum"`` with that one only."""
-    from .._validate import check_choice
-    from ..fit import parse_model_name
 
     if not candidates or not blocked_forces:
         raise ValueError("give at least one candidate model and one blocked-force definition")
@@ -556,8 +562,6 @@ class HoldOutComparison:
     rows: dict  # label -> tuple[HeldOut]
 
     def table(self) -> str:
-        from ..spectrum.bands import OCTAVE_BANDS
-        from ..text import fmt, format_table
 
         header = ["model", "h (m)", "history (%)", "Δt_c (%)", "Δpeak (%)"] + [
             f"ΔL {b} (dB)" for b in OCTAVE_BANDS
