@@ -225,9 +225,11 @@ class DesignResult:
     def plot(self, out_dir, name: str | None = None) -> Path:
         """A bar chart of the normalised margin of every item
         (``design_<model>_<geometry>.png``)."""
+        # lazy: matplotlib.pyplot costs ~1 s at import
         import matplotlib
 
         matplotlib.use("Agg")
+        # lazy: matplotlib.pyplot costs ~1 s at import
         import matplotlib.pyplot as plt
 
         out = Path(out_dir)
@@ -298,6 +300,7 @@ def design(
             release, accepted for one release (a ``DeprecationWarning``): they build the
             ``DesignSearch``.
     """
+    # lazy: optax costs 0.2 s at import
     import optax  # type: ignore[import-untyped]
 
     search = from_old_keywords(
