@@ -39,6 +39,9 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
+import jax
+from threadpoolctl import threadpool_limits
+
 from .._progress import progress as say
 
 __all__ = [
@@ -134,8 +137,6 @@ class Parallel:
             return self.lanes
         if self.workers is not None or self.scheduler is not None or self.executor is not None:
             return False
-        import jax  # here: deciding needs JAX's backend, nothing else here does
-
         return jax.default_backend() != "cpu"
 
     @property
@@ -149,8 +150,6 @@ class Parallel:
 
     def describe(self) -> str:
         if self.use_lanes:
-            import jax
-
             return f"lanes of one batched program per structure on {jax.default_backend()}"
         if self.scheduler is not None:
             return f"the Dask cluster at {self.scheduler}"
@@ -198,8 +197,6 @@ _BLAS_LIMIT: list = []
 def single_threaded_blas() -> None:
     """Limit the BLAS libraries loaded in this process (OpenBLAS, MKL, BLIS) to one thread each,
     for the rest of the process (``threadpoolctl``)."""
-    from threadpoolctl import threadpool_limits
-
     if not _BLAS_LIMIT:
         _BLAS_LIMIT.append(threadpool_limits(limits=1))
 
@@ -208,8 +205,6 @@ def _worker_start(options: dict) -> None:
     """A worker process's JAX: one CPU device, float64, the parent's options; BLAS on one
     thread."""
     single_threaded_blas()
-    import jax
-
     jax.config.update("jax_platforms", "cpu")
     try:
         jax.config.update("jax_num_cpu_devices", 1)
@@ -231,7 +226,7 @@ def _local_pool(n: int, options: dict) -> cf.ProcessPoolExecutor:
 
 def _dask_client(address: str):
     try:
-        from distributed import Client
+        from distributed import Client  # lazy: optional (rbjax[cluster]); 0.8 s at import
     except ImportError as err:
         raise ValueError(
             f"scheduler={address!r}: sending work to a Dask cluster needs the 'distributed' "
@@ -252,7 +247,7 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     if parallel.executor is not None:
         yield parallel.executor
     elif parallel.use_lanes:
-        # the fit package only where its fits run as lanes (sweeps use this module too)
+        # lazy: the fit package only where its fits run as lanes (sweeps use this module too)
         from ..fit.lanes import LaneExecutor
 
         lanes = LaneExecutor()
@@ -287,8 +282,6 @@ _POOLS: dict[tuple, cf.ProcessPoolExecutor] = {}
 def local_pool(n: int) -> cf.ProcessPoolExecutor:
     """This process's pool of ``n`` local workers with its current JAX options (made on first
     use, kept until the process ends or a worker dies)."""
-    import jax
-
     options = {k: jax.config.values[k] for k in INHERITED_OPTIONS if k in jax.config.values}
     key = (n, tuple(sorted(options.items())))
     pool = _POOLS.get(key)
@@ -314,7 +307,7 @@ def shutdown_pools() -> None:
 
 def _warm() -> None:
     """Imports JAX and the fit (a worker's first task would otherwise wait for them)."""
-    import rbjax.fit  # noqa: F401
+    import rbjax.fit  # noqa: F401  (lazy: this import is the worker's warm-up)
 
 
 def prestart(parallel: Parallel | int | None) -> None:
