@@ -172,9 +172,8 @@ def _rebuilt(model, **changes):
         damping=model.damping,
         stiffening=model.stiffening,
         max_deflection_ratio=model.max_deflection_ratio,
-        ball_mode=model.ball_mode,
         floor=model.floor,
-        series=model.series,
+        series_elements=model.series_elements,
     )
     return Model(**(options | changes))
 

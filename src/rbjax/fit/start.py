@@ -63,7 +63,7 @@ def alternative_starts(model: Model, given: set[str]) -> list[dict]:
     value of a parameter whose fit has several minima, as its term declares them
     (``START_ALTERNATIVES``; e.g. the ball mode's frequency), unless the caller gave or held it."""
     starts: list[dict] = [{}]
-    terms = [*model.damping, model.stiffening, model.ball_mode, model.series]
+    terms = [*model.damping, model.stiffening, *model.series_elements]
     for term in terms:
         for name, values in getattr(type(term), "START_ALTERNATIVES", {}).items():
             if name not in given:

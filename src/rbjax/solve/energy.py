@@ -90,16 +90,18 @@ def energy_balance(
 ) -> EnergyBalance:
     """The energy balance of the impact from ``height_m`` (see the module docstring).
 
-    Models with a ``BallMode`` or a ``SeriesKelvinVoigt`` are not covered (their own energy
-    is not accounted for): ``ValueError``.
+    Models with elements in series with the shell (``BallMode``, ``SeriesKelvinVoigt``, any
+    ``AbstractSeriesElement``) are not covered (their own energy is not accounted for): a
+    ``ValueError`` naming them.
     """
 
     check_inputs(height_m, ball)
     model = Model() if model is None else model
-    if model.ball_mode is not None or model.series is not None:
+    if model.series_elements:
+        names = ", ".join(f"{e.description()} ({e.name})" for e in model.series_elements)
         raise ValueError(
-            "energy_balance: models with a ball_mode or a series element are not covered; valid: "
-            "ball_mode=None, series=None"
+            f"energy_balance: models with elements in series with the shell are not covered "
+            f"(got {names}); valid: none (ball_mode=None, series=None, series_elements=())"
         )
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m
 from ..terms.model import Model, Solver
+from ..terms.series_element import free_oscillation
 from .outcome import (
     SINGULAR_FRACTION,
     STATUS_CODES,
@@ -305,32 +306,18 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
     return peak, peak_time, jnp.maximum(d_best, d_ref)
 
 
-def _free_oscillation(q0, qd0, omega, eta, tau):
-    """q(τ) of q̈ + ηωq̇ + ω²q = 0 from (q0, q̇0) (any damping: complex ω_d; ω = 0: a free mass)."""
-    zeta = 0.5 * eta
-    wd = omega * jnp.sqrt((1.0 - zeta**2) + 0j)
-    small = jnp.abs(wd) < 1e-9 * jnp.maximum(omega, 1.0)
-    safe = jnp.where(small, 1.0, wd)
-    sin_over = jnp.where(small, tau, jnp.sin(safe * tau) / safe)
-    q = jnp.exp(-zeta * omega * tau) * (
-        q0 * jnp.cos(wd * tau) + (qd0 + zeta * omega * q0) * sin_over
-    )
-    return jnp.real(q)
-
-
 def recontact_horizon_s(model: Model):
     """How long after separation ``_recontacts`` follows the free motion: two periods of the
-    slowest ball or floor mode, at least 10 ms."""
+    slowest floor mode, each element in series with the shell's own horizon (two periods of
+    the ball mode, two relaxation times of the series element), at least 10 ms."""
     floor = model.floor
     horizon: jax.Array | float = 0.01
     if isinstance(floor, AbstractModalFloor):
         omega = floor.modes()[1]
         periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)
         horizon = jnp.maximum(jnp.max(periods), horizon)
-    if model.series is not None:
-        horizon = jnp.maximum(horizon, 2.0 * model.series.series_time_constant_s)
-    if model.ball_mode is not None:
-        return jnp.maximum(horizon, 2.0 / model.ball_mode.mode_frequency_Hz)
+    for element in model.series_elements:
+        horizon = jnp.maximum(horizon, element.recontact_horizon_s())
     return horizon
 
 
@@ -338,7 +325,8 @@ def _recontacts(y_end, args):
     """True if, after separation, the free motion brings the shell back onto the floor.
 
     After the end of contact the ball's moving part flies off at Ẋ (gravity is neglected over
-    the short horizon), the ball mode and a modal floor ring freely (a massless floor stops).
+    the short horizon), the elements in series move freely (``free_change_m``: the ball mode
+    rings, the series element relaxes) and a modal floor rings (a massless floor stops).
     The gap closes again where δ(τ) = δ_end + Ẋτ + Δw(τ) − Δu(τ) > δ_end, checked on 256 times
     over ``recontact_horizon_s``. The model does not follow a second contact within one
     record: such an impact is flagged ``recontact``.
@@ -347,25 +335,14 @@ def _recontacts(y_end, args):
     taus = jnp.linspace(0.0, recontact_horizon_s(model), 257)[1:]
     z = y_end[2:]
     gap_close = body_velocity_m_per_s(y_end, ball, model) * taus
-    if model.ball_mode is not None:
-        bm = model.ball_mode
-        w, wd = model.ball_mode_states(z)
-        gap_close = (
-            gap_close
-            + _free_oscillation(
-                w, wd, 2.0 * jnp.pi * bm.mode_frequency_Hz, bm.mode_loss_factor, taus
-            )
-            - w
-        )
-    if model.series is not None:
-        w = model.series_states(z)[0]  # relaxes freely: τẇ = −w
-        gap_close = gap_close + w * jnp.expm1(-taus / model.series.series_time_constant_s)
+    for element, states in zip(model.series_elements, model.element_states(z)):
+        gap_close = gap_close + element.free_change_m(states, taus)
     if isinstance(model.floor, AbstractModalFloor):
         s = model.floor_states(z)
         n = model.floor.num_modes
         q, qd = s[:n], s[n:]
         _, omega, eta = model.floor.modes()
-        free = _free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
+        free = free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
         gap_close = gap_close - jnp.sum(free - q, axis=1)
     scale = 1e-9 * ball.wall_m
     return jnp.any(gap_close > scale)

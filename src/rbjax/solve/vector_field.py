@@ -1,11 +1,11 @@
 """The equations of motion as a vector field dy/dt (paper Eq. 7 and the terms that couple to
-it: damping states, the ball mode, the series element, a moving floor), the state at first
+it: damping states, the elements in series with the shell, a moving floor), the state at first
 contact and the forces read from a state. The phases, events and outputs of a solve are
 :mod:`rbjax.solve.ode`; the fixed-step paths (:mod:`~rbjax.solve.sampled`,
 :mod:`~rbjax.solve.record_samples`) step the same field.
 
 State y = (δ, δ̇[, internal states]) from first contact, δ(0) = 0, δ̇(0) = √(2 g h_D) (Eq. 10)
-less what a massless floor or the series element take at once.
+less what a massless floor or a massless element in series take at once.
 """
 
 from __future__ import annotations
@@ -49,20 +49,21 @@ def floor_velocity_m_per_s(y, ball, model):
 
 
 def body_velocity_m_per_s(y, ball, model):
-    """Ẋ = δ̇ + u̇ − ẇ, the velocity of the ball's moving part (δ̇ on the rigid floor)."""
+    """Ẋ = δ̇ + u̇ − Σẇ, the velocity of the ball's moving part (δ̇ on the rigid floor without
+    elements in series)."""
     v = y[1] + floor_velocity_m_per_s(y, ball, model)
-    if model.ball_mode is not None:
-        v = v - model.ball_mode_states(y[2:])[1]
-    if model.series is not None:
-        v = v - _series_velocity(y, ball, model)
+    for w_rate in _element_velocities(y, ball, model):
+        v = v - w_rate
     return v
 
 
-def _series_velocity(y, ball, model):
-    """ẇ = −(w + C F_c)/τ of the series element (``rbjax.terms.series_kelvin_voigt``)."""
-    return model.series.velocity_m_per_s(
-        model.series_states(y[2:])[0], contact_force(y, ball, model)
-    )
+def _element_velocities(y, ball, model) -> list:
+    """ẇ of each element in series with the shell (``rbjax.terms.series_element``)."""
+    if not model.series_elements:
+        return []
+    force = contact_force(y, ball, model)
+    states = model.element_states(y[2:])
+    return [e.velocity_m_per_s(z, force) for e, z in zip(model.series_elements, states)]
 
 
 def _vector_field(flux_on: bool, energy: bool = False):
@@ -71,23 +72,26 @@ def _vector_field(flux_on: bool, energy: bool = False):
 
         (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
 
-    with w the ball mode (``rbjax.terms.ball_mode``) and u the floor's surface
-    (``rbjax.terms.floors.kinds``); on the rigid floor without a ball mode δ̈ = Ẍ, Eq. 7. A
-    massless floor (u̇ = F/Z) has ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈; the series
-    element (τẇ = −(w + C F_c), ``rbjax.terms.series_kelvin_voigt``) has
-    ẅ = −(ẇ + C dF_c/dt)/τ, linear in δ̈ too; both are solved for δ̈ in closed form.
-    With ``energy`` four accumulators follow the state (see ``energy_balance``).
+    with w the displacement the elements in series with the shell add and u the floor's surface
+    (``rbjax.terms.floors.kinds``); on the rigid floor without elements in series δ̈ = Ẍ,
+    Eq. 7. Each element in series with the shell (``rbjax.terms.series_element``) adds its
+    ẅ: an inertial one (the ball mode) from its states; a massless one (the series element,
+    τẇ = −(w + C F_c), ``rbjax.terms.series_kelvin_voigt``) as ẅ = c − a dF_c/dt, linear in
+    δ̈; a massless floor (u̇ = F/Z) has ü = (dF/dt)/Z with dF/dt = ∂F/∂y·ẏ, linear in δ̈ too;
+    both are solved for δ̈ in closed form. With ``energy`` four accumulators follow the state
+    (see ``energy_balance``).
     """
 
     def rhs(t, y, args):
         ball, model = args
         d, v, z = _split(y)
         parts = [internal_rates(d, v, z, ball, model)]
-        if model.series is None:
+        elements = tuple(zip(model.series_elements, model.element_states(z)))
+        if not any(e.massless for e, _ in elements):
             force = contact_force(y, ball, model)
         else:
             # F_c and G = ∂F_c/∂δ δ̇ + ∂F_c/∂z ż in one forward pass, H = ∂F_c/∂δ̇ (the damping
-            # laws only) in another: the series element's dF_c/dt = G + H δ̈
+            # laws only) in another: a massless element's dF_c/dt = G + H δ̈
             zd = z[: model.num_damping_states]
             force, g_c = jax.jvp(
                 lambda dd, zz: contact_force_N(dd, v, zz, ball, model), (d, zd), (v, parts[0])
@@ -97,21 +101,18 @@ def _vector_field(flux_on: bool, energy: bool = False):
             )[1]
         thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
         accel = (thrust - force) / dynamic_mass_kg(d, ball)
-        if model.ball_mode is not None:
-            mode_rates = model.ball_mode.rates(model.ball_mode_states(z), force, ball)
-            accel = accel + mode_rates[1]
-            parts.append(mode_rates)
         # Massless elements make δ̈ appear on both sides: each adds −a(G + H δ̈) (+ c) to δ̈,
         # with dF/dt = G + H δ̈ of the force it carries (F depends on δ, δ̇ and the damping
         # states only); δ̈ (1 + Σ a H) = Ẍ + … − Σ a G is solved in closed form.
         denominator = 1.0
-        if model.series is not None:
-            element = model.series
-            w_rate = element.velocity_m_per_s(model.series_states(z)[0], force)
-            parts.append(w_rate[None])
-            a = element.series_compliance_m_per_N / element.series_time_constant_s
-            accel = accel - w_rate / element.series_time_constant_s - a * g_c
-            denominator = denominator + a * h_c
+        for element, states in elements:
+            rates = element.rates(states, force, ball)
+            parts.append(rates)
+            accel = accel + element.acceleration_m_per_s2(states, rates)
+            if element.massless:
+                a = element.force_rate_weight()
+                accel = accel - a * g_c
+                denominator = denominator + a * h_c
         floor = model.floor
         if not floor.rigid:
             states = model.floor_states(z)
@@ -172,13 +173,16 @@ RESTITUTION_ENERGY_FIELD = _vector_field(flux_on=True, energy=True)
 
 
 def initial_state(v0, ball, model: Model, energy: bool = False):
-    """y at first contact: δ = 0, internal states 0, δ̇ = v0 − u̇(0) + ẇ(0). On a massless floor
-    u̇(0) = F(0, δ̇)/Z (the momentum flux, a damper's δ̇ term), and the series element gives
-    ẇ(0) = −C F_c(0, δ̇)/τ: δ̇ + F(0, δ̇)/Z + F_c(0, δ̇)/c_b = v0 is solved by Newton's method
-    (exact in one step where the forces are affine in δ̇)."""
-    zeros = jnp.zeros(model.num_internal_states + (NUM_ENERGY_STATES if energy else 0))
-    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), zeros])
-    if not model.floor.massless and model.series is None:
+    """y at first contact: δ = 0, internal states at their start (0, or an element's
+    ``initial_states``), δ̇ = v0 − u̇(0) + ẇ(0). On a massless floor u̇(0) = F(0, δ̇)/Z (the
+    momentum flux, a damper's δ̇ term), and a massless element in series has ẇ(0) set by the
+    force (the series element's −C F_c(0, δ̇)/τ): δ̇ + F(0, δ̇)/Z + F_c(0, δ̇)/c_b = v0 is solved
+    by Newton's method (exact in one step where the forces are affine in δ̇)."""
+    internal = model.initial_internal_states()
+    zeros = jnp.zeros(NUM_ENERGY_STATES if energy else 0)
+    y0 = jnp.concatenate([jnp.stack([jnp.zeros_like(v0), v0]), internal, zeros])
+    jumps = model.floor.massless or any(e.massless for e in model.series_elements)
+    if not jumps:
         return y0
 
     def residual(v):
@@ -186,8 +190,8 @@ def initial_state(v0, ball, model: Model, energy: bool = False):
         r = v - v0
         if model.floor.massless:
             r = r + model.floor.admittance_m_per_Ns * floor_force_N(y, ball, model)
-        if model.series is not None:
-            r = r - _series_velocity(y, ball, model)
+        for w_rate in _element_velocities(y, ball, model):
+            r = r - w_rate
         return r
 
     v = v0

@@ -2,7 +2,8 @@
 (:mod:`~rbjax.terms.ball`, :mod:`~rbjax.terms.forces`: Reissner stiffness, gas force, dynamic
 mass, momentum flux), the damping laws (:mod:`~rbjax.terms.damping`), the ball's own mode
 (:mod:`~rbjax.terms.ball_mode`) and its overdamped limit
-(:mod:`~rbjax.terms.series_kelvin_voigt`), the floors and their builders
+(:mod:`~rbjax.terms.series_kelvin_voigt`), both elements in series with the shell
+(:mod:`~rbjax.terms.series_element`: a new one is one class), the floors and their builders
 (:mod:`rbjax.terms.floors`), the model that assembles them (:mod:`~rbjax.terms.model`), and the
 parameter layer: each term's declarations (:mod:`~rbjax.terms.declare`) and the walker over a
 whole impact (:mod:`~rbjax.terms.parameters`). :mod:`~rbjax.terms.serialize` writes and reads
@@ -64,6 +65,7 @@ from .parameters import (
     to_vector,
 )
 from .serialize import load_params, model_from_dict, model_to_dict, save_params
+from .series_element import SERIES_ELEMENTS, AbstractSeriesElement
 from .series_kelvin_voigt import SeriesKelvinVoigt
 from .shell_modes import ShellModes, shell_frequencies_Hz
 
@@ -74,6 +76,8 @@ __all__ = [
     "BallMode",
     "from_modal_mass",
     "SeriesKelvinVoigt",
+    "SERIES_ELEMENTS",
+    "AbstractSeriesElement",
     "DAMPING_MODELS",
     "AbstractDamping",
     "HuntCrossley",

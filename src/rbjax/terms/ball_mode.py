@@ -22,15 +22,16 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
-from .declare import NON_NEGATIVE, POSITIVE, Parameter, check_declared
+from .declare import NON_NEGATIVE, POSITIVE, Parameter
+from .series_element import AbstractSeriesElement, free_oscillation
 
 
-class BallMode(eqx.Module):
-    """One mode of the ball in series with the shell (see the module docstring).
+class BallMode(AbstractSeriesElement):
+    """One mode of the ball in series with the shell (see the module docstring): an inertial
+    element, states (w, ẇ).
 
     Attributes:
         mode_mass_ratio: μ = M/m_b ≥ 0, the ball's mass over the mode's mass at the contact
@@ -44,6 +45,9 @@ class BallMode(eqx.Module):
     mode_loss_factor: ArrayLike
     name: ClassVar[str] = "ball-mode"
     num_states: ClassVar[int] = 2
+    state_names: ClassVar[tuple[str, ...]] = ("w", "w_dot")
+    label: ClassVar[str] = "the ball mode"
+    file_key: ClassVar[str] = "ball_mode"
     PARAMETERS: ClassVar = {
         "mode_mass_ratio": Parameter(
             "1",
@@ -58,9 +62,6 @@ class BallMode(eqx.Module):
         ),
     }
 
-    def __check_init__(self):
-        check_declared(self)
-
     def rates(self, states, contact_force_N, ball):
         """(ẇ, ẅ) of the mode's displacement at the contact, driven by −F_c."""
         w, wd = states[0], states[1]
@@ -71,6 +72,24 @@ class BallMode(eqx.Module):
             - omega**2 * w
         )
         return jnp.stack([wd, wdd])
+
+    def velocity_m_per_s(self, states, contact_force_N):
+        """ẇ, a state."""
+        return states[1]
+
+    def acceleration_m_per_s2(self, states, rates):
+        """ẅ, the rate of the state ẇ."""
+        return rates[1]
+
+    def recontact_horizon_s(self):
+        """Two periods of the mode."""
+        return 2.0 / self.mode_frequency_Hz
+
+    def free_change_m(self, states, times_s):
+        """The mode rings freely from (w, ẇ): w(τ) − w."""
+        w, wd = states[0], states[1]
+        omega = 2.0 * jnp.pi * self.mode_frequency_Hz
+        return free_oscillation(w, wd, omega, self.mode_loss_factor, times_s) - w
 
     @classmethod
     def off(cls) -> BallMode:

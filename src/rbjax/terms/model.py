@@ -7,6 +7,7 @@ from typing import ClassVar
 
 import diffrax as dfx
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 from jaxtyping import ArrayLike
@@ -17,6 +18,7 @@ from .damping import DAMPING_MODELS, AbstractDamping
 from .declare import Parameter, check_declared
 from .floors.kinds import AbstractFloor, Rigid
 from .forces import CubicStiffening
+from .series_element import SERIES_ELEMENTS, AbstractSeriesElement
 from .series_kelvin_voigt import SeriesKelvinVoigt
 
 GAS_OPTIONS = ("adiabatic", "none")
@@ -36,6 +38,22 @@ def _as_damping_tuple(damping) -> tuple:
     return damping  # rejected by __check_init__ with a named error
 
 
+def _as_element_tuple(ball_mode, series, series_elements) -> tuple:
+    """The elements in series with the shell: ``ball_mode``, ``series``, then the others."""
+    if ball_mode is not None and not isinstance(ball_mode, BallMode):
+        raise ValueError(f"ball_mode={ball_mode!r} must be None or an rbjax.BallMode")
+    if series is not None and not isinstance(series, SeriesKelvinVoigt):
+        raise ValueError(f"series={series!r} must be None or an rbjax.SeriesKelvinVoigt")
+    if isinstance(series_elements, AbstractSeriesElement):
+        series_elements = (series_elements,)
+    elif isinstance(series_elements, (tuple, list)):
+        series_elements = tuple(series_elements)
+    given = tuple(e for e in (ball_mode, series) if e is not None)
+    if not isinstance(series_elements, tuple):
+        return series_elements  # rejected by __check_init__ with a named error
+    return given + series_elements
+
+
 class Model(eqx.Module):
     """The terms of the impact model. Every extension is off unless given.
 
@@ -52,11 +70,14 @@ class Model(eqx.Module):
         max_deflection_ratio: largest valid δ_max/h; beyond it the small-deflection shell
             model (§2.1: δ_max < δ_c, buckling from δ_c/h ≈ 2 for thin shells) is not valid
             and the result is flagged ``deflection_limit``.
-        ball_mode: ``None`` or a ``BallMode``: the ball's own vibration in series with the
-            shell (``rbjax.terms.ball_mode``; two states).
-        series: ``None`` or a ``SeriesKelvinVoigt``: a massless spring and damper in series
-            with the shell, the ball mode's overdamped limit
-            (``rbjax.terms.series_kelvin_voigt``; one state).
+        series_elements: the elements in series with the shell, each an
+            ``rbjax.AbstractSeriesElement`` (``rbjax.terms.series_element``), in the order of
+            their states. ``Model(ball_mode=BallMode(…))`` (the ball's own vibration,
+            ``rbjax.terms.ball_mode``; two states) and ``Model(series=SeriesKelvinVoigt(…))``
+            (a massless spring and damper, the ball mode's overdamped limit,
+            ``rbjax.terms.series_kelvin_voigt``; one state) put the two built-in ones first
+            (read back as ``model.ball_mode``, ``model.series``); ``series_elements=`` takes
+            one element or a tuple of them (any subclass: a new element is one class).
         floor: an ``rbjax.terms.floors.kinds.AbstractFloor``; ``Rigid()`` (the default) is the
             paper's immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
 
@@ -68,8 +89,7 @@ class Model(eqx.Module):
     stiffening: CubicStiffening | None
     momentum_flux_weight: ArrayLike
     max_deflection_ratio: float = eqx.field(static=True)
-    ball_mode: BallMode | None
-    series: SeriesKelvinVoigt | None
+    series_elements: tuple
     floor: AbstractFloor
     PARAMETERS: ClassVar = {
         "momentum_flux_weight": Parameter(
@@ -95,6 +115,7 @@ class Model(eqx.Module):
         ball_mode: BallMode | None = None,
         floor: AbstractFloor | None = None,
         series: SeriesKelvinVoigt | None = None,
+        series_elements: AbstractSeriesElement | Sequence[AbstractSeriesElement] = (),
     ):
         if blocked_force is not None and momentum_flux_weight is not None:
             raise ValueError("give blocked_force or momentum_flux_weight, not both")
@@ -107,8 +128,7 @@ class Model(eqx.Module):
         self.stiffening = stiffening
         self.momentum_flux_weight = momentum_flux_weight
         self.max_deflection_ratio = max_deflection_ratio
-        self.ball_mode = ball_mode
-        self.series = series
+        self.series_elements = _as_element_tuple(ball_mode, series, series_elements)
         self.floor = Rigid() if floor is None else floor
 
     def __check_init__(self):
@@ -126,10 +146,17 @@ class Model(eqx.Module):
             raise ValueError(f"damping: each law may appear once; got {names}")
         if self.stiffening is not None and not isinstance(self.stiffening, CubicStiffening):
             raise ValueError(f"stiffening={self.stiffening!r} must be None or a CubicStiffening")
-        if self.ball_mode is not None and not isinstance(self.ball_mode, BallMode):
-            raise ValueError(f"ball_mode={self.ball_mode!r} must be None or an rbjax.BallMode")
-        if self.series is not None and not isinstance(self.series, SeriesKelvinVoigt):
-            raise ValueError(f"series={self.series!r} must be None or an rbjax.SeriesKelvinVoigt")
+        if not isinstance(self.series_elements, tuple) or not all(
+            isinstance(e, AbstractSeriesElement) for e in self.series_elements
+        ):
+            raise ValueError(
+                f"series_elements={self.series_elements!r} is not an element in series with the "
+                "shell; valid: an rbjax.AbstractSeriesElement (BallMode, SeriesKelvinVoigt, …) or "
+                "a tuple of them"
+            )
+        names = [e.name for e in self.series_elements]
+        if len(set(names)) != len(names):
+            raise ValueError(f"series_elements: each element may appear once; got {names}")
         if not isinstance(self.floor, AbstractFloor):
             raise ValueError(
                 f"floor={self.floor!r} is not a floor; valid: an "
@@ -154,48 +181,64 @@ class Model(eqx.Module):
 
     @property
     def name(self) -> str:
-        """``paper`` or the damping laws' names joined by ``+``, then ``+stiffening``,
-        ``+ball-mode`` and ``+series-kelvin-voigt`` for the terms present."""
+        """``paper`` or the damping laws' names joined by ``+``, then ``+stiffening`` and
+        ``+name`` of each element in series with the shell (``+ball-mode``,
+        ``+series-kelvin-voigt``, …)."""
         base = "+".join(d.name for d in self.damping) or "paper"
-        terms = (self.stiffening, self.ball_mode, self.series)
-        return base + "".join(f"+{_TERM_NAMES[i]}" for i, t in enumerate(terms) if t is not None)
+        stiffening = "+stiffening" if self.stiffening is not None else ""
+        return base + stiffening + "".join(f"+{e.name}" for e in self.series_elements)
+
+    @property
+    def ball_mode(self) -> BallMode | None:
+        """The ``BallMode`` among the elements in series with the shell (None without one)."""
+        return next((e for e in self.series_elements if isinstance(e, BallMode)), None)
+
+    @property
+    def series(self) -> SeriesKelvinVoigt | None:
+        """The ``SeriesKelvinVoigt`` among the elements in series (None without one)."""
+        return next((e for e in self.series_elements if isinstance(e, SeriesKelvinVoigt)), None)
 
     @property
     def num_damping_states(self) -> int:
         return sum(d.num_states for d in self.damping)
 
     @property
-    def _num_mode_states(self) -> int:
-        return BallMode.num_states if self.ball_mode is not None else 0
-
-    @property
-    def _num_series_states(self) -> int:
-        return SeriesKelvinVoigt.num_states if self.series is not None else 0
+    def num_element_states(self) -> int:
+        """The states of the elements in series with the shell, all together."""
+        return sum(e.num_states for e in self.series_elements)
 
     @property
     def num_internal_states(self) -> int:
-        """States beyond (δ, δ̇): the damping laws', the ball mode's (w, ẇ), the series
-        element's (w), then the floor's."""
-        return (
-            self.num_damping_states
-            + self._num_mode_states
-            + self._num_series_states
-            + self.floor.num_states
-        )
+        """States beyond (δ, δ̇): the damping laws', the elements' in series (the ball mode's
+        (w, ẇ), the series element's (w), …), then the floor's."""
+        return self.num_damping_states + self.num_element_states + self.floor.num_states
 
-    def ball_mode_states(self, internal):
-        """(w, ẇ) of the ball mode from the internal-state vector (empty without one)."""
-        i = self.num_damping_states
-        return internal[i : i + self._num_mode_states]
+    @property
+    def internal_state_names(self) -> tuple[str, ...]:
+        """``term:state`` of every internal state, in the state vector's order."""
+        names = [f"{d.name}:z{i}" for d in self.damping for i in range(d.num_states)]
+        names += [f"{e.name}:{s}" for e in self.series_elements for s in e.state_names]
+        names += [f"{self.floor.name}:q{i}" for i in range(self.floor.num_states)]
+        return tuple(names)
 
-    def series_states(self, internal):
-        """(w,) of the series element from the internal-state vector (empty without one)."""
-        i = self.num_damping_states + self._num_mode_states
-        return internal[i : i + self._num_series_states]
+    def element_states(self, internal) -> list:
+        """The internal-state vector cut into one slice per element in series with the shell."""
+        out, i = [], self.num_damping_states
+        for e in self.series_elements:
+            out.append(internal[i : i + e.num_states])
+            i += e.num_states
+        return out
+
+    def initial_internal_states(self):
+        """The internal states at first contact: the damping laws' and the floor's 0, the
+        elements' ``initial_states``."""
+        parts = [jnp.zeros(self.num_damping_states)]
+        parts += [e.initial_states() for e in self.series_elements]
+        return jnp.concatenate([*parts, jnp.zeros(self.floor.num_states)])
 
     def floor_states(self, internal):
         """The floor's states from the internal-state vector."""
-        i = self.num_damping_states + self._num_mode_states + self._num_series_states
+        i = self.num_damping_states + self.num_element_states
         return internal[i : i + self.floor.num_states]
 
     def split_internal(self, internal) -> list:
@@ -214,17 +257,16 @@ class Model(eqx.Module):
         contact_time_s: float,
         speed_m_per_s: float,
     ) -> dict:
-        """Start values for fitting the parameters of the damping laws, the ball mode and the
-        series element (each term's ``start`` from the shell's stiffness, the ball's mass and
-        the measured restitution, contact time and impact speed)."""
+        """Start values for fitting the parameters of the damping laws and the elements in series
+        (each term's ``start`` from the shell's stiffness, the ball's mass and the measured
+        restitution, contact time and impact speed)."""
         out: dict = {}
-        for term in (*self.damping, self.ball_mode, self.series):
-            if term is not None:
-                out.update(
-                    type(term).start(
-                        stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s
-                    )
+        for term in (*self.damping, *self.series_elements):
+            out.update(
+                type(term).start(
+                    stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s
                 )
+            )
         return out
 
     @property
@@ -234,14 +276,14 @@ class Model(eqx.Module):
 
     @property
     def coupling(self) -> str | None:
-        """Why the shell is pressed by more than the ball's rigid motion, δ = X + w − u (a ball
-        mode, a moving floor), in words; None on the rigid floor without a ball mode. The paths
-        that solve only δ = X (quadrature, phase angle, sampled histories) give it as their
-        reason."""
-        if self.ball_mode is not None:
-            return "the ball mode adds states of its own (the shell is pressed by δ = X + w)"
-        if self.series is not None:
-            return "the series element adds a state of its own (the shell is pressed by δ = X + w)"
+        """Why the shell is pressed by more than the ball's rigid motion, δ = X + w − u (an
+        element in series, a moving floor), in words; None on the rigid floor without one. The
+        paths that solve only δ = X (quadrature, phase angle, sampled histories) give it as
+        their reason."""
+        if self.series_elements:
+            e = self.series_elements[0]
+            states = "a state" if e.num_states == 1 else "states"
+            return f"{e.description()} adds {states} of its own (the shell is pressed by δ = X + w)"
         if not self.floor.rigid:
             return f"the floor ({self.floor.name}) moves under the force (δ = X − u)"
         return None
@@ -251,8 +293,6 @@ class Model(eqx.Module):
         """True if the shell is pressed by more than the ball's rigid motion (``coupling``)."""
         return self.coupling is not None
 
-
-_TERM_NAMES = ("stiffening", BallMode.name, SeriesKelvinVoigt.name)
 
 _SOLVERS = {
     "euler": dfx.Euler,
@@ -320,18 +360,25 @@ class Solver(eqx.Module):
 
 
 def superset_model(
-    base: Model, laws=None, stiffening: bool = True, ball_mode: bool = False, series: bool = False
+    base: Model,
+    laws=None,
+    stiffening: bool = True,
+    ball_mode: bool = False,
+    series: bool = False,
+    elements: Sequence[type[AbstractSeriesElement]] = (),
 ) -> Model:
     """``base`` with every damping law of ``laws`` (default: all registered), the stiffening
-    and (with ``ball_mode``, ``series``) the ball mode and the series element present but
-    switched off (their ``off()`` values, β = 0, μ = 0, C = 0).
+    and the elements in series of ``elements`` (with ``ball_mode``, ``series``: the ball mode
+    and the series element too) present but switched off (their ``off()`` values, β = 0,
+    μ = 0, C = 0).
 
     Models that differ in which of these terms are on share the superset's structure, so one
     compiled program serves them all; the terms a candidate leaves off are held at their
-    off values. The ball mode is opt-in: held off it is exact (w ≡ 0) but carries two states
-    and three Jacobian columns through every solve.
+    off values. The elements are opt-in: held off they are exact (w ≡ 0) but carry their
+    states and Jacobian columns through every solve (the ball mode two states and three
+    columns). The superset holds its elements in the order their classes were defined
+    (``SERIES_ELEMENTS``).
     """
-
     laws = tuple(DAMPING_MODELS.values()) if laws is None else tuple(laws)
     have = {type(d) for d in base.damping}
     damping = base.damping + tuple(law.off() for law in laws if law not in have)
@@ -340,17 +387,19 @@ def superset_model(
         if base.stiffening is not None
         else (CubicStiffening(0.0) if stiffening else None)
     )
-    mode = base.ball_mode if base.ball_mode is not None else (BallMode.off() if ball_mode else None)
-    element = (
-        base.series if base.series is not None else (SeriesKelvinVoigt.off() if series else None)
-    )
+    present = {type(e): e for e in base.series_elements}
+    wanted = set(present) | set(elements)
+    wanted |= {BallMode} if ball_mode else set()
+    wanted |= {SeriesKelvinVoigt} if series else set()
+    order = list(SERIES_ELEMENTS.values())
+    order += [c for c in (*present, *elements) if c not in order]
+    in_series = tuple(present[c] if c in present else c.off() for c in order if c in wanted)
     return Model(
         gas=base.gas,
         damping=damping,
         stiffening=stiff,
         max_deflection_ratio=base.max_deflection_ratio,
         momentum_flux_weight=base.momentum_flux_weight,
-        ball_mode=mode,
-        series=element,
         floor=base.floor,
+        series_elements=in_series,
     )

@@ -5,8 +5,12 @@
                "damping": null | {"name": "zener", "stiffness_ratio": .., "relaxation_time_s": ..},
                "stiffening": null | {"beta": ..},
                "ball_mode": null | {"mode_mass_ratio": .., "mode_frequency_Hz": .., "mode_loss_factor": ..},
-               "series": null | {"series_compliance_m_per_N": .., "series_time_constant_s": ..},
+               "series": {"series_compliance_m_per_N": .., "series_time_constant_s": ..},
                "floor": {"name": "rigid"} | {"name": "infinite-plate", "plate_thickness_m": .., ...}}}
+
+Each element in series with the shell is one table under its class's ``key()`` (``ball_mode``,
+``series``, or a new element's ``name``), absent without it (``ball_mode`` is written null, as
+files have always had it); the tables present are read back in the file's order.
 
 A fit's JSON output carries these two keys, so ``rbjax simulate --params FIT.json`` predicts
 with the fitted model.
@@ -24,12 +28,22 @@ import numpy as np
 
 from .._validate import as_float
 from .ball import Ball
-from .ball_mode import BallMode
 from .damping import DAMPING_MODELS
 from .floors.kinds import FLOOR_MODELS
 from .forces import CubicStiffening
 from .model import Model
-from .series_kelvin_voigt import SeriesKelvinVoigt
+from .series_element import SERIES_ELEMENTS
+
+#: The keys of a model's table besides its elements' (``SERIES_ELEMENTS``' ``key()``).
+MODEL_KEYS = (
+    "gas",
+    "blocked_force",
+    "momentum_flux_weight",
+    "max_deflection_ratio",
+    "damping",
+    "stiffening",
+    "floor",
+)
 
 
 def _fields(module) -> dict:
@@ -93,11 +107,9 @@ def model_to_dict(model: Model) -> dict:
             "stiffening": stiffening,
         }
     )
-    out["ball_mode"] = None if model.ball_mode is None else _fields(model.ball_mode)
-    if (
-        model.series is not None
-    ):  # absent, not null, without one: files written before it stay valid
-        out["series"] = _fields(model.series)
+    out["ball_mode"] = None  # null without a ball mode, as files have always had it
+    for element in model.series_elements:  # the others absent without them
+        out[element.key()] = _fields(element)
     out["floor"] = {"name": model.floor.name, **_fields(model.floor)}
     return out
 
@@ -116,12 +128,18 @@ def model_from_dict(d: dict) -> Model:
     stiffening = d.get("stiffening")
     if stiffening is not None:
         stiffening = _construct("stiffening", CubicStiffening, _table("stiffening", stiffening))
-    ball_mode = d.get("ball_mode")
-    if ball_mode is not None:
-        ball_mode = _construct("ball_mode", BallMode, _table("ball_mode", ball_mode))
-    series = d.get("series")
-    if series is not None:
-        series = _construct("series", SeriesKelvinVoigt, _table("series", series))
+    classes = {cls.key(): cls for cls in SERIES_ELEMENTS.values()}
+    unknown = sorted(set(d) - set(MODEL_KEYS) - set(classes))
+    if unknown:
+        raise ValueError(
+            f"model: unknown keys {unknown}; valid: {', '.join(MODEL_KEYS + tuple(classes))} (an "
+            "element in series with the shell is known once its class is defined)"
+        )
+    elements = tuple(
+        _construct(key, classes[key], _table(key, value))
+        for key, value in d.items()
+        if key in classes and value is not None
+    )
     floor = dict(_table("floor", d.get("floor", {"name": "rigid"})))
     floor_name = floor.pop("name", None)
     if floor_name not in FLOOR_MODELS:
@@ -134,8 +152,7 @@ def model_from_dict(d: dict) -> Model:
         stiffening=stiffening,
         max_deflection_ratio=float(d.get("max_deflection_ratio", 2.0)),
         momentum_flux_weight=None if weight is None else float(weight),
-        ball_mode=ball_mode,
-        series=series,
+        series_elements=elements,
         floor=_construct(f"floor {floor_name!r}", FLOOR_MODELS[floor_name], floor),
     )
 

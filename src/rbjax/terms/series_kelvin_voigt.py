@@ -27,15 +27,16 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
-from .declare import NON_NEGATIVE, POSITIVE, Parameter, check_declared
+from .declare import NON_NEGATIVE, POSITIVE, Parameter
+from .series_element import AbstractSeriesElement
 
 
-class SeriesKelvinVoigt(eqx.Module):
-    """A massless spring and damper in series with the shell (see the module docstring).
+class SeriesKelvinVoigt(AbstractSeriesElement):
+    """A massless spring and damper in series with the shell (see the module docstring): a
+    massless element, state (w,).
 
     Attributes:
         series_compliance_m_per_N: C = 1/k_b ≥ 0 of the element's spring (0: off).
@@ -46,6 +47,10 @@ class SeriesKelvinVoigt(eqx.Module):
     series_time_constant_s: ArrayLike
     name: ClassVar[str] = "series-kelvin-voigt"
     num_states: ClassVar[int] = 1
+    state_names: ClassVar[tuple[str, ...]] = ("w",)
+    massless: ClassVar[bool] = True
+    label: ClassVar[str] = "the series element"
+    file_key: ClassVar[str] = "series"
     PARAMETERS: ClassVar = {
         "series_compliance_m_per_N": Parameter(
             "m/N",
@@ -61,9 +66,6 @@ class SeriesKelvinVoigt(eqx.Module):
         ),
     }
 
-    def __check_init__(self):
-        check_declared(self)
-
     @property
     def stiffness_N_per_m(self):
         """k_b = 1/C (infinite when the term is off)."""
@@ -76,9 +78,30 @@ class SeriesKelvinVoigt(eqx.Module):
             self.series_compliance_m_per_N
         )
 
-    def velocity_m_per_s(self, w, contact_force_N):
+    def velocity_m_per_s(self, states, contact_force_N):
         """ẇ = −(w + C F_c)/τ."""
+        w = states[0]
         return -(w + self.series_compliance_m_per_N * contact_force_N) / self.series_time_constant_s
+
+    def rates(self, states, contact_force_N, ball):
+        """(ẇ,)."""
+        return self.velocity_m_per_s(states, contact_force_N)[None]
+
+    def acceleration_m_per_s2(self, states, rates):
+        """ẅ = −(ẇ + C dF_c/dt)/τ less its dF_c/dt term: −ẇ/τ."""
+        return -(rates[0] / self.series_time_constant_s)
+
+    def force_rate_weight(self):
+        """a = C/τ."""
+        return self.series_compliance_m_per_N / self.series_time_constant_s
+
+    def recontact_horizon_s(self):
+        """Two relaxation times."""
+        return 2.0 * self.series_time_constant_s
+
+    def free_change_m(self, states, times_s):
+        """It relaxes freely, τẇ = −w: w(τ) − w = w (e^(−τ/τ_s) − 1)."""
+        return states[0] * jnp.expm1(-times_s / self.series_time_constant_s)
 
     @classmethod
     def off(cls) -> SeriesKelvinVoigt:
