@@ -72,3 +72,24 @@ def test_import_rbjax_pulls_no_scipy_submodule_nor_matplotlib():
     # at most SciPy's own internals (JAX's dependencies may import some); no SciPy module the
     # library uses where it is needed (signal, stats, optimize, fft, io, linalg)
     assert not set(out["scipy"]) & {"signal", "stats", "optimize", "fft", "io", "linalg"}
+
+
+def test_the_lazy_names_are_the_typed_names_and_all():
+    """``rbjax/__init__.py`` lists each public name three times (for type checkers under
+    ``TYPE_CHECKING``, for ``__getattr__`` in ``_WHERE``, and ``__all__``): they agree, and
+    each loads from the module it names."""
+    import ast
+
+    import rbjax
+
+    tree = ast.parse(open(rbjax.__file__).read())
+    typed = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING":
+            for imp in node.body:
+                assert isinstance(imp, ast.ImportFrom)
+                typed |= {a.name: imp.module for a in imp.names}
+    assert typed == rbjax._MODULE_OF
+    assert set(rbjax.__all__) == set(typed)
+    for name, module in typed.items():
+        assert getattr(rbjax, name) is getattr(__import__(f"rbjax.{module}", fromlist=[name]), name)
