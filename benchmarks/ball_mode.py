@@ -2,11 +2,11 @@
 the issue's bars, the first-maximum peak against the history's maximum, the cost per impact,
 and ``rbjax select`` with the ball-mode candidates (cold and warm).
 
-1. Fit to 0.1, 0.4, 1.0, 1.6 m and predict 0.2 and 0.8 m (the README's held-out split), for
-   the best models without the mode (hunt-crossley/momentum, zener/momentum) and with it; the
-   ball-mode fits start from several mode frequencies (``BALL_MODE_FREQUENCY_STARTS_Hz``),
-   every start is reported and the lowest cost is kept. One superset structure (all terms),
-   one compiled program.
+1. Fit to 0.1, 0.4, 1.0, 1.6 m and predict 0.2 and 0.8 m (the held-out split of
+   docs/guides/fitting.md), for the best models without the mode (hunt-crossley/momentum,
+   zener/momentum) and with it; the ball-mode fits start from several mode frequencies
+   (``BALL_MODE_FREQUENCY_STARTS_Hz``), every start is reported and the lowest cost is kept. One
+   superset structure (all terms), one compiled program.
 2. For the fitted ball-mode model: ``peak_force_N`` (the floor force at the first maximum of
    compression) against the maximum of a 200 kHz history, at every height.
 3. Forward cost per impact: ``rbjax.simulate`` of 1000 heights on the ODE path, with and

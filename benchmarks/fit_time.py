@@ -4,7 +4,7 @@ beside what a scipy user would write (``scipy_fit.py``), and the cost of one LM 
 Runs the command line in subprocesses with ``RBJAX_CACHE_DIR`` pointing at a fresh folder, so
 the first run compiles and the second reads JAX's persistent compilation cache; prints a
 table and writes ``results/fit_time.json`` (with the full selection's table, printed as
-Markdown for the README). Settings: ``--model hunt-crossley+ball-mode --blocked-force
+Markdown for docs/guides/fitting.md). Settings: ``--model hunt-crossley+ball-mode --blocked-force
 momentum``, ``--model kelvin-voigt --blocked-force momentum`` and the full selection (no
 ``--model``). Then, in this process: the scipy fits of the same two models (time, cost ½Σr²
 of the scipy residuals, rms) and rbjax's optimum's cost under the same residuals; the time of
@@ -67,7 +67,7 @@ def _selection_summary(out: dict) -> dict:
 
 
 def selection_markdown(sel: dict) -> str:
-    """The README's selection table from ``rbjax fit --json``'s ``selection``."""
+    """The selection table of docs/guides/fitting.md from ``rbjax fit --json``'s ``selection``."""
     bands = "31.5 | 63 | 125 | 250 | 500 | 1000 Hz (dB)"
     lines = [
         "| model | blocked force | fitted params | history rms (N) | held-out history err (%) | "

@@ -1,4 +1,4 @@
-"""The package's layout (README "Layout"): one package per layer, imports pointing down, no
+"""The package's layout (docs/architecture.md): one package per layer, imports pointing down, no
 import cycle anywhere in src/, nothing below the command line importing ``rbjax.commands``,
 small modules. Read from the source text (every ``import`` statement, lazy and
 ``TYPE_CHECKING`` ones included), so it holds however the modules are loaded."""
@@ -12,7 +12,7 @@ import rbjax
 
 SRC = Path(rbjax.__file__).parent
 
-#: Layers from the bottom up (README "Layout"): a module may import its own layer and the
+#: Layers from the bottom up (docs/architecture.md): a module may import its own layer and the
 #: layers below it, never one above.
 LAYERS = ("terms", "spectrum", "solve", "room", "data", "fit", "studies", "report", "commands")
 #: Top-level helpers beside the packages, and the layers they may import.

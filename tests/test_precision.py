@@ -1,6 +1,6 @@
-"""README "Precision": every entry point that solves or analyses an impact raises the named
-``RuntimeError`` when ``jax_enable_x64`` is switched off after importing rbjax, rather than
-computing in float32.
+"""docs/guides/solving.md, "Precision": every entry point that solves or analyses an impact
+raises the named ``RuntimeError`` when ``jax_enable_x64`` is switched off after importing rbjax,
+rather than computing in float32.
 
 One subprocess (the flag is process-wide, so switching it off here would break the other tests)
 imports rbjax, builds the few inputs that need float64 (an ``ImpactResult``), switches the flag
@@ -21,7 +21,7 @@ import pytest
 
 MESSAGE = "rbjax needs float64"
 
-#: Every name below is called once in the child with x64 off (README "Precision").
+#: Every name below is called once in the child with x64 off (docs/guides/solving.md, "Precision").
 SCRIPT = textwrap.dedent(
     """
     import json
@@ -103,5 +103,6 @@ def test_every_entry_point_is_called(outcomes):
 
 @pytest.mark.parametrize("name", ENTRY_POINTS)
 def test_float32_is_refused_with_the_named_error(outcomes, name):
-    # README "Precision": a RuntimeError naming float64, never a silent float32 result
+    # docs/guides/solving.md, "Precision": a RuntimeError naming float64, never a silent float32
+    # result
     assert outcomes[name].startswith(f"RuntimeError: {MESSAGE}"), outcomes[name]

@@ -1,4 +1,4 @@
-"""No module imports another module's ``_private`` name (README "Layout"): a helper that two
+"""No module imports another module's ``_private`` name (docs/architecture.md): a helper that two
 modules share has a public name in the module where it belongs. Read from the source text like
 ``tests/test_layout.py`` (every ``import`` statement, lazy and ``TYPE_CHECKING`` ones included).
 

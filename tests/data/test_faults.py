@@ -59,7 +59,7 @@ def test_a_clean_record_is_left_as_it_is(drop):
     log = clean.conditioning
     assert log["polarity"] == "as recorded" and log["drift_N_per_s"] is None and log["hum"] is None
     assert log["further_impacts"] == [] and abs(log["offset_N"]) < 0.05
-    # README "What the loader handles": every shipped record comes back bitwise unchanged, the
+    # docs/guides/loader.md: every shipped record comes back bitwise unchanged, the
     # 30 emulated recordings (noise and all) and the raw WAV whose rebound ``condition`` cuts
     shipped = [
         *D.load_examples(),
@@ -71,7 +71,7 @@ def test_a_clean_record_is_left_as_it_is(drop):
 
 
 def test_clean_simulated_records_of_three_lengths_come_back_bitwise_unchanged():
-    """README "What the loader handles", mains hum: no false repair on 3 × 288 simulated clean
+    """docs/guides/loader.md, mains hum: no false repair on 3 × 288 simulated clean
     records of 0.06, 0.1 and 0.3 s. The records: the six drops of the fault tests (the scipy
     solution of Eq. 7, tests/synthetic_records.py) at 48 noise seeds each (0.8 N white noise
     through the 1250 Hz chain), contact 10 ms (+ a fraction of a sample) into the record."""

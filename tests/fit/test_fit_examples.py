@@ -6,7 +6,7 @@ README), so this is a test of prediction, not of recovery: heights 0.2 m and 0.8
 out of the fit and compared with the unfitted paper model (JIS ball, E = 1.6 MPa, adiabatic
 gas, paper blocked force) in contact time, peak force and octave-band L_FE.
 
-Two fitted models are checked, each claim of README "Fitting measured force histories" (the
+Two fitted models are checked, each claim of docs/guides/fitting.md (the
 paragraph "Where they fall short" below the held-out table) at its printed figure:
 hunt-crossley/momentum cuts the history error to 0.54× and 0.22× the paper model's, brings every
 tolerance band within 2.2 dB (the paper's model: 6–9 dB off at 500 Hz) but predicts the contact
@@ -59,22 +59,24 @@ def test_fitted_models_predict_history_peak_and_bands_better_than_the_paper(comp
             np.abs(p.lfe_octave_dB[TOLERANCE_BANDS])
         ), (f, p)
         assert np.all(np.abs(f.lfe_octave_dB[TOLERANCE_BANDS]) < 2.5), f  # measured ≤ 2.3 dB
-        # README "Where they fall short": neither model reproduces the 1 kHz band (measured
-        # 4.8–11 dB off)
+        # docs/guides/fitting.md, "Where they fall short": neither model reproduces the 1 kHz band
+        # (measured 4.8–11 dB off)
         assert abs(f.lfe_octave_dB[5]) > 3.0, f
-    # The peak force, over the two held-out heights (README held-out table, |Δpeak|: hunt-crossley
-    # 0.52, 1.52 %; zener 5.28, 2.41 %, mean 3.85 %; the paper's model 2.67, 5.43 %, mean 4.05 %):
-    # zener is the further at 0.2 m, the nearer at 0.8 m, and the nearer on average.
+    # The peak force, over the two held-out heights (docs/guides/fitting.md, the held-out table,
+    # |Δpeak|: hunt-crossley 0.52, 1.52 %; zener 5.28, 2.41 %, mean 3.85 %; the paper's model 2.67,
+    # 5.43 %, mean 4.05 %): zener is the further at 0.2 m, the nearer at 0.8 m, and the nearer on
+    # average.
     mean_peak = lambda rows: np.mean([abs(r.peak_force_pct) for r in rows])  # noqa: E731
     fitted, paper = zip(*_rows(comparison, label), strict=True)
     assert mean_peak(fitted) < mean_peak(paper), (fitted, paper)
 
 
 def test_hunt_crossley_claims(comparison):
-    """README "Where they fall short", hunt-crossley/momentum: the history error 0.54× and 0.22×
-    the paper model's, every tolerance band within 2.2 dB (the paper's model 6–9 dB off at
-    500 Hz), the contact time ~3 % long against the paper model's 1–2 %; its peak force nearer
-    than the paper model's at each height (the table: +0.52, +1.52 % against +2.67, +5.43 %)."""
+    """docs/guides/fitting.md, "Where they fall short", hunt-crossley/momentum: the history
+    error 0.54× and 0.22× the paper model's, every tolerance band within 2.2 dB (the paper's model
+    6–9 dB off at 500 Hz), the contact time ~3 % long against the paper model's 1–2 %; its peak
+    force nearer than the paper model's at each height (the table: +0.52, +1.52 % against +2.67,
+    +5.43 %)."""
     stated_ratio = {0.2: 0.54, 0.8: 0.22}
     for f, p in _rows(comparison, "hunt-crossley/momentum"):
         assert f.history_error_pct / p.history_error_pct < stated_ratio[f.height_m] + 0.05, (f, p)
@@ -88,8 +90,8 @@ def test_hunt_crossley_claims(comparison):
 
 
 def test_zener_claims(comparison):
-    """README "Where they fall short", zener/momentum: the contact time within 0.6 % (better
-    than the paper model's), the peak force 2–5 % low."""
+    """docs/guides/fitting.md, "Where they fall short", zener/momentum: the contact time
+    within 0.6 % (better than the paper model's), the peak force 2–5 % low."""
     for f, p in _rows(comparison, "zener/momentum"):
         assert abs(f.contact_time_pct) < 0.6, f
         assert abs(f.contact_time_pct) < abs(p.contact_time_pct), (f, p)

@@ -4,7 +4,8 @@ the faults real force plates produce, one set of files holding every fault class
 again: E within 1 % and the damping within 2σ of the clean fit, what conditioning did in the
 report, the clipped file excluded (refused with --strict). The same drops recorded at 48 and
 25.6 kHz condition to the records of 44.1 kHz (a fit at another rate compiles another
-program, ~25 s here: measured by benchmarks/other_rates.py instead, figures in the README).
+program, ~25 s here: measured by benchmarks/other_rates.py instead, figures in
+docs/guides/loader.md).
 
 Fits are costly: the clean and the faulty set share one compiled program (same shapes).
 The per-fault checks without a fit are tests/data/test_faults.py.
@@ -198,7 +199,7 @@ def test_the_same_drops_at_other_rates_condition_to_the_same_records(drops, rate
     b = prepare_data(recordings(long_records(rate)[1], rate))
     assert b.rate_Hz == rate and b.conditioning[0]["rate_Hz"] == rate
     fa, fb = record_features(a.force_N, a.rate_Hz), record_features(b.force_N, b.rate_Hz)
-    # README "What the loader handles", row "48 kHz, 25.6 kHz": the conditioned records match
+    # docs/guides/loader.md, row "48 kHz, 25.6 kHz": the conditioned records match
     # 44.1 kHz's, peak to 0.2 %, contact time to 20 µs (measured 0.09 %, 4 µs), L_FE to 0.03 dB
     # at 31.5–250 Hz (measured 0.023) and 0.11 dB at 500 Hz and 1 kHz (measured 0.105 at 500 Hz:
     # the 10 cm drop at 25.6 kHz, a band at −2 dB; 0.097 at 1 kHz). The octave bands are

@@ -1,5 +1,5 @@
 """The fitted ball mode read in physical terms, and parameters on a bound of their fit range
-(README "With the ball mode")."""
+(docs/guides/fitting.md, "With the ball mode")."""
 
 from __future__ import annotations
 

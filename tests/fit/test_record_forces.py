@@ -1,4 +1,4 @@
-"""The fit's sampled path (README "Fitting measured force histories"): the force at a record's
+"""The fit's sampled path (docs/guides/fitting.md): the force at a record's
 own samples by fixed steps (``rbjax.solve.record_samples``) and the fit's Jacobian built from
 it (``rbjax.fit.record_forces``), against the independent scipy references (paper Eq. 7 and
 the two-degree-of-freedom ball-mode impact and the series element's, DOP853 at rtol 1e-12),
@@ -82,7 +82,7 @@ def _record_samples(h, shift_s, model):
 _RECORD_SAMPLES = jax.jit(record_samples, static_argnums=(4, 5, 6))
 
 
-#: README "Fitting measured force histories", the sampled path: it agrees with the independent
+#: docs/guides/fitting.md, the sampled path: it agrees with the independent
 #: scipy references to ≤ 1e-6 of the peak force at every sample, "measured ~1e-11 without the
 #: ball mode, ~2e-9 with it": asserted at 10× the measured figures.
 SAMPLED_REL = {"ball mode": 2e-8, "no ball mode": 1e-10}
@@ -95,7 +95,7 @@ def _sampled_rel(case):
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("shift_s", [0.0100, 0.01034567])
 def test_samples_match_the_scipy_reference_at_every_sample(case, shift_s):
-    """The stated agreement at every sample (README "Fitting measured force histories", the
+    """The stated agreement at every sample (docs/guides/fitting.md, the
     sampled path), the first sample by the box rule of the fit, on and off the sample grid."""
     model, reference = CASES[case]
     t = np.arange(N) / RATE_HZ
@@ -141,7 +141,7 @@ TRUE = {
 
 
 def test_sampled_and_ode_paths_of_the_fit_agree():
-    """The fit's force on both paths (README "Fitting measured force histories", the sampled
+    """The fit's force on both paths (docs/guides/fitting.md, the sampled
     path: "and with the fit's diffrax path to the same", ~2e-9 of the peak force with the ball
     mode, asserted at 10×): the sampled path and the diffrax ODE with its events
     (``rbjax.fit.program.sample_force``, the ``method="ode"`` prediction) at the records'

@@ -305,8 +305,9 @@ def test_report_explains_the_differences_and_lists_tolerances_and_figures(run, r
         assert f"]({name})" in report
 
 
-#: README "The paper's measured ball": the table, each model's E (MPa), contact times at 10 / 100
-#: / 160 cm (ms), held-out rms (σ), predicted 160 cm peak ± sd (N) and its excess over 1800 N (%).
+#: docs/guides/summary-and-design.md, "The paper's measured ball": the table, each model's
+#: E (MPa), contact times at 10 / 100 / 160 cm (ms), held-out rms (σ), predicted 160 cm peak ± sd
+#: (N) and its excess over 1800 N (%).
 MEASURED_BALL_TABLE = {
     "paper": (1.719, (21.17, 19.83, 19.27), 1.98, 2079, 8, 15.5),
     "paper+stiffening": (1.700, (21.26, 19.79, 19.17), 2.69, 2111, 37, 17.3),
@@ -315,9 +316,10 @@ MEASURED_BALL_TABLE = {
 
 
 def test_measured_ball_table_is_the_readme_table(results):
-    """README "The paper's measured ball" (the table; recommended: the elastic ``paper``; the bar,
-    within 5 % of 1800 N, missed): every figure at its printed digits (within one unit of the
-    last printed digit, two for the ± of a peak), from the reproduce run's results.json."""
+    """docs/guides/summary-and-design.md, "The paper's measured ball" (the table;
+    recommended: the elastic ``paper``; no model within 5 % of 1800 N): every figure at its printed
+    digits (within one unit of the last printed digit, two for the ± of a peak), from the reproduce
+    run's results.json."""
     measured = results["measured_ball"]
     assert measured["recommended"] == "paper" and measured["bar_met"] is False
     assert set(measured["models"]) == set(MEASURED_BALL_TABLE)
@@ -333,10 +335,10 @@ def test_measured_ball_table_is_the_readme_table(results):
 
 
 def test_measured_ball_elastic_row_against_the_independent_solver():
-    """README "The paper's measured ball", the recommended row: the elastic model with the
-    printed E = 1.719 MPa (gas on, paper blocked force) gives 21.17 / 19.83 / 19.27 ms and
-    2079 N at 160 cm by the scipy solution of Eq. 7 (tests/scipy_reference.py) too. (E printed
-    to 4 digits moves t_c by < 0.003 ms and the peak by < 0.4 N.)"""
+    """docs/guides/summary-and-design.md, "The paper's measured ball", the recommended row:
+    the elastic model with the printed E = 1.719 MPa (gas on, paper blocked force) gives 21.17 /
+    19.83 / 19.27 ms and 2079 N at 160 cm by the scipy solution of Eq. 7 (tests/scipy_reference.py)
+    too. (E printed to 4 digits moves t_c by < 0.003 ms and the peak by < 0.4 N.)"""
     ball = rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=1.719e6)
     _, tc_ms, _, peak, _, _ = MEASURED_BALL_TABLE["paper"]
     for h, tc in zip((0.1, 1.0, 1.6), tc_ms, strict=True):

@@ -138,16 +138,17 @@ def test_rating_is_smooth_in_thickness(thickness_program):
     change = np.diff(values)
     by_slope = 0.5 * (np.array(slopes[1:]) + np.array(slopes[:-1])) * 0.01
     np.testing.assert_allclose(change, by_slope, atol=0.05)  # measured ≤ 0.03 dB
-    # the published trend (heavier slabs rate lower) holds from 150 to 200 mm; the README room
-    # section says where and why it does not above (the first mode nears the 63 Hz octave)
+    # the published trend (heavier slabs rate lower) holds from 150 to 200 mm; the room page
+    # (docs/guides/room.md) says where and why it does not above (the first mode nears the
+    # 63 Hz octave)
     at = dict(zip(steps, values))
     assert at[0.15] > at[0.18] > at[0.2]
-    # and the model's departure from it (README): it rises again from 210 mm
+    # and the model's departure from it (docs/guides/room.md): it rises again from 210 mm
     assert at[0.2] < at[0.21] < at[0.24]
 
 
 def test_readme_predicted_levels(bare, thickness_program):
-    # README, "Impact sound in the room below": the ball from 1 m on a bare C30/37 slab of
+    # docs/guides/room.md: the ball from 1 m on a bare C30/37 slab of
     # 4 m × 5 m at its centre, room 50 m³, T = 0.5 s; 63-500 Hz octaves as printed (0.1 dB)
     rating_bands = slice(1, 5)
     np.testing.assert_allclose(bare.level_dB[rating_bands], [69.9, 63.8, 54.1, 42.2], atol=0.05)

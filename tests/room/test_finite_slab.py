@@ -183,7 +183,7 @@ def test_mode_indices_are_m_major():
 
 
 def test_centre_of_the_150_mm_slab_drives_no_mode_of_the_63_Hz_octave():
-    # README, "Impact sound in the room below": the modes of the 4 m × 5 m, 150 mm slab in
+    # docs/guides/room.md: the modes of the 4 m × 5 m, 150 mm slab in
     # 44.2-88.4 Hz are (1,2) and (2,1), both with a node at the centre
     slab = Slab(0.15, **CONCRETE, length_x_m=4.0, length_y_m=5.0)
     orders = mode_orders(slab, 88.4)

@@ -10,7 +10,7 @@ linear-spring ball, the finite-difference points of the gradient check) is one b
 program; the floating floor with the stiff layer is the 2-mode ModalFloor of the scalar,
 energy and history checks.
 
-Measured (default Solver(), rtol 1e-9), with what the tests assert (README "Floors" states the
+Measured (default Solver(), rtol 1e-9), with what the tests assert (docs/guides/floors.md states the
 measured figures; each assertion names it): contact time, peak force and restitution agree with
 the reference to ≤ 3.8e-10 relative on every dashpot (Z = 500, 2000, 1e5) and on the modal
 floor, both conventions, h = 0.1 and 1 m (asserted 1e-9), the injected energy to ≤ 7.3e-10
@@ -47,7 +47,7 @@ BALL = rbjax.JIS_RUBBER_BALL
 HEIGHTS = (0.1, 1.0)
 CONVENTIONS = ("paper", "momentum")
 WEIGHT = {"paper": 0.0, "momentum": 1.0}
-#: rbjax's default solver against the rtol-1e-12 reference (README "Floors": ≤ 4e-10 for the
+#: rbjax's default solver against the rtol-1e-12 reference (docs/guides/floors.md: ≤ 4e-10 for the
 #: contact time, peak force and restitution, ≤ 1e-9 for the injected energy, ≤ 7e-10 for
 #: Dashpot(1e12) against the rigid floor; measured 3.8e-10, 7.3e-10, 6.8e-10).
 REL = 1e-9
@@ -90,7 +90,8 @@ FD_Z, FD_E, FD_STEP, FD_RTOL = 2000.0, float(BALL.youngs_Pa), 3e-3, 1e-13
 
 # ------------------------------------------------------------------------------------------------
 # One dashpot batch: (label, height, Z, w, ball) per row. Every assertion against the reference
-# below guards README "Floors" ("Against an independent scipy model of the ball on a moving floor").
+# below guards docs/guides/floors.md ("Against an independent scipy model of the ball on a
+# moving floor").
 
 
 def _dashpot_rows():
@@ -151,7 +152,7 @@ def test_dashpot_matches_reference(z, bf):
             assert _rel(got[("dashpot", z, bf, h)][q], getattr(ref, q)) < REL, (
                 q,
                 h,
-            )  # README "Floors": ≤ 4e-10
+            )  # docs/guides/floors.md: ≤ 4e-10
 
 
 @functools.cache
@@ -179,7 +180,7 @@ def test_modal_floor_matches_reference(bf):
         assert _rel(float(out.max_deflection_m[j]), _global_max_deflection(ref)) < REL
         assert (
             _rel(float(energy.floor_energy_J[j]), ref.injected_energy_J) < ENERGY_REL
-        )  # README "Floors": ≤ 1e-9
+        )  # docs/guides/floors.md: ≤ 1e-9
         assert _rel(float(out.peak_force_N[j]), ref.peak_force_N) < REL
 
 
@@ -220,7 +221,7 @@ def test_injected_energy_dashpot():
         ref = reference(float(h), ("dashpot", float(z)), "momentum")
         assert (
             _rel(float(e.floor_energy_J[i]), ref.injected_energy_J) < ENERGY_REL
-        )  # README "Floors": ≤ 1e-9
+        )  # docs/guides/floors.md: ≤ 1e-9
         assert _rel(float(e.rebound_energy_J[i]), ref.restitution**2 * ref.impact_energy_J) < REL
 
 
@@ -244,7 +245,7 @@ def test_stiff_dashpot_is_rigid():
     for i, h in enumerate(HEIGHTS):
         ref = reference_impact(h, BALL)
         for q in QUANTITIES:
-            # README "Floors": Dashpot(1e12) is the rigid floor to ≤ 7e-10
+            # docs/guides/floors.md: Dashpot(1e12) is the rigid floor to ≤ 7e-10
             assert _rel(got[("rigid-limit", h)][q], getattr(ref, q)) < RIGID_REL, q
             assert _rel(got[("rigid-limit", h)][q], float(getattr(rigid, q)[i])) < RIGID_REL, q
 
@@ -270,7 +271,8 @@ def test_linear_spring_on_dashpot_closed_form(z):
             < 1e-12 * v0 / wd
         )
         for q in QUANTITIES:
-            assert _rel(got[("linear", z, h)][q], exact[q]) < REL, q  # README "Floors": ≤ 4e-10
+            # docs/guides/floors.md: ≤ 4e-10
+            assert _rel(got[("linear", z, h)][q], exact[q]) < REL, q
 
 
 def test_many_mode_plate_approaches_infinite_plate():
@@ -293,7 +295,7 @@ def test_many_mode_plate_approaches_infinite_plate():
             assert _rel(float(getattr(out, q)[i]), getattr(ref, q)) < 5e-3, (
                 q,
                 h,
-            )  # README "Floors": 0.1–0.4 %
+            )  # docs/guides/floors.md: 0.1–0.4 %
 
 
 def _maxima(f):
@@ -309,7 +311,7 @@ def _floor_histories(floor, times):
     "floor, n_peaks", [(STIFF, 2), (SOFT, 1)], ids=["stiff-layer", "soft-layer"]
 )
 def test_floating_floor_force_peaks(floor, n_peaks):
-    """README "Floors": a floating floor with a soft layer (1 MN/m³) gives one force peak and
+    """docs/guides/floors.md: a floating floor with a soft layer (1 MN/m³) gives one force peak and
     with a stiffer one (10 MN/m³) two, 947 N and the global 1070 N at 1 m. Counted on rbjax's
     own 20 kHz history (paper convention), which must follow the reference's to 1e-7 of the
     peak; the reference finds the same maxima (one ModalFloor more: one ~10 s compile more)."""
@@ -324,7 +326,7 @@ def test_floating_floor_force_peaks(floor, n_peaks):
             float(np.max(np.abs(np.asarray(hist.force_N[i]) - ref.force_N(times))))
             < 1e-7 * ref.peak_force_N
         )
-    if floor is STIFF:  # the two maxima at 1 m as the README prints them
+    if floor is STIFF:  # the two maxima at 1 m as docs/guides/floors.md prints them
         first, second = reference(1.0, _modal_key(STIFF)).force_maxima_N
         assert abs(first - 947.0) < 0.5 and abs(second - 1070.0) < 5.0, (first, second)
 
@@ -334,8 +336,9 @@ def test_floating_floor_force_peaks(floor, n_peaks):
 
 
 def test_contact_time_gradients():
-    """README "Floors": jax.grad of the contact time w.r.t. Z and E matches finite differences of
-    the independent reference to ≤ 3e-9 (measured 1e-10 and 2.8e-9; asserted 1e-8)."""
+    """docs/guides/floors.md: jax.grad of the contact time w.r.t. Z and E matches finite
+    differences of the independent reference to ≤ 3e-9 (measured 1e-10 and 2.8e-9; asserted
+    1e-8)."""
 
     def contact_time(z, e):
         return rbjax.simulate(

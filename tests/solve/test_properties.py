@@ -11,8 +11,8 @@ with the same drops from twice the height, with twice the Young's modulus and wi
   every point with δ_max < 2h must be solved and every point beyond it flagged
   ``deflection_limit``, so the masked comparisons below check exactly the valid points and
   cannot pass by a whole batch failing;
-* statuses: ok outputs are finite; every non-ok status has NaN outputs (README, "Failures are
-  flagged, never plausible");
+* statuses: ok outputs are finite; every non-ok status has NaN outputs (docs/guides/solving.md,
+  "Failures are flagged, never plausible");
 * energy is never gained: 0 < restitution ≤ 1 (paper §2.3: the momentum flux of Eq. 7 only
   dissipates; damping only dissipates);
 * the elastic model (paper Eq. 7): contact time decreases and peak force increases with drop

@@ -204,8 +204,8 @@ def test_auto_under_jit_uses_the_quadrature():
 
 
 def test_a_model_is_the_one_calling_convention():
-    """simulate(h, ball, model) (README "Using it"): the keywords are a shortcut that builds the
-    same Model; giving both is refused by name."""
+    """simulate(h, ball, model) (docs/getting-started.md): the keywords are a shortcut that
+    builds the same Model; giving both is refused by name."""
     model = rbjax.Model(gas="none", blocked_force="momentum", damping=rbjax.KelvinVoigt(30.0))
     by_model = rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model)
     by_keywords = rbjax.simulate(

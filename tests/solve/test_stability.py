@@ -232,9 +232,9 @@ def test_forward_derivatives_elastic_match_finite_differences(elastic_tangents):
 
 
 def test_reverse_gradient_tiny_height():
-    """jax.grad at the default (reverse-mode) solver, as in the README, for a 1 mm drop: contact
-    time with respect to E and M (the same traced structure as test_impact_reference's 1 m case,
-    so the compiled gradient is shared within a test session)."""
+    """jax.grad at the default (reverse-mode) solver, as in docs/getting-started.md, for a
+    1 mm drop: contact time with respect to E and M (the same traced structure as
+    test_impact_reference's 1 m case, so the compiled gradient is shared within a test session)."""
     e0, m0 = float(BALL.youngs_Pa), float(BALL.mass_kg)
 
     def outputs(e, m):

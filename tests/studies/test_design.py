@@ -39,7 +39,7 @@ def test_items_and_geometries():
     assert len(ITEMS) == 8 and ITEMS[0] == "lfe_31.5_dB"
     iso = GEOMETRIES["iso"]
     assert 2 * iso.radius_m == pytest.approx(0.180) and iso.wall_m == pytest.approx(0.030)
-    # the JIS ball's rubber: M over the shell volume, 1148 kg/m³ (README, shell modes)
+    # the JIS ball's rubber: M over the shell volume, 1148 kg/m³ (docs/guides/physics.md)
     assert _density(GEOMETRIES["jis"]) == pytest.approx(1148, abs=1)
     assert RUBBER_BALL_TOLERANCES.mass.nominal == 2.5
 

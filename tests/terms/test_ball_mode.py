@@ -195,8 +195,8 @@ def test_jacfwd_of_contact_time_matches_finite_differences(reference_fd):
 
 
 class ReverseModeNaN(Exception):
-    """The known failure of reverse mode with a ball mode (README "The ball's own vibration"):
-    Lineax refuses the NaN that reaches the event's linear solve."""
+    """The known failure of reverse mode with a ball mode (docs/guides/physics.md, "The ball's
+    own vibration"): Lineax refuses the NaN that reaches the event's linear solve."""
 
 
 @pytest.mark.xfail(
@@ -209,8 +209,8 @@ class ReverseModeNaN(Exception):
 )
 def test_grad_of_contact_time_matches_finite_differences(reference_fd):
     # Only that failure is expected: a finite but wrong gradient fails the assertion below, and
-    # a working one passes it, so strict xfail reports both (README: "an expected-failure test
-    # keeps it visible").
+    # a working one passes it, so strict xfail reports both (docs/guides/physics.md: "an
+    # expected-failure test keeps it visible").
     try:
         g = np.asarray(jax.jit(jax.grad(_grad_outputs))(jnp.asarray(GRAD[1:])))
     except jax.errors.JaxRuntimeError as err:

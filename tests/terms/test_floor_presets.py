@@ -477,7 +477,7 @@ def test_cli_help_lists_the_floor_presets():
     assert all(name in out for name in FLOOR_PRESETS)
 
 
-#: README "Floors", the preset table: (peak force / blocked over 0.5, 1.0, 1.5 m and w = 0, 1;
+#: docs/guides/floors.md, the preset table: (peak force / blocked over 0.5, 1.0, 1.5 m and w = 0, 1;
 #: restitution at 1 m, w = 0; W_floor / impact energy in %), as printed there.
 PRESET_TABLE = {
     "concrete-150mm": ((0.9993, 0.9994), 0.888, (0.2, 0.2)),
@@ -516,7 +516,7 @@ def preset_table():
 
 @pytest.mark.parametrize("name", list(PRESET_TABLE))
 def test_preset_table_peak_restitution_and_floor_energy(preset_table, name):
-    """README "Floors": each row of the preset table to its printed digits (OSB and chipboard
+    """docs/guides/floors.md: each row of the preset table to its printed digits (OSB and chipboard
     lower the peak force by 31 % and 17 % and the restitution from 0.89 to 0.38 and 0.62 at 1 m)."""
     rows, on, energy, blocked = preset_table
     (lo, hi), restitution, (e_lo, e_hi) = PRESET_TABLE[name]
@@ -531,7 +531,7 @@ def test_preset_table_peak_restitution_and_floor_energy(preset_table, name):
 
 
 def test_energy_balance_closes_on_every_preset_and_height(preset_table):
-    """README "Floors": |residual| / impact energy ≤ 1.0e-9 on every floor and height of the
+    """docs/guides/floors.md: |residual| / impact energy ≤ 1.0e-9 on every floor and height of the
     table (≤ 3.0e-10 with blocked_force="momentum"; 1.6e-10 on osb-15mm at 1 m); asserted at
     2e-9 and 1e-9."""
     rows, _, energy, _ = preset_table

@@ -127,7 +127,7 @@ def test_the_superset_with_its_extra_terms_off_is_the_elastic_model(blocked_forc
     assert np.all(res.status == 0)
     for i, h in enumerate(heights):
         ref = reference_impact(float(h), JIS_RUBBER_BALL, blocked_force=blocked_force, rtol=1e-12)
-        # README "Fitting measured force histories": the superset "agrees with the elastic model
+        # docs/guides/fitting.md: the superset "agrees with the elastic model
         # to 1e-9" (measured ≤ 1.7e-10 against the independent reference)
         for q in ("contact_time_s", "peak_force_N", "restitution"):
             assert float(getattr(res, q)[i]) == pytest.approx(getattr(ref, q), rel=1e-9), q

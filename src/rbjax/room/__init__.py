@@ -1,10 +1,10 @@
-"""From the ball's force to the rating in the room below (README "Impact sound in the room
-below"): the floor's injected energy (:mod:`~rbjax.room.injection`), radiation
-(:mod:`~rbjax.room.radiation`), the finite slab's modes at low frequencies
-(:mod:`~rbjax.room.finite_slab`, :mod:`~rbjax.room.mode_radiation`), the receiving room and
-the Fast detector (:mod:`~rbjax.room.detector`), chained in :mod:`~rbjax.room.chain` (scene terms in
-:mod:`~rbjax.room.scene`), the standards' arithmetic (:mod:`~rbjax.room.standards`: ISO 16283-2
-normalisation, ISO 717-2 Annex D rating) and ``impact_sound`` (:mod:`~rbjax.room.result`).
+"""From the ball's force to the rating in the room below (docs/guides/room.md): the floor's
+injected energy (:mod:`~rbjax.room.injection`), radiation (:mod:`~rbjax.room.radiation`), the finite
+slab's modes at low frequencies (:mod:`~rbjax.room.finite_slab`, :mod:`~rbjax.room.mode_radiation`),
+the receiving room and the Fast detector (:mod:`~rbjax.room.detector`), chained in
+:mod:`~rbjax.room.chain` (scene terms in :mod:`~rbjax.room.scene`), the standards' arithmetic
+(:mod:`~rbjax.room.standards`: ISO 16283-2 normalisation, ISO 717-2 Annex D rating) and
+``impact_sound`` (:mod:`~rbjax.room.result`).
 
 Layer: above ``solve`` (it simulates the impact) and ``spectrum``; below ``data``."""
 

@@ -8,7 +8,7 @@ floor is an equinox Module, a term like the others: ``Rigid`` (the default, toda
 exactly), ``Dashpot`` (a real point impedance Z: u̇ = F/Z), ``InfinitePlate`` (the thin plate's
 Z = 8√(B′m″)) and the modal floors (modes at the drive point: ``ModalFloor``, values given;
 ``rbjax.terms.floors.floating.FloatingFloor``, a floating floor of declared parameters). The
-coupled equations are derived in :mod:`rbjax.solve.ode` and the README ("Floors").
+coupled equations are derived in :mod:`rbjax.solve.ode` and docs/guides/floors.md.
 
 A floor tells the solver three things about its drive point, for a floor force F and the
 floor's states s (all zero at first contact):
