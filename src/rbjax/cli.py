@@ -15,7 +15,7 @@ import os
 import pkgutil
 import sys
 
-from . import commands
+from . import __version__, commands
 from .commands import ArgumentParser, UsageError, add_json_flag
 
 
@@ -27,8 +27,6 @@ def command_modules() -> list[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with one subparser per discovered command."""
-    from . import __version__
-
     parser = ArgumentParser(
         prog="rbjax",
         description=(
@@ -67,7 +65,7 @@ def compile_cache_dir() -> str | None:
 
 
 def _enable_compile_cache() -> None:
-    import jax
+    import jax  # lazy: JAX costs ~1 s at import, which --help and --version do not need
 
     path = compile_cache_dir()
     # Off, or the caller chose one. (JAX's config options are attributes set at run time;
