@@ -35,3 +35,24 @@ def test_the_api_page_lists_every_public_name(module):
     assert [name for name in listed if name not in public] == []  # not public (any more)
     assert len(listed) == len(set(listed))
     assert re.search(rf"^::: {re.escape(module)}$", text, flags=re.MULTILINE)  # the docstring
+
+
+def test_sphinx_roles_become_optional_autorefs():
+    """docs/_hooks/sphinx_roles.py: a role becomes a link that may stay unresolved without a
+    warning (``optional``), showing the name as written, or its last part after ``~``."""
+    import importlib.util
+
+    import griffe
+
+    path = API.parent / "_hooks" / "sphinx_roles.py"
+    spec = importlib.util.spec_from_file_location("sphinx_roles", path)
+    assert spec is not None and spec.loader is not None
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    scope = griffe.Module("scope")
+    text = "see :func:`rbjax.simulate` and :class:`~rbjax.terms.ball.Ball`, not ``code``"
+    assert hook.convert(scope, text) == (
+        'see <autoref identifier="rbjax.simulate" optional><code>rbjax.simulate</code></autoref>'
+        ' and <autoref identifier="rbjax.terms.ball.Ball" optional><code>Ball</code></autoref>,'
+        " not ``code``"
+    )
