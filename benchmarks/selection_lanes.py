@@ -98,6 +98,14 @@ def main() -> None:
         float(np.max(np.abs(b.fold_errors_pct / a.fold_errors_pct - 1)))
         for a, b in zip(seq.candidates, lanes.candidates)
     ]
+    per_candidate = {
+        a.label: {
+            "sequential_folds_pct": a.fold_errors_pct.tolist(),
+            "lanes_folds_pct": b.fold_errors_pct.tolist(),
+            "largest_relative_difference": d,
+        }
+        for a, b, d in zip(seq.candidates, lanes.candidates, differences)
+    }
     report = {
         "candidates": len(seq.candidates),
         "steps_per_round": STEPS_PER_ROUND,
@@ -118,6 +126,7 @@ def main() -> None:
             "total_lane_steps": sum(sum(c["steps"][: c["asked"]]) for c in calls),
         },
         "largest_relative_difference_of_held_out_errors": max(differences),
+        "per_candidate": per_candidate,
         "estimate_on_h100_s": {
             "sequential": seq_depth * H100_STEP_S,
             "lanes": lane_depth * H100_STEP_S,
@@ -145,8 +154,10 @@ def main() -> None:
     print(
         table(["run (this CPU)", "wall (s)", "recommended", "calls", "lanes/call", "depth"], rows)
     )
+    worst = max(per_candidate, key=lambda k: per_candidate[k]["largest_relative_difference"])
     print(
         f"held-out errors, lanes vs sequential: largest relative difference {max(differences):.1e}"
+        f" ({worst})"
     )
     print(
         f"estimate on an H100 at {H100_STEP_S * 1e3:.0f} ms a step: {seq_depth} → {lane_depth} "
