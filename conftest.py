@@ -4,9 +4,10 @@ own kernel, which inherits this process's environment, as do the xdist workers).
 Almost all of the suite's time is XLA compiling diffrax solves once per process, so:
 
 * ``JAX_DISABLE_MOST_OPTIMIZATIONS=1`` (JAX's own option: LLVM backend optimisation level 0,
-  no expensive LLVM passes). The programs run once or a few times each, so a cheaper compile
-  wins over faster code; the numbers do not change beyond round-off, and every test keeps its
-  tolerance against its independent reference.
+  no expensive LLVM passes) for the notebooks' kernels, smoke runs whose programs run once or a
+  few times each, so a cheaper compile wins over faster code. The tests under tests/ compile at
+  XLA's default level, as users do, unless marked ``xla_smoke`` (tests/conftest.py sets the
+  level per module and test, and this variable for the subprocesses a test starts).
 * One JAX persistent compilation cache per pytest session, in a temporary folder shared by the
   xdist workers and the notebooks' kernels: a program compiled by one process (the paper model's
   solves, the fits of the shipped example set) is read back by the others instead of compiled
