@@ -82,8 +82,6 @@ def test_no_module_imports_another_modules_private_name():
 #: above its block of imports): ``lazy: <what it costs at import>`` or ``cycle``. The command
 #: line's modules import the library inside their ``run`` by design (an instant ``--help``).
 REASON = ("lazy", "cycle")
-#: Modules another session is editing (the room below, issue 33): to say why, then leave this list.
-PENDING = {"rbjax.room.figure", "rbjax.room.result"}
 
 
 def unexplained_imports(source: str) -> list[int]:
@@ -123,7 +121,6 @@ def test_imports_inside_functions_say_why():
         name: lines
         for name, path in MODULES.items()
         if not name.startswith(("rbjax.commands", "rbjax.cli"))
-        and name not in PENDING
         and (lines := unexplained_imports(path.read_text()))
     }
     assert found == {}

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .._validate import as_float
+from ..solve.outcome import STATUS_NAMES
 from ..solve.simulate import simulate, trajectory
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
@@ -22,6 +23,7 @@ from .chain import (
     rating_unrounded_dB,
     room_levels,
 )
+from .figure import plot_impact_sound
 from .finite_slab import bending_speed_constant
 from .scene import Chain, ReceivingRoom, Slab
 from .standards import round_rating
@@ -79,8 +81,6 @@ class ImpactSound:
 
     def plot(self, path=None):
         """Band levels (measured-room and normalised) and the Fast level against time."""
-        from .figure import plot_impact_sound
-
         return plot_impact_sound(self, path)
 
 
@@ -96,8 +96,6 @@ def _contact_samples(height_m, ball, slab, floor, rate_Hz) -> int:
         traj = trajectory(height_m, np.arange(n) / rate_Hz, ball, model)
         status = int(np.asarray(traj.status))
         if status != 0:
-            from ..solve.outcome import STATUS_NAMES
-
             raise RuntimeError(f"the impact on the floor failed: {STATUS_NAMES[status]}")
         if not bool(np.asarray(traj.in_contact)[-1]):
             return n
