@@ -10,13 +10,16 @@ the same fits as lanes as alone is tested with the selection, in
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import threading
+import time
 
 import numpy as np
 import pytest
 
+from rbjax.fit import lanes as lanes_module
 from rbjax.fit.lanes import BATCH_SIZES, LaneExecutor, current_batcher, padded_size
-from rbjax.studies.executors import Parallel, Task, run_tasks
+from rbjax.studies.executors import Parallel, Task, TaskError, run_tasks
 
 
 def test_a_batch_runs_at_the_next_of_a_few_sizes():
@@ -76,6 +79,44 @@ def test_an_error_in_a_batch_reaches_only_the_fits_in_it():
     with pytest.raises(ValueError, match="this program fails"):
         bad.result(timeout=30)
     np.testing.assert_array_equal(good.result(timeout=30), [10 * (10 * 1 + 1.5) + 1.5])
+
+
+def _gated_fit(gate, record):
+    """A toy fit that does host work (waits for ``gate``) after its first call."""
+    x = np.zeros(1)
+    try:
+        for i in range(3):
+            x = current_batcher().call(1, {"x": x}, 0.5)["y"]
+            if i == 0:
+                gate.wait(timeout=30)
+    except cf.CancelledError as err:
+        record.append(err)
+        raise
+    record.append("finished")
+    return x
+
+
+def _toy_run(key, lanes, shared):
+    if key == "bad":
+        raise ValueError("this program fails")
+    return {"y": 10 * lanes["x"] + key + shared}
+
+
+def test_a_run_that_fails_stops_the_fits_still_running(monkeypatch):
+    monkeypatch.setattr(lanes_module, "run_lanes", _toy_run)
+    gate, record = threading.Event(), []
+    tasks = [
+        Task("a failing fit", _fit, (1, "bad", [1.0])),
+        Task("a long fit", _gated_fit, (gate, record)),
+    ]
+    with pytest.raises(TaskError, match="a failing fit failed: ValueError: this program fails"):
+        run_tasks(Parallel(lanes=True), tasks)
+    gate.set()  # the long fit's host work ends: its next call finds the executor closed
+    for _ in range(300):
+        if record:
+            break
+        time.sleep(0.01)
+    assert len(record) == 1 and isinstance(record[0], cf.CancelledError)
 
 
 def test_tasks_added_while_others_run_join_the_batches():

@@ -86,8 +86,20 @@ class LaneBatcher:
         self._members = 0
         self._pending: list[_Call] = []
         self._flushing = False
+        self._closed = False
         #: (lanes asked for, lanes run including padding) of every batch run, in order
         self.batches: list[tuple[int, int]] = []
+
+    def close(self) -> None:
+        """No more batches: every call waiting now, and every later one, raises
+        :class:`concurrent.futures.CancelledError` (the fits of a run that failed stop at their
+        next call instead of running on unseen)."""
+        with self._cond:
+            self._closed = True
+            for item in self._pending:
+                item.error, item.done = cf.CancelledError("the lane executor was shut down"), True
+            self._pending = []
+            self._cond.notify_all()
 
     def join(self) -> None:
         with self._cond:
@@ -102,6 +114,8 @@ class LaneBatcher:
         """Hand one call to the batch; its outputs once the batch has run (this thread waits)."""
         item = _Call(key, lanes, shared)
         with self._cond:
+            if self._closed:
+                raise cf.CancelledError("the lane executor was shut down")
             self._pending.append(item)
         self._flush_when_all_wait()
         with self._cond:
@@ -192,6 +206,10 @@ class LaneExecutor(cf.Executor):
         return future
 
     def shutdown(self, wait=True, *, cancel_futures=False):
+        """With ``cancel_futures``, the fits still running stop at their next program call
+        (:meth:`LaneBatcher.close`)."""
+        if cancel_futures:
+            self.batcher.close()
         if wait:
             for thread in self._threads:
                 thread.join()

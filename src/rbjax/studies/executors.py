@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import atexit
 import concurrent.futures as cf
+import concurrent.futures.process  # noqa: F401  (cf.process.BrokenProcessPool, also before any pool)
 import contextlib
 import dataclasses
 import heapq
@@ -253,8 +254,10 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
         lanes = LaneExecutor()
         try:
             yield lanes
-        finally:
-            lanes.shutdown(wait=False)
+        except BaseException:
+            lanes.shutdown(wait=False, cancel_futures=True)  # a failed run: the others stop
+            raise
+        lanes.shutdown(wait=False)
     elif parallel.scheduler is not None:
         client = _dask_client(parallel.scheduler)
         try:
