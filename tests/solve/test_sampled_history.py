@@ -26,7 +26,6 @@ from scipy_reference import reference_impact
 
 # the modules (``rbjax.simulate`` the attribute is the function)
 sim = importlib.import_module("rbjax.solve.simulate")
-sh = importlib.import_module("rbjax.solve.sampled")
 BALL = rbjax.JIS_RUBBER_BALL
 RATE_Hz = 44_100.0
 HEIGHTS = np.array([0.1, 0.8, 1.6])
@@ -203,7 +202,7 @@ def test_force_history_path(monkeypatch, model, solver, method, expected):
 
         return fail
 
-    monkeypatch.setattr(sh, "sampled_solve", ran("sampled"))
+    monkeypatch.setattr(sim, "sampled_solve", ran("sampled"))  # the name simulate calls
     monkeypatch.setattr(sim, "trajectory", ran("ode"))
     with pytest.raises(_Ran) as info:
         force_history(1.0, BALL, model, solver, contact_time_s=0.02, method=method)
