@@ -112,14 +112,15 @@ def test_sobol_drops_base_points_with_failed_evaluations():
 def test_morris_elementary_effects_of_a_linear_function():
     res = morris_screening(linear, LINEAR_RANGES, 20, seed=3)
     # effect per full range: coefficient × width, with no spread for a linear function (exact
-    # but for round-off: measured ≤ 1.2e-15; 1e-12 as before the SALib rewrite)
-    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-12)
-    np.testing.assert_allclose(res.mu_star["y"], np.abs(COEF * WIDTH), atol=1e-12)
-    np.testing.assert_allclose(res.sigma["y"], 0.0, atol=1e-12)
+    # but for round-off: measured ≤ 1.2e-15; 1e-12 as before the SALib rewrite, absolute: rtol
+    # 0, or assert_allclose's default rtol 1e-7 would hold the nonzero effects instead)
+    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.mu_star["y"], np.abs(COEF * WIDTH), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.sigma["y"], 0.0, rtol=0, atol=1e-12)
     assert res.n_evaluations == 20 * 4 and res.driver("y") == "a"
     picked = morris_screening(linear, LINEAR_RANGES, 20, optimal_trajectories=5, seed=3)
     assert picked.n_trajectories == 5 and picked.n_evaluations == 5 * 4
-    np.testing.assert_allclose(picked.mu["y"], COEF * WIDTH, atol=1e-12)
+    np.testing.assert_allclose(picked.mu["y"], COEF * WIDTH, rtol=0, atol=1e-12)
 
 
 def test_morris_leaves_out_trajectories_with_a_failed_evaluation():
@@ -128,7 +129,7 @@ def test_morris_leaves_out_trajectories_with_a_failed_evaluation():
 
     res = morris_screening(f, LINEAR_RANGES, 40, seed=1)
     assert 2 <= res.n_valid["y"] < 40
-    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, atol=1e-12)
+    np.testing.assert_allclose(res.mu["y"], COEF * WIDTH, rtol=0, atol=1e-12)
 
 
 def test_fast_indices_of_the_linear_model_and_the_ishigami_function():

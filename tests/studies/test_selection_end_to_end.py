@@ -18,12 +18,11 @@ from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
 
-pytestmark = pytest.mark.xla_optimised  # many optimiser steps: see tests/conftest.py
-
-#: README table: held-out history error (%) ± its standard error over the 6 folds.
+#: README "Model selection on the bundled emulated recordings", the table's held-out history
+#: err (%) column: the mean over the 6 folds ± its standard error.
 README_HELD_OUT = {
     "hunt-crossley/momentum": (2.59, 0.36),
-    "hunt-crossley+ball-mode/momentum": (1.03, 0.15),
+    "hunt-crossley+ball-mode/momentum": (1.03, 0.16),
 }
 
 
@@ -51,5 +50,13 @@ def test_held_out_errors_are_the_readme_table_within_their_standard_error(select
     stated, se = README_HELD_OUT[label]
     candidate = next(c for c in selection.candidates if c.label == label)
     assert candidate.fit.converged
-    assert abs(candidate.cv_error_pct - stated) <= se
-    assert candidate.cv_se_pct == pytest.approx(se, abs=0.1)
+    assert len(candidate.folds) == 6
+    # the mean and its standard error from the fold errors, here (std with ddof 1 over √6)
+    errors = [fold.history_error_pct for fold in candidate.folds]
+    mean = sum(errors) / 6
+    stderr = (sum((e - mean) ** 2 for e in errors) / 5) ** 0.5 / 6**0.5
+    assert candidate.cv_error_pct == pytest.approx(mean, rel=1e-12)
+    # each at its printed figure (two decimals): within the rounding of the last digit, plus
+    # 0.001 for the round-off between this two-candidate run and the README's twelve
+    assert abs(mean - stated) <= 0.006, (label, mean, stderr)
+    assert abs(stderr - se) <= 0.006, (label, mean, stderr)
