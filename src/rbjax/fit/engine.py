@@ -79,9 +79,10 @@ def fit(
             ``zener``, any registered damping law, each optionally ``+stiffening``) or an
             ``rbjax.Model``: every parameter of its damping laws and stiffening is fitted, its
             values are the start (with a name, the start comes from the records).
-        blocked_force, gas: for a model name: ``paper`` (F_B + F_G + F_d) or ``momentum``
-            (adds (M/2R)δ̇² in compression); ``adiabatic`` (Eq. 4, corrected) or ``none``.
-            A ``Model`` brings its own.
+        blocked_force: for a model name: ``paper`` (F_B + F_G + F_d) or ``momentum`` (adds
+            (M/2R)δ̇² in compression). A ``Model`` brings its own.
+        gas: for a model name: ``adiabatic`` (Eq. 4, corrected) or ``none``. A ``Model``
+            brings its own.
         ball: geometry and mass (R, h, M) and the starting E, ν for nothing else.
         fix: name → value of parameters held (E, ν, the terms' parameters, or R, h, M).
         start: name → start value, or a previous :class:`FitResult` of the same model and data

@@ -49,7 +49,8 @@ class FitResult:
         per_height: one dict per drop height: measured and fitted contact time, peak force and
             octave-band L_FE (same estimator on both, through the measuring chain), residual rms.
         residual_rms_N: rms of F_pred − F_measured over the fitted records.
-        converged, message, iterations (function evaluations), optimizer.
+        converged, message, iterations, optimizer: whether the optimiser converged, its message,
+            its function evaluations and its name (``lm`` or ``gauss-newton``).
         n_eff_factor: τ, the samples per independent residual (N_eff = N/τ).
         aic, bic: information criteria of the history residuals (see :func:`fit`).
         time_s, measured_N, predicted_N, heights_m, in_fit: the records, for plots and checks.
