@@ -195,9 +195,23 @@ INHERITED_OPTIONS = (
 _BLAS_LIMIT: list = []
 
 
+#: The environment variables by which the BLAS libraries (and OpenMP) read their thread count
+#: when they are loaded.
+BLAS_THREAD_VARIABLES = (
+    "OPENBLAS_NUM_THREADS",
+    "OMP_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "BLIS_NUM_THREADS",
+)
+
+
 def single_threaded_blas() -> None:
-    """Limit the BLAS libraries loaded in this process (OpenBLAS, MKL, BLIS) to one thread each,
-    for the rest of the process (``threadpoolctl``)."""
+    """One thread for every BLAS library (OpenBLAS, MKL, BLIS) of this process and of the worker
+    processes it starts, for the rest of the process: those loaded already through
+    ``threadpoolctl``, those loaded later (SciPy's own OpenBLAS, imported on first use) and the
+    workers' through the environment (a count the user set is kept)."""
+    for name in BLAS_THREAD_VARIABLES:
+        os.environ.setdefault(name, "1")
     if not _BLAS_LIMIT:
         _BLAS_LIMIT.append(threadpool_limits(limits=1))
 
