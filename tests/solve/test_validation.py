@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import equinox as eqx
+import jax
 import numpy as np
 import pytest
 
@@ -163,6 +165,22 @@ def test_deflection_beyond_the_shell_model_is_flagged():
         assert float(result.peak_force_N[i]) == pytest.approx(ref.peak_force_N, rel=1e-6)
     # The reference agrees that the deflection passes 2h there.
     assert reference_impact(10.0, JIS).max_deflection_m > 2 * float(JIS.wall_m)
+
+
+def test_a_failed_solve_has_nan_derivatives_not_zero():
+    # Inside jax.jit the default path cannot fall back to the ODE: a Hunt–Crossley impact the
+    # phase-angle path flags (α = 0.5 s/m at 1 m) is NaN, and so must be its gradient (it was a
+    # plausible 0.0); an impact that solves keeps a finite, nonzero one.
+    def contact_time(youngs_Pa, alpha):
+        ball = eqx.tree_at(lambda b: b.youngs_Pa, JIS, youngs_Pa)
+        model = rbjax.Model(damping=rbjax.HuntCrossley(alpha))
+        return rbjax.simulate(1.0, ball, model).contact_time_s
+
+    value_and_grad = jax.jit(jax.value_and_grad(contact_time))
+    value, grad = value_and_grad(1.6e6, 0.5)
+    assert np.isnan(value) and np.isnan(grad)
+    value, grad = value_and_grad(1.6e6, 0.05)
+    assert np.isfinite(value) and np.isfinite(grad) and grad < 0  # stiffer: shorter contact
 
 
 def test_raise_for_status_returns_the_result_when_ok():

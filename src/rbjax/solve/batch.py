@@ -53,7 +53,7 @@ from .devices import default_chunk_size, local_devices
 from .inputs import padded_rows
 from .ode import impact_ode, ode_trajectory
 from .options import EvaluationSpec, spec_from_keywords
-from .outcome import STATUS_CODES
+from .outcome import STATUS_CODES, nan_where
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
 from .sharded import sharded_map
@@ -150,7 +150,7 @@ def _one_impact(row: Mapping, model: Model, spec: _Spec) -> dict:
             )
             force, status = traj.force_N, traj.status
         lfe = lfe_octave_dB(force, spec.rate_Hz, n_record=spec.n_total)
-        return {"lfe_dB": jnp.where(status == 0, lfe, jnp.nan), "history_status": status}
+        return {"lfe_dB": nan_where(status != 0, lfe), "history_status": status}
     if spec.path == "quadrature":
         out = impact_quadrature(height, ball, model)
     elif spec.path == "angle":

@@ -30,6 +30,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
 from .ode import final_state, impact_status, solve_phases
+from .outcome import nan_where
 from .simulate import broadcast_inputs, check_inputs
 from .vector_field import body_velocity_m_per_s, split_energy
 
@@ -67,14 +68,14 @@ def _balance(height_m, ball, model, solver) -> EnergyBalance:
     speed = body_velocity_m_per_s(y_end, ball, model)
     rebound = 0.5 * dynamic_mass_kg(y_end[0], ball) * speed**2
     status = impact_status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
-    nan = jnp.where(status == 0, 1.0, jnp.nan)
+    failed = status != 0
     return EnergyBalance(
         impact_energy_J=0.5 * ball.mass_kg * v0**2,
-        rebound_energy_J=rebound * nan,
-        floor_energy_J=acc[0] * nan,
-        flux_loss_J=acc[1] * nan,
-        contact_work_J=acc[2] * nan,
-        cap_work_J=acc[3] * nan,
+        rebound_energy_J=nan_where(failed, rebound),
+        floor_energy_J=nan_where(failed, acc[0]),
+        flux_loss_J=nan_where(failed, acc[1]),
+        contact_work_J=nan_where(failed, acc[2]),
+        cap_work_J=nan_where(failed, acc[3]),
         status=status,
     )
 

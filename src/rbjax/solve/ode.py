@@ -38,6 +38,7 @@ from .outcome import (
     ImpactScalars,
     Trajectory,
     impact_velocity_m_per_s,
+    nan_where,
 )
 from .vector_field import (
     COMPRESSION_ENERGY_FIELD,
@@ -413,9 +414,9 @@ def ode_trajectory(height_m, ball, model: Model, solver: Solver, times_s) -> Tra
         force = jnp.where(inside, floor_force_N(y, *args), 0.0)
         # a failed solve gives NaN, never a plausible-looking history
         return (
-            jnp.where(failed, jnp.nan, y[0]),
-            jnp.where(failed, jnp.nan, y[1]),
-            jnp.where(failed, jnp.nan, force),
+            nan_where(failed, y[0]),
+            nan_where(failed, y[1]),
+            nan_where(failed, force),
             inside & ~failed,
         )
 

@@ -35,6 +35,14 @@ def impact_velocity_m_per_s(height_m: ArrayLike) -> jax.Array:
     return jnp.sqrt(2.0 * G_N_PER_KG * height_m)
 
 
+def nan_where(failed, value):
+    """``value`` where ``failed`` is False and NaN where it is True, for the value and for every
+    derivative of it: ``value · (1 or NaN)``. (``jnp.where(failed, nan, value)`` would give NaN
+    values but derivatives of 0 where the solve failed: a plausible-looking gradient.) Where
+    ``failed`` is False the value and its derivatives are the same bits."""
+    return value * jnp.where(failed, jnp.nan, 1.0)
+
+
 class ImpactScalars(eqx.Module):
     """The scalar outputs of one impact (or a batch: every field shares the batch shape)."""
 
@@ -52,7 +60,7 @@ class ImpactScalars(eqx.Module):
         """The outputs where ``status`` is 0 (ok) and NaN elsewhere: a failed solve never
         returns plausible-looking numbers. ``outputs``: the six float fields by name."""
         ok = status == 0
-        masked = {name: jnp.where(ok, value, jnp.nan) for name, value in outputs.items()}
+        masked = {name: nan_where(~ok, value) for name, value in outputs.items()}
         return cls(
             **masked,
             status=jnp.asarray(status, dtype=jnp.int32),

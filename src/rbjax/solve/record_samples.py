@@ -39,7 +39,7 @@ import jax
 import jax.numpy as jnp
 
 from ..terms.model import Model
-from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s
+from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s, nan_where
 from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
 
 #: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate λ of the
@@ -162,4 +162,4 @@ def record_samples(
         jnp.where(bad, STATUS_CODES["solver_failed"], STATUS_CODES["ok"]),
     ).astype(jnp.int32)
     failed = status != 0
-    return jnp.where(failed, jnp.nan, force), jnp.where(failed, jnp.nan, d_shift), status
+    return nan_where(failed, force), nan_where(failed, d_shift), status

@@ -44,7 +44,13 @@ from .._validate import check_range
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
 from .inputs import PAPER_RATE_Hz, as_arrays, broadcast_inputs, check_inputs
-from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
+from .outcome import (
+    SINGULAR_FRACTION,
+    STATUS_CODES,
+    Trajectory,
+    impact_velocity_m_per_s,
+    nan_where,
+)
 from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
 
 #: Fourth-order Runge–Kutta steps per sample unless the caller asks for more.
@@ -188,11 +194,13 @@ def sampled_impact(height_m, ball, model: Model, rate_Hz, num_samples: int, subs
         STATUS_CODES["ok"],
     ).astype(jnp.int32)
     failed = status != 0
-
-    def nan_if_failed(x):
-        return jnp.where(failed, jnp.nan, x)
-
-    return nan_if_failed(d), nan_if_failed(v), nan_if_failed(f), inside & ~failed, status
+    return (
+        nan_where(failed, d),
+        nan_where(failed, v),
+        nan_where(failed, f),
+        inside & ~failed,
+        status,
+    )
 
 
 def _count(name: str, value) -> int:
@@ -264,7 +272,7 @@ def pad_record(traj: Trajectory, num_samples: int, rate_Hz: float) -> Trajectory
     failed = (traj.status != 0)[..., None]
 
     def padded(x):
-        return jnp.where(failed, jnp.nan, jnp.pad(x, [(0, 0)] * (x.ndim - 1) + [(0, pad)]))
+        return nan_where(failed, jnp.pad(x, [(0, 0)] * (x.ndim - 1) + [(0, pad)]))
 
     return Trajectory(
         time_s=jnp.arange(num_samples) / rate_Hz,
