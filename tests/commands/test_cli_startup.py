@@ -5,14 +5,16 @@ Each check runs in a fresh interpreter: in this one the library is loaded alread
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
 import textwrap
 
-from rbjax.cli import command_modules
+from rbjax.cli import build_parser, command_modules
 from rbjax.commands.simulate import FLOOR_PRESET_NAMES
 from rbjax.terms.floors.presets import FLOOR_PRESETS
+from rbjax.terms.model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS
 
 HEAVY = ("jax", "jaxlib", "numpy", "scipy", "matplotlib", "diffrax", "equinox")
 
@@ -29,7 +31,7 @@ def test_help_and_version_import_no_library():
     out = run_python(
         f"""
         import contextlib, io, json, sys
-        from rbjax.cli import command_modules, main
+        from rbjax.cli import build_parser, command_modules, main
 
         codes = {{}}
         for argv in (["--help"], ["--version"], *([c, "--help"] for c in command_modules())):
@@ -48,6 +50,25 @@ def test_help_and_version_import_no_library():
 def test_the_help_names_the_floor_presets():
     # written out in the command so that --help imports no library
     assert FLOOR_PRESET_NAMES == FLOOR_PRESETS
+
+
+def test_the_gas_and_blocked_force_choices_are_the_library_s():
+    # written out in the commands for the same reason: one definition (rbjax.terms.model) all
+    # the same; `rbjax select` adds "both"
+    subcommands = next(
+        a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)
+    )
+    seen = {"gas": 0, "blocked_force": 0}
+    for name, parser in subcommands.choices.items():
+        for action in parser._actions:
+            if action.dest == "gas" and action.choices is not None:
+                assert tuple(action.choices) == GAS_OPTIONS, name
+                seen["gas"] += 1
+            if action.dest == "blocked_force" and action.choices is not None:
+                extra = ("both",) if name == "select" else ()
+                assert tuple(action.choices) == BLOCKED_FORCE_OPTIONS + extra, name
+                seen["blocked_force"] += 1
+    assert seen["gas"] >= 4 and seen["blocked_force"] >= 4
 
 
 def test_import_rbjax_pulls_no_scipy_submodule_nor_matplotlib():

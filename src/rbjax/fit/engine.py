@@ -41,7 +41,7 @@ from .._progress import progress as say
 from .._validate import check_choice
 from .._x64 import require_x64
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import GAS_OPTIONS, Model
+from ..terms.model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS, Model
 from ..terms.parameters import replace
 from .estimates import Estimates, estimates
 from .freedom import Freedom, free_parameters, prior_row
@@ -53,7 +53,7 @@ from .rounds import MAX_ROUNDS, Rounds, optimise, pick_best
 from .setup import FitSetup, set_up
 from .start import Starts, evaluate_starts, start_plan
 
-BLOCKED_FORCES = ("paper", "momentum")
+BLOCKED_FORCES = BLOCKED_FORCE_OPTIONS  # one definition: rbjax.terms.model
 
 
 def fit(

@@ -38,7 +38,7 @@ from ..fit import (
 )
 from ..fit.options import OLD_KEYWORDS, options_from_keywords
 from ..spectrum.bands import OCTAVE_BANDS
-from ..terms.model import Model, superset_model
+from ..terms.model import BLOCKED_FORCE_OPTIONS, Model, superset_model
 from ..text import fmt, format_table
 from .executors import Parallel, Task, run_tasks
 
@@ -55,7 +55,7 @@ __all__ = [
     "recommend",
 ]
 
-BLOCKED_FORCES = ("paper", "momentum")
+BLOCKED_FORCES = BLOCKED_FORCE_OPTIONS  # one definition: rbjax.terms.model
 RULE = (
     "paired one-standard-error rule on the leave-one-height-out history error: among the "
     "candidates whose mean fold-by-fold excess error over the best candidate is at most the "
