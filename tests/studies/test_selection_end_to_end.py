@@ -1,9 +1,10 @@
-"""Model selection run end to end on the bundled recordings (README "Model selection on the
-bundled emulated recordings"): every fit, every leave-one-height-out fold and the rule, for the
-three candidates the README's recommendation turns on, all with the ``momentum`` blocked force:
-the best model without the ball mode, the one with it, and the runner-up, its massless limit
-(the series element: one parameter fewer, kept out by its paired excess over the ball mode).
-The figures are the README's, each within the rounding of its last printed digit.
+"""Model selection run end to end on the bundled recordings (docs/guides/fitting.md, "Model
+selection on the bundled emulated recordings"; the README's validated table): every fit, every
+leave-one-height-out fold and the rule, for the three candidates the page's recommendation turns on,
+all with the ``momentum`` blocked force: the best model without the ball mode, the one with it, and
+the runner-up, its massless limit (the series element: one parameter fewer, kept out by its paired
+excess over the ball mode). The figures are the page's, each within the rounding of its last printed
+digit.
 
 The independent check of the rule itself (hand-worked candidates) is
 ``test_selection_rule.py``; this test checks that the fits feeding it give the stated
@@ -18,8 +19,8 @@ from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
 
-#: README "Model selection on the bundled emulated recordings", the table's held-out history
-#: err (%) column: the mean over the 6 folds ± its standard error.
+#: docs/guides/fitting.md, "Model selection on the bundled emulated recordings", the held-out
+#: history err (%) column: the mean over the 6 folds ± its standard error.
 README_HELD_OUT = {
     "hunt-crossley/momentum": (2.59, 0.36),
     "hunt-crossley+ball-mode/momentum": (1.03, 0.16),
@@ -39,7 +40,7 @@ def selection():
 
 
 def test_the_ball_mode_is_recommended_and_nothing_else_is_within_the_noise(selection):
-    # README "Model selection": recommended hunt-crossley+ball-mode/momentum, "no other
+    # docs/guides/fitting.md: recommended hunt-crossley+ball-mode/momentum, "no other
     # candidate is within the noise of the best"
     assert selection.recommended.label == "hunt-crossley+ball-mode/momentum"
     assert [c.label for c in selection.within_noise] == ["hunt-crossley+ball-mode/momentum"]
@@ -47,7 +48,7 @@ def test_the_ball_mode_is_recommended_and_nothing_else_is_within_the_noise(selec
 
 @pytest.mark.parametrize("label", sorted(README_HELD_OUT))
 def test_held_out_errors_are_the_readme_table_within_their_standard_error(selection, label):
-    # README "Model selection" table, held-out history err (%) column
+    # docs/guides/fitting.md, "Model selection" table, held-out history err (%) column
     stated, se = README_HELD_OUT[label]
     candidate = next(c for c in selection.candidates if c.label == label)
     assert candidate.fit.converged
@@ -58,13 +59,13 @@ def test_held_out_errors_are_the_readme_table_within_their_standard_error(select
     stderr = (sum((e - mean) ** 2 for e in errors) / 5) ** 0.5 / 6**0.5
     assert candidate.cv_error_pct == pytest.approx(mean, rel=1e-12)
     # each at its printed figure (two decimals): within the rounding of the last digit, plus
-    # 0.001 for the round-off between this two-candidate run and the README's twelve
+    # 0.001 for the round-off between this two-candidate run and the page's twelve
     assert abs(mean - stated) <= 0.006, (label, mean, stderr)
     assert abs(stderr - se) <= 0.006, (label, mean, stderr)
 
 
 def test_the_runner_up_is_kept_out_by_its_paired_excess(selection):
-    # README "Model selection": the massless limit hunt-crossley+series-kelvin-voigt (one
+    # docs/guides/fitting.md: the massless limit hunt-crossley+series-kelvin-voigt (one
     # parameter fewer) comes second, "but its fold-by-fold excess over the ball mode is +0.040 ±
     # 0.009 % (positive in all six folds)", so the rule keeps the ball mode. The excess and its
     # standard error from the fold errors, here, fold matched to fold by its held-out height.
