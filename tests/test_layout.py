@@ -31,26 +31,37 @@ def module_name(path: Path) -> str:
 MODULES = {module_name(p): p for p in SRC.rglob("*.py")}
 
 
+def rbjax_from_imports(name: str, source: str):
+    """(module, imported name) of every ``from … import`` of an rbjax module in ``source`` (the
+    text of module ``name``), relative imports resolved."""
+    is_package = name in MODULES and MODULES[name].name == "__init__.py"
+    package = name if is_package else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        if node.level:
+            base = package.split(".")
+            base = base[: len(base) - (node.level - 1)]
+            target = ".".join(base + ([node.module] if node.module else []))
+        else:
+            target = node.module or ""
+        if target.split(".")[0] == "rbjax":
+            yield from ((target, alias.name) for alias in node.names)
+
+
 def imports_of(name: str) -> set[str]:
     """The rbjax modules ``name`` imports (``from pkg import mod`` counts as ``pkg.mod``)."""
-    path = MODULES[name]
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.split(".")[0] == "rbjax"}
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            if target.split(".")[0] != "rbjax":
-                continue
-            for alias in node.names:
-                full = f"{target}.{alias.name}"
-                out.add(full if full in MODULES else target)
+    source = MODULES[name].read_text()
+    out = {
+        a.name
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Import)
+        for a in node.names
+        if a.name.split(".")[0] == "rbjax"
+    }
+    for target, alias in rbjax_from_imports(name, source):
+        full = f"{target}.{alias}"
+        out.add(full if full in MODULES else target)
     return out - {name}
 
 

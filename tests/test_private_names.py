@@ -11,19 +11,8 @@ is about the names defined inside another module.
 from __future__ import annotations
 
 import ast
-from pathlib import Path
 
-import rbjax
-
-SRC = Path(rbjax.__file__).parent
-
-
-def module_name(path: Path) -> str:
-    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-MODULES = {module_name(p): p for p in SRC.rglob("*.py")}
+from test_layout import MODULES, rbjax_from_imports
 
 
 def is_private(name: str) -> bool:
@@ -33,25 +22,11 @@ def is_private(name: str) -> bool:
 def private_imports(name: str, source: str) -> list[str]:
     """``"module: target.name"`` for each private name of another rbjax module imported in
     ``source`` (the text of module ``name``)."""
-    is_package = name in MODULES and MODULES[name].name == "__init__.py"
-    package = name if is_package else name.rpartition(".")[0]
-    out = []
-    for node in ast.walk(ast.parse(source)):
-        if not isinstance(node, ast.ImportFrom):
-            continue
-        if node.level:
-            base = package.split(".")
-            base = base[: len(base) - (node.level - 1)]
-            target = ".".join(base + ([node.module] if node.module else []))
-        else:
-            target = node.module or ""
-        if target.split(".")[0] != "rbjax":
-            continue
-        for alias in node.names:
-            full = f"{target}.{alias.name}"
-            if is_private(alias.name) and full not in MODULES:
-                out.append(f"{name}: {full}")
-    return out
+    return [
+        f"{name}: {target}.{alias}"
+        for target, alias in rbjax_from_imports(name, source)
+        if is_private(alias) and f"{target}.{alias}" not in MODULES
+    ]
 
 
 def test_the_check_finds_a_private_import():
