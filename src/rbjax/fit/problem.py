@@ -213,11 +213,7 @@ class Problem:
             "held": thetas,
             "constants": np.broadcast_to(np.asarray(constants, dtype=float), (b, len(constants))),
             "weights": _stacked(weights if isinstance(weights, list) else [weights] * b),
-            "atol": np.full(b, math.inf) if atol is None else atol,
-        }
-        lanes = {
-            k: (v if k == "weights" else np.asarray(v, dtype=float if k != "free" else bool))
-            for k, v in lanes.items()
+            "atol": np.full(b, math.inf) if atol is None else np.asarray(atol, dtype=float),
         }
         batcher = current_batcher()
         if batcher is not None:
