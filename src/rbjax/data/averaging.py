@@ -44,9 +44,27 @@ def average(
     different lengths are cut to the shortest (noted). Samples shifted in from outside
     a record are zero, so the records should be baseline-subtracted (conditioned).
 
+    Args:
+        recordings: the conditioned records (each with ``onset_s``), of one sampling rate.
+        domain: ``"frequency"`` or ``"time"``.
+        method: :func:`fractional_shift` method for ``domain="time"``: ``"fourier"``,
+            ``"cubic"`` or ``"linear"``.
+        onset_s: the reference onset, s from the first sample; default: the first
+            record's.
+
+    Returns:
+        A new :class:`Recording` of the mean force, as long as the shortest record, with
+            ``onset_s`` the reference onset; ``height_m`` is the mean height when every record
+            has one (else ``None``), and ``calibration_N_per_FS`` and ``lowpass_Hz`` are kept
+            when all the records agree on them (else ``None``).
+
     Raises:
-      DataError: no records, a record without ``onset_s``, different sample rates
-        (the message lists files and rates). Heights more than 2 cm apart warn.
+        DataError: no records, a record without ``onset_s``, different sample rates
+            (the message lists files and rates).
+        ValueError: an unknown ``domain``, or (``domain="time"``) an unknown ``method``.
+
+    Warns:
+        DataWarning: drop heights more than 2 cm apart.
     """
     recs = list(recordings)
     if not recs:

@@ -27,9 +27,11 @@ __all__ = ["Impact", "estimate_noise_rms_N", "find_impacts", "locate_onset", "co
 class Impact(NamedTuple):
     """One impact found by :func:`find_impacts` (a plain tuple ``(start, end, peak)``).
 
-    start_index: first sample above the threshold; end_index: one past the last sample
-    above the threshold (``== n`` when the force is still above it at the last sample);
-    peak_N: largest force of the impact above the record's baseline level, N.
+    Attributes:
+        start_index: first sample above the threshold.
+        end_index: one past the last sample above the threshold (``== n`` when the force
+            is still above it at the last sample).
+        peak_N: largest force of the impact above the record's baseline level, N.
     """
 
     start_index: int
@@ -60,11 +62,22 @@ def find_impacts(
     :func:`estimate_noise_rms_N`). Runs of samples above it closer than
     ``min_separation_s`` belong to one impact.
 
+    Args:
+        force_N: raw force record, N, 1-D.
+        rate_Hz: sampling rate, Hz.
+        threshold_N: detection level above the baseline level, N; default
+            ``max(10 N, 8 * noise rms)``.
+        min_separation_s: runs of samples above the threshold closer than this, s, are one
+            impact.
+
     Returns:
-      a list of :class:`Impact` ``(start_index, end_index, peak_N)``: first sample above
-      the threshold, one past the last one (``end_index == len(force_N)`` means the
-      impact runs off the end), peak force above the baseline level in N. Empty if no
-      sample exceeds the threshold.
+        a list of :class:`Impact` ``(start_index, end_index, peak_N)``: first sample above
+            the threshold, one past the last one (``end_index == len(force_N)`` means the
+            impact runs off the end), peak force above the baseline level in N. Empty if no
+            sample exceeds the threshold.
+
+    Raises:
+        ValueError: ``force_N`` is not 1-D.
     """
     x = np.asarray(force_N, dtype=np.float64)
     if x.ndim != 1:
@@ -118,11 +131,21 @@ def locate_onset(
     (:mod:`rbjax.spectrum.filters`) or a fitted time offset.
 
     Args:
-      force_N: baseline-subtracted force, N.
-      rate_Hz: sampling rate, Hz.
-      fraction: level as a fraction of the impact's peak (0 < fraction < 1).
-      impact: the :class:`Impact` to use (default: the first one found).
-      source: name for messages.
+        force_N: baseline-subtracted force, N.
+        rate_Hz: sampling rate, Hz.
+        fraction: level as a fraction of the impact's peak (0 < fraction < 1).
+        impact: the :class:`Impact` to use (default: the first one found).
+        source: name for messages.
+
+    Returns:
+        The onset time in seconds from the first sample (a float, to a fraction of a
+            sample).
+
+    Raises:
+        ValueError: ``fraction`` is not in (0, 1).
+        NoImpactError: no ``impact`` given and none found.
+        RecordCutOffError: the force is already above the level at the first sample
+            (no pre-trigger).
     """
     x = np.asarray(force_N, dtype=np.float64)
     if not 0 < fraction < 1:
@@ -190,11 +213,40 @@ def condition(
     The default window (50 ms) fits the shipped 0.1 s records (pre-trigger up to
     ~20 ms) and holds the ~21 ms contact with its ringing.
 
+    Args:
+        recording: the raw record (mended by :func:`~rbjax.data.clean` first, as a rule).
+        which: the impact to keep: ``"first"``, ``"largest"``, ``"last"`` or an index
+            (negative counts from the end) into :func:`find_impacts`' list.
+        baseline: ``"pretrigger"`` or ``"none"`` (step 2).
+        align: shift the record so that ``onset_s == pre_onset_s`` exactly (step 5).
+        lowpass_Hz: cutoff of the causal 4th-order Butterworth to apply, Hz; ``None``:
+            none (step 3).
+        window_s: length of the window kept, s.
+        pre_onset_s: time from the window's start to the onset, s.
+        onset_fraction: onset level as a fraction of the impact's peak
+            (:func:`locate_onset`).
+        threshold_N: impact detection level above the baseline, N; default
+            ``max(10 N, 8 * noise rms)``.
+        min_separation_s: runs above the threshold closer than this, s, are one impact.
+        shift_method: :func:`fractional_shift` method of the alignment: ``"fourier"``,
+            ``"cubic"`` or ``"linear"``.
+
+    Returns:
+        A copy of ``recording`` holding the window: ``force_N`` (``round(window_s *
+            rate_Hz)`` samples), ``onset_s``, ``lowpass_Hz``, and ``notes`` and ``log``
+            extended.
+
     Raises:
-      NoImpactError: no impact (peak below threshold).
-      RecordCutOffError: the impact runs off either end of the record, or the window
-        would run past either end.
-      DataError: the window would cut the impact.
+        NoImpactError: no impact (peak below threshold).
+        RecordCutOffError: the impact runs off either end of the record (or starts at its
+            first sample), or the window would run past either end.
+        DataError: the window would cut the impact; fewer than 20 pre-trigger samples for
+            the ``"pretrigger"`` baseline.
+        ValueError: an unknown ``which`` or ``baseline``, an index ``which`` out of range,
+            an unknown ``shift_method`` (with ``align=True``).
+
+    Warns:
+        DataWarning: further impacts in the record, or inside the window.
     """
     src = recording.source
     rate = recording.rate_Hz

@@ -39,6 +39,12 @@ def estimate_noise_rms_N(force_N) -> float:
     segment's spread is ``1.4826 * MAD``; the quietest quarter of the segments gives a
     first estimate ``s0``, and the result is the median over all segments with spread
     below ``2 s0`` (so the impact, ringing and drifts do not count).
+
+    Args:
+        force_N: the force samples, N, 1-D.
+
+    Returns:
+        The noise rms, N.
     """
     return quiet_level(force_N)[1]
 

@@ -21,6 +21,9 @@ def examples_dir() -> Path:
     ``hHHH_dN.csv`` (drop N from HHH cm, 0.1 s at 44.1 kHz) and
     ``raw_h100_two_impacts.wav`` (1.5 s, float32 newtons, two impacts); see the
     README.md in that folder.
+
+    Returns:
+        The folder's path.
     """
     here = Path(__file__).resolve().parents[1] / "examples" / "emulated-rubber-ball"
     try:
@@ -35,6 +38,15 @@ def load_examples(pattern: str = "h*.csv") -> list[Recording]:
 
     Heights come from the file names; ``lowpass_Hz`` is set to the declared measuring
     chain cutoff of these files (1250 Hz, 4th-order causal).
+
+    Args:
+        pattern: a glob pattern of file names in :func:`examples_dir`.
+
+    Returns:
+        The matching recordings (raw, not conditioned), sorted by file name.
+
+    Raises:
+        DataError: no file matches ``pattern``, or a file cannot be read (see :func:`load`).
     """
     paths = sorted(examples_dir().glob(pattern))
     if not paths:

@@ -165,6 +165,21 @@ def clean(
     flipped"``), ``drift_N_per_s`` (the slope removed, or None) and ``hum`` (``{"frequency_Hz",
     "amplitude_N"}`` of the fundamental removed, or None). A record with no impact is
     returned with the polarity entry only (:func:`~rbjax.data.condition` refuses it).
+
+    Args:
+        recording: the raw record.
+        mains_Hz: nominal mains frequencies searched for hum, Hz (default 50 and 60).
+        threshold_N: impact detection level above the baseline, N, which a negative
+            excursion must also exceed to count as inverted; default
+            ``max(10 N, 8 * noise rms)`` of the detrended record.
+        min_separation_s: runs above the threshold closer than this, s, are one impact.
+
+    Returns:
+        A copy of ``recording`` with the mended ``force_N`` and with ``notes`` and ``log``
+            extended.
+
+    Warns:
+        DataWarning: the record was inverted and has been flipped.
     """
     x = np.array(recording.force_N, dtype=np.float64)
     rate, n = recording.rate_Hz, recording.n_samples

@@ -38,7 +38,13 @@ _KNOWN = ", ".join(f"*{s}" for s in SUFFIXES)
 
 @dataclasses.dataclass(frozen=True)
 class Excluded:
-    """A file :func:`load` read but left out (``strict=False``): its name, height and why."""
+    """A file :func:`load` read but left out (``strict=False``): its name, height and why.
+
+    Attributes:
+        source: the file's name.
+        height_m: its drop height in metres (as :func:`load` resolved it), or ``None``.
+        reason: why it was left out (the :class:`ClippedRecordError` message).
+    """
 
     source: str
     height_m: float | None
@@ -62,6 +68,30 @@ def read_file(
     The arguments a format has no use for are refused, not ignored: a ``.csv`` or ``.npy``
     has one channel in newtons (no ``channel``, no calibration); a ``.wav``'s rate is in
     its header (``rate_Hz``, if given, must agree).
+
+    Args:
+        path: the file; its suffix (any case) picks the reader.
+        rate_Hz: sampling rate, Hz: required for ``.npy``, for a ``.csv`` without a time
+            column and for a channel whose file gives no rate; checked against the file's
+            own rate otherwise.
+        calibration_N_per_FS: newtons per full scale (or per unit) for integer or
+            non-newton samples; refused for ``.csv`` and ``.npy``.
+        height_m: drop height, m; default from the file name (``hNNN``), else ``None``.
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        channel: the channel to read (a number, or a name for MAT, UFF and TDMS files);
+            refused for ``.csv`` and ``.npy`` (except ``0``).
+
+    Returns:
+        The file's :class:`Recording`, as the format's reader returns it.
+
+    Raises:
+        DataError: an unknown suffix; ``channel`` or ``calibration_N_per_FS`` given for a
+            ``.csv`` or ``.npy``; a ``.npy`` without ``rate_Hz``; a ``rate_Hz`` that
+            disagrees with a WAV header; anything the format's reader refuses (see
+            :func:`read_csv`, :func:`read_npy`, :func:`read_wav`, :func:`read_mat`,
+            :func:`read_uff`, :func:`read_tdms`), :class:`ClippedRecordError` included.
+        MissingFormatError: the format's optional reader (pyuff, npTDMS, h5py for MATLAB
+            v7.3) is not installed.
     """
     p = Path(path)
     suf = p.suffix.lower()
@@ -199,13 +229,35 @@ def load(
     height_m}`` or ``{file name: {column: value}}``), the file name (``h100_d1.csv`` ->
     1.00 m: ``hNNN`` in centimetres). Manifest values override the arguments for that file.
 
-    ``strict``: a clipped file (:class:`ClippedRecordError`) is refused (True, the
-    default) or returned as an :class:`Excluded` entry with the reason (False), in its
-    place among the recordings.
+    Args:
+        paths_or_dir: a file or directory (``str`` or path), or an iterable of them.
+        height_m: drop height in metres of every file (overrides the manifest and the
+            names).
+        manifest: a manifest CSV file, or a mapping ``{file name: height_m}`` or
+            ``{file name: {column: value}}``; default: a ``manifest.csv`` in a directory
+            given.
+        rate_Hz: sampling rate, Hz, for the files that need one (see :func:`read_file`).
+        calibration_N_per_FS: newtons per full scale (or per unit), passed to the files
+            other than ``.csv`` and ``.npy``.
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        channel: the channel to read, passed to the files other than ``.csv`` and ``.npy``.
+        strict: a clipped file (:class:`ClippedRecordError`) is refused (True, the
+            default) or returned as an :class:`Excluded` entry with the reason (False), in
+            its place among the recordings.
+
+    Returns:
+        A list of :class:`Recording` in file order (each directory's files sorted by
+            name), with an :class:`Excluded` in place of each clipped file when
+            ``strict=False``.
 
     Raises:
-      DataError: a file cannot be read (see the readers), a height cannot be known,
-        the files have different sample rates, nothing to read.
+        DataError: a file cannot be read (see the readers), a path is neither a file nor
+            a directory, a directory holds no recording, a height cannot be known, the
+            manifest is empty, lacks the ``file`` and ``height_m`` columns, has a line of
+            the wrong length or a non-numeric value, the files have different sample
+            rates, nothing to read.
+        ClippedRecordError: a clipped file, with ``strict=True``.
+        MissingFormatError: a file's optional reader is not installed.
     """
     if isinstance(paths_or_dir, (str, os.PathLike)):
         items = [paths_or_dir]

@@ -10,8 +10,12 @@ __all__ = ["describe_conditioning"]
 def describe_conditioning(log: dict) -> str:
     """One line: rate, polarity, offset, drift, hum, the impact kept and the others cut.
 
-    ``log``: ``Recording.conditioning`` (or the same dict with ``rate_Hz`` added); steps
-    absent from it are left out of the line.
+    Args:
+        log: ``Recording.conditioning`` (or the same dict with ``rate_Hz`` added); steps
+            absent from it are left out of the line.
+
+    Returns:
+        The steps in words, joined by ``"; "`` (empty if none is logged).
     """
     parts = []
     if log.get("rate_Hz") is not None:

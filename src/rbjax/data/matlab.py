@@ -134,19 +134,23 @@ def read_mat(
     """Read a force record from a MATLAB ``.mat`` file (v4 to v7 by scipy, v7.3 by h5py).
 
     Args:
-      path: the .mat file.
-      channel: the variable holding the force (a name, ``s.field`` in a struct,
-        ``data(:,2)`` for a matrix column) or its number in the listing an error shows;
-        needed when the file holds more than one channel.
-      rate_Hz: sampling rate, Hz, needed when the file holds neither a rate nor a time vector.
-      calibration_N_per_FS: newtons per full scale for integer samples (required then).
-      height_m: drop height, m; default from the file name (``hNNN``).
-      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        path: the .mat file.
+        channel: the variable holding the force (a name, ``s.field`` in a struct,
+            ``data(:,2)`` for a matrix column) or its number in the listing an error shows;
+            needed when the file holds more than one channel.
+        rate_Hz: sampling rate, Hz, needed when the file holds neither a rate nor a time vector.
+        calibration_N_per_FS: newtons per full scale for integer samples (required then).
+        height_m: drop height, m; default from the file name (``hNNN``).
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Returns:
+        The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-      DataError: not a .mat file, no or an unknown channel (the channels are listed), a
-        missing rate or calibration, a non-uniform time vector, clipping, too few samples.
-      MissingFormatError: a v7.3 file without h5py (``pip install 'rbjax[formats]'``).
+        DataError: not a .mat file, no or an unknown channel (the channels are listed), a
+            missing or disagreeing rate, a missing calibration, a non-uniform time vector,
+            clipping, too few samples.
+        MissingFormatError: a v7.3 file without h5py (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
     if Path(path).stat().st_size == 0:

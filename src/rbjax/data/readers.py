@@ -53,14 +53,21 @@ def read_csv(
     given it must agree with the column to 1e-4.
 
     Args:
-      path: CSV file.
-      rate_Hz: sampling rate in Hz, needed without a time column.
-      height_m: drop height in metres; default: from the file name (``hNNN``), else None.
-      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        path: CSV file.
+        rate_Hz: sampling rate in Hz, needed without a time column.
+        height_m: drop height in metres; default: from the file name (``hNNN``), else None.
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Returns:
+        The :class:`Recording` (``source`` the file's name), with a note for a time column
+            that does not start at 0 or is written coarsely.
 
     Raises:
-      DataError: empty or truncated file, missing/unknown columns, non-numeric or
-        non-finite values, fewer than ``MIN_SAMPLES`` rows, non-uniform time, clipping.
+        DataError: empty, truncated or non-text file, missing/unknown/ambiguous columns,
+            non-numeric or non-finite values, fewer than ``MIN_SAMPLES`` rows, a constant
+            signal, non-uniform time, no ``rate_Hz`` without a time column or one that
+            disagrees with it, a drop height that is not positive; clipping
+            (:class:`ClippedRecordError`).
     """
     source = as_source(path)
     try:
@@ -211,6 +218,22 @@ def read_npy(
     The array must be 1-D (or ``(n, 1)`` / ``(1, n)``). ``source`` names an array in
     messages (default ``"<array>"``); for a file, its name is used and the drop height
     defaults to the one in the name.
+
+    Args:
+        path_or_array: a ``.npy`` file (``str`` or path) or an array-like of forces, N.
+        rate_Hz: sampling rate, Hz.
+        height_m: drop height, m; default for a file: from its name (``hNNN``), else None.
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        source: name of an array in messages and in the result (ignored for a file).
+
+    Returns:
+        The :class:`Recording` (``source`` the file's name, or ``source`` for an array).
+
+    Raises:
+        DataError: an empty or unreadable file, a ``.npz`` archive, a non-numeric array or
+            one that is not 1-D, no ``rate_Hz``, NaN or inf, fewer than ``MIN_SAMPLES``
+            samples, a constant signal, a drop height that is not positive; a flat top
+            (:class:`ClippedRecordError`).
     """
     if isinstance(path_or_array, (str, os.PathLike)):
         src = as_source(path_or_array)

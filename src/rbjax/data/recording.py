@@ -29,22 +29,28 @@ class Recording:
     """One force record of one drop, sampled uniformly.
 
     Attributes:
-      source: file name the record came from (or a description, e.g. for averages).
-      height_m: drop height in metres, or ``None`` when unknown.
-      rate_Hz: sampling rate in Hz.
-      force_N: force samples in newtons, 1-D float64, read-only; sample ``i`` is at
-        ``i / rate_Hz`` seconds from the first sample.
-      onset_s: sub-sample time of the impact onset (see :func:`locate_onset`), seconds
-        from the first sample of ``force_N``; ``None`` until :func:`condition` sets it.
-      calibration_N_per_FS: calibration used to scale integer/normalised samples to
-        newtons (N per full scale), or ``None``.
-      lowpass_Hz: cutoff of the causal low-pass the record went through (measuring chain
-        or :func:`condition`), Hz, if known/declared; ``None`` if unknown.
-      notes: human-readable warnings and processing notes, oldest first.
-      log: what conditioning did to the record, as ``(step, value)`` pairs in the order
-        done (:func:`~rbjax.data.clean`, :func:`~rbjax.data.condition`): ``polarity``,
-        ``drift_N_per_s``, ``hum``, ``offset_N``, ``impact_s``, ``further_impacts``...;
-        ``conditioning`` gives them as a dict.
+        source: file name the record came from (or a description, e.g. for averages).
+        height_m: drop height in metres, or ``None`` when unknown.
+        rate_Hz: sampling rate in Hz.
+        force_N: force samples in newtons, 1-D float64, read-only; sample ``i`` is at
+            ``i / rate_Hz`` seconds from the first sample.
+        onset_s: sub-sample time of the impact onset (see :func:`locate_onset`), seconds
+            from the first sample of ``force_N``; ``None`` until :func:`condition` sets it.
+        calibration_N_per_FS: calibration used to scale integer/normalised samples to
+            newtons (N per full scale), or ``None``.
+        lowpass_Hz: cutoff of the causal low-pass the record went through (measuring chain
+            or :func:`condition`), Hz, if known/declared; ``None`` if unknown.
+        notes: human-readable warnings and processing notes, oldest first.
+        log: what conditioning did to the record, as ``(step, value)`` pairs in the order
+            done (:func:`~rbjax.data.clean`, :func:`~rbjax.data.condition`): ``polarity``,
+            ``drift_N_per_s``, ``hum``, ``offset_N``, ``impact_s``, ``further_impacts``...;
+            ``conditioning`` gives them as a dict.
+
+    Raises:
+        DataError: ``rate_Hz`` is not positive and finite; ``force_N`` is not a non-empty
+            1-D array or holds NaN or inf; ``height_m`` is given but not positive and
+            finite; ``onset_s``, ``calibration_N_per_FS`` or ``lowpass_Hz`` is given but
+            not finite.
     """
 
     source: str
@@ -129,6 +135,16 @@ class Recording:
         (rising edge exactly as :func:`locate_onset`; falling edge by cubic
         interpolation too). ``end_s - start_s`` is a contact time at that level. Assumes
         the baseline has been removed (a conditioned record).
+
+        Args:
+            fraction: the level as a fraction of the peak force.
+
+        Returns:
+            ``(start_s, end_s)``, seconds from the first sample.
+
+        Raises:
+            DataError: the force does not fall below the level after the peak.
+            RecordCutOffError: the force is already above the level at the first sample.
         """
         x = self.force_N
         ip = int(np.argmax(x))
@@ -150,6 +166,17 @@ class Recording:
         Sub-sample shift by :func:`fractional_shift` (``"fourier"``: band-limited,
         ``"linear"`` or ``"cubic"`` interpolation); samples shifted in from outside the
         record are zero (meaningful for a baseline-subtracted record).
+
+        Args:
+            onset_s: where the onset is to land, seconds from the first sample.
+            method: ``"fourier"``, ``"linear"`` or ``"cubic"``.
+
+        Returns:
+            A copy of the :class:`Recording` with the shifted ``force_N`` and ``onset_s``.
+
+        Raises:
+            DataError: the record has no ``onset_s`` (not conditioned).
+            ValueError: an unknown ``method`` (when the shift is not zero).
         """
         if self.onset_s is None:
             raise DataError(f"{self.source}: no onset_s; condition() the recording first")

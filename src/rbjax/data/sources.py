@@ -15,6 +15,13 @@ def height_from_name(name: str | os.PathLike) -> float | None:
 
     ``h100_d1.csv`` -> 1.0, ``raw_h020_x.wav`` -> 0.2. The three digits must not be
     part of a longer number and the ``h`` must not follow a letter or digit.
+
+    Args:
+        name: a file name or path; only its stem (the name without directory and suffix)
+            is searched.
+
+    Returns:
+        The drop height in metres, or ``None`` when the name holds no ``hNNN``.
     """
     m = _HEIGHT_RE.search(Path(name).stem)
     if m is None:

@@ -56,21 +56,24 @@ def read_tdms(
     """Read a force record from a TDMS file (LabVIEW, NI DAQmx).
 
     Args:
-      path: the .tdms file.
-      channel: ``group/channel``, the channel's name alone when no other group has one
-        of that name, or its number in the listing an error shows; needed when the file
-        holds more than one channel.
-      rate_Hz: sampling rate, Hz, needed when the channel has neither ``wf_increment``
-        nor a time channel; checked against them otherwise (to 1e-4).
-      calibration_N_per_FS: newtons per full scale for integer (unscaled) samples, or
-        newtons per unit for a channel in another unit (V...).
-      height_m: drop height, m; default from the file name (``hNNN``).
-      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        path: the .tdms file.
+        channel: ``group/channel``, the channel's name alone when no other group has one
+            of that name, or its number in the listing an error shows; needed when the file
+            holds more than one channel.
+        rate_Hz: sampling rate, Hz, needed when the channel has neither ``wf_increment``
+            nor a time channel; checked against them otherwise (to 1e-4).
+        calibration_N_per_FS: newtons per full scale for integer (unscaled) samples, or
+            newtons per unit for a channel in another unit (V...).
+        height_m: drop height, m; default from the file name (``hNNN``).
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Returns:
+        The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-      DataError: not a TDMS file, an unknown channel (the channels are listed), a missing
-        rate or calibration, clipping, too few samples.
-      MissingFormatError: npTDMS is not installed (``pip install 'rbjax[formats]'``).
+        DataError: not a TDMS file, an unknown channel (the channels are listed), a missing
+            or disagreeing rate, a missing calibration, clipping, too few samples.
+        MissingFormatError: npTDMS is not installed (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
     if Path(path).stat().st_size == 0:

@@ -73,19 +73,22 @@ def read_uff(
     """Read a force record from a Universal File Format file (``.uff``, ``.unv``), dataset 58.
 
     Args:
-      path: the UFF file.
-      channel: the dataset's ``id1`` (or ``node N dir D``) or its number among the
-        file's datasets 58; needed when the file holds more than one.
-      rate_Hz: checked against the file's abscissa (to 1e-4) if given.
-      calibration_N_per_FS: newtons per unit for a channel in another unit (V...).
-      height_m: drop height, m; default from the file name (``hNNN``).
-      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        path: the UFF file.
+        channel: the dataset's ``id1`` (or ``node N dir D``) or its number among the
+            file's datasets 58; needed when the file holds more than one.
+        rate_Hz: checked against the file's abscissa (to 1e-4) if given.
+        calibration_N_per_FS: newtons per unit for a channel in another unit (V...).
+        height_m: drop height, m; default from the file name (``hNNN``).
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Returns:
+        The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-      DataError: not a UFF file or no dataset 58 in it, a dataset that is not a real time
-        response, an unknown channel (the channels are listed), a missing calibration,
-        clipping, too few samples.
-      MissingFormatError: pyuff is not installed (``pip install 'rbjax[formats]'``).
+        DataError: not a UFF file or no dataset 58 in it, a dataset that is not a real time
+            response, an unknown channel (the channels are listed), a ``rate_Hz`` that
+            disagrees with the file, a missing calibration, clipping, too few samples.
+        MissingFormatError: pyuff is not installed (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
     if Path(path).stat().st_size == 0:

@@ -57,15 +57,19 @@ def read_wav(
     Warnings of the WAV reader (unknown chunks skipped, ...) go to ``notes``.
 
     Args:
-      path: WAV file.
-      calibration_N_per_FS: newtons per full scale (required for integer PCM).
-      height_m: drop height in metres; default: from the file name, else None.
-      channel: channel to read from a multi-channel file (0-based; required then).
-      lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+        path: WAV file.
+        calibration_N_per_FS: newtons per full scale (required for integer PCM).
+        height_m: drop height in metres; default: from the file name, else None.
+        channel: channel to read from a multi-channel file (0-based; required then).
+        lowpass_Hz: declared cutoff of the measuring chain, Hz (stored, not applied).
+
+    Returns:
+        The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-      DataError: empty, truncated or not a WAV file, an unsupported format, a missing
-        channel or calibration, clipping, non-finite or too few samples.
+        DataError: empty, truncated or not a WAV file, an unsupported format, a missing
+            or invalid channel, a missing calibration, clipping, non-finite or too few
+            samples.
     """
     from scipy.io import wavfile  # lazy: scipy.io costs 0.1–0.2 s at import (RESULTS.md)
 
