@@ -71,6 +71,11 @@ def fit(
 ) -> FitResult:
     """Fit E, ν and the parameters of ``model``'s terms to force histories of all records.
 
+    The information criteria use the history residuals, AIC = N_eff ln(RSS/N) + 2p and
+    BIC = N_eff ln(RSS/N) + p ln N_eff (p: free parameters incl. onsets), with the same
+    N_eff = N/τ_noise for every model fitted to the same data (τ_noise: the integrated
+    autocorrelation of the pre-contact noise), so that they are comparable across models.
+
     Args:
         data: a :class:`FitData`, Recording objects, or paths/a directory (see
             :func:`prepare_data`: per-height averages, 30 ms windows, measuring chain low-pass
@@ -98,10 +103,23 @@ def fit(
             ``height_error``, ``fit_heights``, ``superset``), accepted for one release with a
             ``DeprecationWarning``; with ``options=`` too, a ``ValueError`` naming them.
 
-    The information criteria use the history residuals, AIC = N_eff ln(RSS/N) + 2p and
-    BIC = N_eff ln(RSS/N) + p ln N_eff (p: free parameters incl. onsets), with the same
-    N_eff = N/τ_noise for every model fitted to the same data (τ_noise: the integrated
-    autocorrelation of the pre-contact noise), so that they are comparable across models.
+    Returns:
+        The :class:`FitResult`: the fitted ball and model, each parameter's estimate and
+        uncertainty, what the data determine, the per-height table, the information
+        criteria and the measured and fitted records.
+
+    Raises:
+        RuntimeError: float64 was switched off after importing rbjax.
+        ValueError: ``model`` is not a model name; ``blocked_force`` or ``gas`` is not an
+            option; ``ball`` is not an ``rbjax.Ball``; ``fix`` names a parameter the model
+            lacks or holds a value outside its range; ν is both fixed and given a prior;
+            ``start`` names a parameter the model lacks, or is a :class:`FitResult` of
+            another model or number of records; ``options`` is not a
+            :class:`~rbjax.fit.options.FitOptions` or is given with deprecated keywords;
+            ``fit_heights`` names a height without records; the ``superset`` lacks a term
+            of the model or has another gas.
+        TypeError: an unknown keyword.
+        DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()
     options = options_from_keywords("fit", options, deprecated)

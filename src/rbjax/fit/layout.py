@@ -92,6 +92,13 @@ def fit_declaration(name: str, ball, model):
 
 
 def all_model_names() -> tuple[str, ...]:
+    """Every model name that :func:`model_from_name` builds from one suffix of each kind.
+
+    Returns:
+        The names, a tuple of str: ``paper`` and each registered damping law, then each of
+        these with ``+stiffening``, then all of those with ``+ball-mode``, then all of them
+        with ``+series-kelvin-voigt``.
+    """
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
     with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
     return with_stiffening + tuple(
@@ -110,7 +117,20 @@ class ModelTerms(NamedTuple):
 
 def parse_model_terms(name: str) -> ModelTerms:
     """(damping law classes, stiffening?, ball mode?, series element?) of a model name such as
-    ``zener+stiffening+ball-mode`` (the suffixes in this order, as ``Model.name`` writes them)."""
+    ``zener+stiffening+ball-mode`` (the suffixes in this order, as ``Model.name`` writes them).
+
+    Args:
+        name: a model name: ``paper`` or a registered damping law, then optionally
+            ``+stiffening``, ``+ball-mode`` and ``+series-kelvin-voigt``, in this order.
+
+    Returns:
+        A ``ModelTerms`` ``(laws, stiffening, ball_mode, series)``: the damping law classes
+        (empty for ``paper``) and whether the name has each of the three suffixes.
+
+    Raises:
+        ValueError: ``name`` is not a str, or what is left of it without the suffixes is
+            neither ``paper`` nor a registered damping law.
+    """
     if not isinstance(name, str):
         raise ValueError(
             f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}"
@@ -132,7 +152,18 @@ def parse_model_terms(name: str) -> ModelTerms:
 def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
     """(damping law classes, stiffening?) of a model name such as ``zener+stiffening``
     (a ``+ball-mode`` suffix is accepted; :func:`parse_model_terms` also says whether it is
-    there)."""
+    there).
+
+    Args:
+        name: a model name (see :func:`parse_model_terms`).
+
+    Returns:
+        A tuple ``(laws, stiffening)``: the damping law classes (empty for ``paper``) and
+        whether the name has the ``+stiffening`` suffix.
+
+    Raises:
+        ValueError: ``name`` is not a model name (see :func:`parse_model_terms`).
+    """
     terms = parse_model_terms(name)
     return terms.laws, terms.stiffening
 
@@ -141,7 +172,22 @@ def model_from_name(
     name: str, *, gas: str = "adiabatic", blocked_force: str = "paper", values=None
 ) -> Model:
     """The ``Model`` a model name stands for, its parameters from ``values`` (name → value;
-    the ball mode's and the series element's defaults are their ``start``'s for a 50 kN/m shell)."""
+    the ball mode's and the series element's defaults are their ``start``'s for a 50 kN/m shell).
+
+    Args:
+        name: a model name (see :func:`all_model_names`).
+        gas: the gas term, ``adiabatic`` or ``none``.
+        blocked_force: ``paper`` or ``momentum``.
+        values: name → value of the terms' parameters (SI units, as named); a damping law's
+            parameter not given is 1.0, the stiffening's ``beta`` 0.05. None: every default.
+
+    Returns:
+        The ``rbjax.Model`` with the terms the name stands for.
+
+    Raises:
+        ValueError: ``name`` is not a model name, ``gas`` or ``blocked_force`` is not an
+            option, or a value is outside its parameter's range.
+    """
     terms = parse_model_terms(name)
     values = dict(values or {})
     damping = tuple(law(**{k: values.get(k, 1.0) for k in law.PARAMETERS}) for law in terms.laws)

@@ -53,6 +53,15 @@ class FitOptions:
             ``rbjax.terms.model.superset_model``): the fit runs in its compiled program with the
             terms the model lacks held at their values, so fits of different models share one
             program (model selection does this).
+
+    Raises:
+        ValueError: ``optimizer``, ``scale`` or ``path`` is not an option; ``decimate`` is
+            not an integer ≥ 1; ``hold_poisson`` is outside (−1, 0.5]; ``poisson_prior`` is
+            not a (mean, std) with −1 < mean < 0.5, std > 0; ``extra_weights`` names an
+            unknown term or gives a negative or non-finite weight; ``max_steps`` is not an
+            integer ≥ 0; ``solver`` is not an ``rbjax.Solver``; ``superset`` is not an
+            ``rbjax.Model``; ``height_error`` is not a bool; ``fit_heights`` is not a
+            sequence of finite heights.
     """
 
     optimizer: str = "lm"

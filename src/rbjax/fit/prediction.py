@@ -28,9 +28,27 @@ def predict(
 
     The model's floor force goes through the records' measuring chain; each record's onset
     is aligned with the predicted one (5 % of the peak); contact time, peak and octave-band
-    L_FE are read off both with the same estimator. ``per_height`` rows as in
-    :class:`FitResult` (all held out). ``model``: any ``rbjax.Model`` (default: the paper's
-    elastic model). ``superset``: run in that model's compiled program (see :func:`fit`).
+    L_FE are read off both with the same estimator.
+
+    Args:
+        data: a :class:`FitData`, Recording objects, or paths/a directory (see
+            :func:`prepare_data`).
+        ball: geometry, mass and E, ν of the ball.
+        model: any ``rbjax.Model`` (default: the paper's elastic model).
+        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then
+            runs on the diffrax ODE; default: the fit's path for the model.
+        superset: run in that model's compiled program (see :func:`fit`).
+
+    Returns:
+        The :class:`Prediction`: ``per_height`` rows as in :class:`FitResult` (all held
+        out), the time axis, the measured and the predicted (filtered) records, N, and each
+        record's drop height, m.
+
+    Raises:
+        RuntimeError: float64 was switched off after importing rbjax.
+        ValueError: ``solver`` is not an ``rbjax.Solver``, or ``superset`` has another gas
+            or lacks a term of ``model``.
+        DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()
     model = Model() if model is None else model
@@ -55,11 +73,31 @@ def model_histories(
 ):
     """The predicted records of :func:`fit` and their exact Jacobian, for given parameters.
 
-    ``params``: every name of ``rbjax.fit.parameter_names(model)``; ``onset_shift_s``: the
-    contact start of each record in its time axis (s). Returns ``(force_N, jacobian, names)``:
-    the filtered floor force (n_records, n_samples), d force/d parameter
-    (n_records, n_samples, n_parameters) by forward-mode differentiation through the solver,
-    and the parameter names (the physical ones, then ``shift[k]``).
+    Args:
+        data: a :class:`FitData`, Recording objects, or paths/a directory (see
+            :func:`prepare_data`).
+        model: a model name or an ``rbjax.Model`` (its values replaced by ``params``).
+        params: name → value of every name of ``rbjax.fit.parameter_names(model)``, in the
+            units the names state (others are not used).
+        onset_shift_s: the contact start of each record in its time axis, s: one per
+            record, or one for all.
+        blocked_force: for a model name: ``paper`` or ``momentum``. A ``Model`` brings its own.
+        gas: for a model name: ``adiabatic`` or ``none``. A ``Model`` brings its own.
+        ball: geometry and mass (R, h, M); its E, ν are replaced by ``params``.
+        solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then
+            runs on the diffrax ODE.
+
+    Returns:
+        A tuple ``(force_N, jacobian, names)``: the filtered floor force
+        (n_records, n_samples), N; d force/d parameter (n_records, n_samples, n_parameters)
+        by forward-mode differentiation through the solver; and the parameter names (the
+        physical ones, then ``shift[k]``).
+
+    Raises:
+        ValueError: ``params`` lacks a parameter of the model, ``model`` is not a model
+            name, a value is outside its parameter's range, or ``solver`` is not an
+            ``rbjax.Solver``.
+        DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     _, candidate = candidate_model(model, blocked_force, gas)
     names = fitted_parameter_names(candidate)
@@ -95,5 +133,19 @@ def parameter_names_of(
     model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic"
 ) -> tuple[str, ...]:
     """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
-    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``."""
+    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``.
+
+    Args:
+        model: a model name or an ``rbjax.Model``.
+        blocked_force: for a model name: ``paper`` or ``momentum``. A ``Model`` brings its own.
+        gas: for a model name: ``adiabatic`` or ``none``. A ``Model`` brings its own.
+
+    Returns:
+        The names (tuple of str), in the fit's order: E and ν, then the parameters of the
+        damping laws, stiffening, ball mode and series element (not R, h, M).
+
+    Raises:
+        ValueError: ``model`` is not a model name, or ``blocked_force`` or ``gas`` is not
+            an option.
+    """
     return fitted_parameter_names(candidate_model(model, blocked_force, gas)[1])

@@ -88,13 +88,26 @@ class FitData:
 def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_kwargs):
     """Read recordings with ``rbjax.data.load``; resolve the measuring chain's low-pass.
 
-    ``lowpass_Hz="auto"``: the cutoff the recordings declare (all equal), else, for the
-    shipped emulated recordings (``rbjax.data.examples_dir()``), their documented 1250 Hz;
-    else none. A number or None overrides.
+    Args:
+        paths_or_dir: a file or directory (``str`` or path), or an iterable of them.
+        lowpass_Hz: the measuring chain's cutoff, Hz. ``"auto"``: the cutoff the recordings
+            declare (all equal), else, for the shipped emulated recordings
+            (``rbjax.data.examples_dir()``), their documented 1250 Hz; else none. A number or
+            None overrides.
+        strict: False (the default): a clipped file is returned as ``rbjax.data.Excluded``
+            with its reason (:func:`prepare_data` leaves it out and reports it); True: it is
+            refused (``rbjax.data.ClippedRecordError``).
+        **load_kwargs: further keywords of ``rbjax.data.load`` (``height_m``, ``manifest``,
+            ``rate_Hz``, ``calibration_N_per_FS``, ``channel``).
 
-    ``strict=False`` (the default): a clipped file is returned as ``rbjax.data.Excluded``
-    with its reason (:func:`prepare_data` leaves it out and reports it); ``strict=True``:
-    it is refused (``rbjax.data.ClippedRecordError``).
+    Returns:
+        A list of ``rbjax.data.Recording`` in file order, their ``lowpass_Hz`` resolved as
+        above, with an ``rbjax.data.Excluded`` in place of each clipped file (``strict=False``).
+
+    Raises:
+        DataError: a file cannot be read or its height known, and the other errors of
+            ``rbjax.data.load``.
+        ClippedRecordError: a clipped file, with ``strict=True``.
     """
 
     items = [paths_or_dir] if isinstance(paths_or_dir, (str, Path)) else list(paths_or_dir)
@@ -137,8 +150,27 @@ def prepare_data(
     height are averaged coherently in the frequency domain (``rbjax.data.average``, the
     paper's §3 averaging), one record per height; else every drop is a record.
 
-    ``recordings``: Recording objects, or paths/a directory (read by :func:`load_data`).
-    ``lowpass_Hz``: ``"auto"`` (as declared by the recordings), a cutoff in Hz, or None.
+    Args:
+        recordings: Recording objects (``rbjax.data.Excluded`` entries among them are left
+            out), or paths/a directory (read by :func:`load_data`); a :class:`FitData` is
+            returned as it is (the other arguments are then not used).
+        average: average the drops of each height into one record (True) or keep every
+            drop a record (False).
+        window_s: length of the window kept of each record, s.
+        pre_onset_s: how long before the first impact's onset the window starts, s.
+        lowpass_Hz: the measuring chain's cutoff: ``"auto"`` (as declared by the
+            recordings), a cutoff in Hz, or None (no filter).
+
+    Returns:
+        The :class:`FitData`, its records in ascending height (one per height with
+        ``average=True``), all cut to the length of the shortest.
+
+    Raises:
+        DataError: no recording is left (every one excluded, or none given), a recording's
+            drop height is unknown, the recordings declare different low-pass cutoffs, or a
+            record cannot be conditioned (e.g. ``rbjax.data.NoImpactError``,
+            ``rbjax.data.RecordCutOffError``) or read (:func:`load_data`).
+        ValueError: ``window_s`` or ``pre_onset_s`` is not a positive finite number.
     """
 
     if isinstance(recordings, FitData):
@@ -268,8 +300,17 @@ def record_features(force_N, rate_Hz: float) -> dict:
     """Contact time, peak force and octave-band L_FE of histories (..., n) as measured.
 
     The estimator of :func:`fit` (5 % of the peak, linear interpolation; L_FE of the record
-    zero-padded to 1 s); returns NumPy arrays ``contact_time_s``, ``peak_force_N``,
-    ``onset_s`` and ``lfe_octave_dB`` (..., 6).
+    zero-padded to 1 s).
+
+    Args:
+        force_N: force histories, N, shape (..., n): time along the last axis.
+        rate_Hz: their sampling rate, Hz.
+
+    Returns:
+        A dict of NumPy arrays: ``onset_s`` (...), the contact start from the first sample,
+        s; ``contact_time_s`` (...), s; ``peak_force_N`` (...), N; ``lfe_octave_dB``
+        (..., 6), dB per octave band. Contact start and time are NaN where the history
+        does not cross 5 % of its peak before or after it.
     """
     f = np.asarray(
         _features_jit(float(rate_Hz), _n_pad(rate_Hz))(jnp.asarray(force_N, dtype=jnp.float64))

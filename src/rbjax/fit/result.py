@@ -16,7 +16,16 @@ from ..text import fmt, format_table
 
 @dataclasses.dataclass(frozen=True)
 class ParameterEstimate:
-    """A fitted (or held) parameter: value, standard deviation, 95 % interval, unit."""
+    """A fitted (or held) parameter: value, standard deviation, 95 % interval, unit.
+
+    Attributes:
+        value: the fitted (or held) value, in ``unit``.
+        std: its standard deviation (linearised; 0 for a held one), in ``unit``.
+        ci95: the 95 % interval (lower, upper), in ``unit``: ±1.96 standard deviations in
+            the fit's unconstrained coordinate, mapped back (so it respects the bounds).
+        unit: the unit, e.g. ``Pa`` (``1`` for a dimensionless parameter).
+        fixed: whether the parameter was held, not fitted.
+    """
 
     value: float
     std: float
@@ -41,6 +50,7 @@ class FitResult:
     Attributes:
         model_name: ``paper``, ``kelvin-voigt``, ``hunt-crossley``, ``zener`` (+``+stiffening``),
             or the name of the ``Model`` fitted.
+        blocked_force, gas: the fitted model's blocked-force and gas options.
         ball, model: the fitted ``rbjax.Ball`` and ``rbjax.Model`` (``rbjax.simulate`` them).
         parameters: name → :class:`ParameterEstimate` (held ones with ``fixed=True``, std 0),
             plus ``effective_modulus_Pa`` = E/√(1−ν²), the combination the data determine.
@@ -52,8 +62,11 @@ class FitResult:
         converged, message, iterations, optimizer: whether the optimiser converged, its message,
             its function evaluations and its name (``lm`` or ``gauss-newton``).
         n_eff_factor: τ, the samples per independent residual (N_eff = N/τ).
+        n_residuals, n_free: N, the history residuals, and p, the free parameters (onset
+            shifts included), of the information criteria.
         aic, bic: information criteria of the history residuals (see :func:`fit`).
         time_s, measured_N, predicted_N, heights_m, in_fit: the records, for plots and checks.
+        onset_shift_s: the fitted contact start of each record in its time axis, s.
         theta: the full internal parameter vector (natural units; warm starts).
         n_starts, n_converged_starts: the starts tried (alternatives for parameters whose fit
             has several minima, in one compiled program) and how many converged; the result is
@@ -161,7 +174,17 @@ class FitResult:
 @dataclasses.dataclass(frozen=True, eq=False)
 class Prediction:
     """A model's predicted records next to the measured ones (nothing fitted); see
-    :func:`predict`."""
+    :func:`predict`.
+
+    Attributes:
+        per_height: one dict per drop height, as :attr:`FitResult.per_height` (every record
+            held out).
+        time_s: the records' time axis, s.
+        measured_N: the measured records (n_records, n_samples), N.
+        predicted_N: the predicted records through the measuring chain, N, same shape.
+        heights_m: the drop height of each record, m.
+        converged: True (nothing is optimised; as :attr:`FitResult.converged`).
+    """
 
     per_height: tuple
     time_s: np.ndarray
