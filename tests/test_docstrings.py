@@ -57,7 +57,10 @@ def _own_source(obj) -> str:
     for name in VALIDATORS:
         member = obj.__dict__.get(name)
         if inspect.isfunction(member):
-            parts.append(inspect.getsource(member))
+            try:
+                parts.append(inspect.getsource(member))
+            except OSError:  # generated (a dataclass's or an equinox Module's __init__)
+                pass
     return "\n".join(parts)
 
 
