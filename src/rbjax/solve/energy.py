@@ -36,7 +36,23 @@ from .vector_field import body_velocity_m_per_s, split_energy
 
 
 class EnergyBalance(eqx.Module):
-    """The terms of the energy balance of an impact (J); ``residual_J`` should be ~0."""
+    """The terms of the energy balance of an impact (J); ``residual_J`` should be ~0.
+
+    Every field has the broadcast shape of the inputs of :func:`energy_balance`; where
+    ``status != 0`` every term but ``impact_energy_J`` is NaN.
+
+    Attributes:
+        impact_energy_J: ½Mv0², the kinetic energy at first contact.
+        rebound_energy_J: ½(M − M_c)Ẋ², the kinetic energy of the moving part at the end of
+            contact.
+        floor_energy_J: W_floor = ∫F u̇ dt, the energy injected into the floor (0 on the rigid
+            floor).
+        flux_loss_J: D_flux = ∫½(M/2R)|δ̇|³ dt, lost as mass joins and leaves the cap.
+        contact_work_J: W_contact = ∫F_c δ̇ dt, the damping's loss (0 for an elastic ball).
+        cap_work_J: W_cap, the work the model leaves out on a moving floor (0 on the rigid
+            floor).
+        status: status code per impact (``rbjax.STATUS_NAMES``; 0: ok).
+    """
 
     impact_energy_J: jax.Array
     rebound_energy_J: jax.Array
@@ -94,6 +110,23 @@ def energy_balance(
     Models with elements in series with the shell (``BallMode``, ``SeriesKelvinVoigt``, any
     ``AbstractSeriesElement``) are not covered (their own energy is not accounted for): a
     ``ValueError`` naming them.
+
+    Args:
+        height_m: drop height h_D (m), a scalar or an array; ball and model fields may be
+            arrays too and broadcast against it.
+        ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``).
+        model: the :class:`~rbjax.terms.model.Model` (default ``Model()``), without elements in
+            series with the shell.
+        solver: the :class:`~rbjax.terms.model.Solver` of the diffrax ODE (default ``Solver()``).
+
+    Returns:
+        An :class:`EnergyBalance` with the broadcast shape of the inputs.
+
+    Raises:
+        ValueError: a model with elements in series with the shell (named in the message);
+            ``height_m`` not finite and > 0, or ``ball`` not a ``Ball`` (the argument named in
+            the message).
+        RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
 
     check_inputs(height_m, ball)

@@ -46,6 +46,11 @@ class EvaluationSpec:
             ``rbjax.solve.devices.default_chunk_size``).
         devices: the local JAX devices the chunks are split over (default: all).
         progress: progress bars on stderr.
+
+    Raises:
+        ValueError: an unknown ``path``; a ``solver`` that is not an ``rbjax.Solver``;
+            ``rate_Hz`` or ``duration_s`` not finite and > 0; a ``chunk_size`` that is not an
+            integer ≥ 1; a ``progress`` that is not a bool. The message names the field.
     """
 
     path: str = "auto"

@@ -31,7 +31,14 @@ SINGULAR_FRACTION = 0.999
 
 
 def impact_velocity_m_per_s(height_m: ArrayLike) -> jax.Array:
-    """v0 = √(2 g h_D), the speed at first contact after a free fall from h_D (Eq. 10)."""
+    """v0 = √(2 g h_D), the speed at first contact after a free fall from h_D (Eq. 10).
+
+    Args:
+        height_m: drop height h_D (m), a scalar or an array.
+
+    Returns:
+        The impact speed v0 (m/s), with the shape of ``height_m`` (g = 9.80665 m/s²).
+    """
     return jnp.sqrt(2.0 * G_N_PER_KG * height_m)
 
 
@@ -44,7 +51,21 @@ def nan_where(failed, value):
 
 
 class ImpactScalars(eqx.Module):
-    """The scalar outputs of one impact (or a batch: every field shares the batch shape)."""
+    """The scalar outputs of one impact (or a batch: every field shares the batch shape).
+
+    Where ``status != 0`` the six float fields are NaN.
+
+    Attributes:
+        contact_time_s: duration of the contact (s), first contact to the end of contact.
+        peak_force_N: largest floor force (N).
+        peak_time_s: time of the force peak after first contact (s).
+        restitution: coefficient of restitution, rebound momentum over impact momentum.
+        max_deflection_m: largest deflection δ of the shell (m).
+        max_compression_time_s: time of the maximum compression after first contact (s).
+        status: status code (int32; ``STATUS_NAMES``, 0: ok).
+        num_steps: the solve path's count of steps (int32): solver steps of the ODE, force
+            evaluations of the quadrature, fixed steps of the phase-angle path.
+    """
 
     contact_time_s: jax.Array
     peak_force_N: jax.Array
@@ -72,6 +93,14 @@ class Trajectory(eqx.Module):
     """State and floor force of one impact (or a batch) sampled at given times (0 after contact).
 
     Where ``status != 0`` (see ``STATUS_NAMES``) the solve failed and the samples are NaN.
+
+    Attributes:
+        time_s: the sample times after first contact (s).
+        deflection_m: deflection δ of the shell (m) at each time.
+        velocity_m_per_s: its rate δ̇ (m/s) at each time.
+        force_N: the force on the floor (N) at each time.
+        in_contact: True at the samples during contact (False where the solve failed).
+        status: status code per impact (int32; 0: ok), with the batch shape.
     """
 
     time_s: jax.Array

@@ -95,13 +95,27 @@ class ImpactResult(eqx.Module):
 
     Every scalar field has the broadcast shape of the inputs. Where ``status != 0`` the scalar
     outputs are NaN and ``status_name`` says why (``step_limit``, ``mass_singularity``,
-    ``deflection_limit``, ``solver_failed``).
+    ``deflection_limit``, ``solver_failed``, ``recontact``).
 
-    ``method`` records the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` =
-    solver steps), ``"quadrature"`` (``rbjax.solve.quadrature``, ``num_steps`` = force evaluations),
-    ``"angle"`` (``rbjax.solve.angle``, ``num_steps`` = fixed steps in the phase angle), or
-    ``"quadrature+ode"`` / ``"angle+ode"`` (that path, with the ODE for the impacts it flagged
-    ``solver_failed``).
+    Attributes:
+        height_m: the drop heights h_D (m), broadcast to the shape of the outputs.
+        contact_time_s: duration of the contact (s).
+        peak_force_N: largest floor force (N).
+        peak_time_s: time of the force peak after first contact (s).
+        restitution: coefficient of restitution, rebound momentum over impact momentum.
+        max_deflection_m: largest deflection δ of the shell (m).
+        status: status code per impact (int32; ``rbjax.STATUS_NAMES``, 0: ok).
+        num_steps: the path's count of steps per impact (see ``method``).
+        ball: the :class:`~rbjax.terms.ball.Ball` simulated.
+        model: the :class:`~rbjax.terms.model.Model` simulated.
+        solver: the :class:`~rbjax.terms.model.Solver` of the ODE (and of ``history()``).
+        rate_Hz: sample rate of the force record (Hz) of ``force_N``, ``history()`` and the L_FE.
+        duration_s: length of that record (s).
+        method: the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` = solver
+            steps), ``"quadrature"`` (``rbjax.solve.quadrature``, ``num_steps`` = force
+            evaluations), ``"angle"`` (``rbjax.solve.angle``, ``num_steps`` = fixed steps in the
+            phase angle), or ``"quadrature+ode"`` / ``"angle+ode"`` (that path, with the ODE for
+            the impacts it flagged ``solver_failed``).
     """
 
     height_m: jax.Array
@@ -245,10 +259,6 @@ def simulate(
     * ``"ode"``: the diffrax ODE with ``solver`` (default ``Solver()``).
     * ``"quadrature"``, ``"angle"``: that path only (``ValueError`` for models it cannot solve).
 
-    Returns an ``ImpactResult``: contact time, peak force, restitution, status per height;
-    ``.force_N`` / ``.history()`` compute the histories on request (``rbjax.solve.sampled`` on the
-    rigid floor, the ODE otherwise); ``.lfe_octave_dB()`` the band levels from the contact samples.
-
     Every core: concrete inputs (outside ``jax.jit``) are solved as one batch of impacts, cut in
     chunks sized for the device and split over the local devices, each device running its own
     program (``rbjax.solve.devices``); the results are those of one device, bit for bit. JAX
@@ -256,6 +266,36 @@ def simulate(
     ``JAX_NUM_CPU_DEVICES=16 python script.py``, or first thing in the script
     ``jax.config.update("jax_num_cpu_devices", 16)`` (``rbjax.commands.use_cpu_devices()``: one
     per usable core). The command line does it for you.
+
+    Args:
+        height_m: drop height h_D (m), a scalar or an array.
+        ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``); its fields may
+            be arrays that broadcast against ``height_m``.
+        model: the :class:`~rbjax.terms.model.Model` (default: built from ``shortcuts``, else
+            ``Model()``).
+        solver: a :class:`~rbjax.terms.model.Solver`: asks for the diffrax ODE with it (default:
+            none, ``Solver()`` where the ODE runs).
+        method: the path of the scalar outputs, ``"auto"``, ``"ode"``, ``"quadrature"`` or
+            ``"angle"`` (see above).
+        rate_Hz: sample rate (Hz) of the force record of ``force_N``, ``history()`` and the L_FE
+            (default the paper's 44.1 kHz).
+        duration_s: length of that record (s; default 1 s).
+        **shortcuts: the keyword shortcuts that build the ``Model`` when ``model`` is not given
+            (see above).
+
+    Returns:
+        An :class:`ImpactResult`: contact time, peak force, restitution, status per height;
+            ``.force_N`` / ``.history()`` compute the histories on request
+            (``rbjax.solve.sampled`` on the rigid floor, the ODE otherwise); ``.lfe_octave_dB()``
+            the band levels from the contact samples.
+
+    Raises:
+        ValueError: ``height_m``, ``rate_Hz`` or ``duration_s`` not finite and > 0, or a record
+            of no sample; ``ball`` not a ``Ball`` or ``model`` not a ``Model``; ``model`` and
+            shortcuts both given; an unknown ``method``, or a path that cannot solve the model;
+            an invalid shortcut value (as ``Model`` raises). The message names the argument.
+        TypeError: a keyword that is neither an argument nor a field of ``Model``.
+        RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
     model = model_from_shortcuts("simulate", model, shortcuts)
@@ -447,6 +487,24 @@ def trajectory(
 
     The building block for fitting: ``times_s`` is static in shape, so this jits and goes
     through ``jax.jacfwd`` (with ``Solver(adjoint="forward")``).
+
+    Args:
+        height_m: drop height h_D (m), a scalar or an array; ball and model fields may be arrays
+            too and broadcast against it.
+        times_s: the sample times after first contact (s), a 1-D array.
+        ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``).
+        model: the :class:`~rbjax.terms.model.Model` (default ``Model()``).
+        solver: the :class:`~rbjax.terms.model.Solver` of the diffrax ODE (default ``Solver()``).
+
+    Returns:
+        A :class:`~rbjax.solve.outcome.Trajectory` whose samples have the broadcast shape of
+            the inputs followed by ``len(times_s)`` (zero after contact, NaN where the solve
+            failed).
+
+    Raises:
+        ValueError: ``times_s`` not 1-D or not finite; ``height_m`` not finite and > 0, or
+            ``ball`` not a ``Ball`` (the argument named in the message).
+        RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
     check_inputs(height_m, ball)
     if np.ndim(times_s) != 1:

@@ -27,6 +27,10 @@ class Ball(eqx.Module):
         mass_kg: total mass M.
         youngs_Pa: Young's modulus E of the rubber.
         poisson: Poisson's ratio ν, −1 < ν ≤ 0.5.
+
+    Raises:
+        ValueError: a field outside its valid range or not finite, or ``wall_m`` ≥ ``radius_m``,
+            named in the message (concrete values only).
     """
 
     radius_m: ArrayLike

@@ -38,6 +38,10 @@ class BallMode(AbstractSeriesElement):
             point (0: off; large: a light contact zone).
         mode_frequency_Hz: f = ω/2π > 0 of the mode on its own.
         mode_loss_factor: η ≥ 0 (viscous at resonance: damping η ω m_b).
+
+    Raises:
+        ValueError: a field outside its valid range or not finite, named in the message
+            (concrete values only).
     """
 
     mode_mass_ratio: ArrayLike

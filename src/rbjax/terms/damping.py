@@ -90,7 +90,11 @@ class KelvinVoigt(AbstractDamping):
     """Viscous damping in parallel with the shell: F_d = c δ̇ (model name ``kelvin-voigt``).
 
     Attributes:
-        damping_Ns_per_m: c ≥ 0.
+        damping_Ns_per_m: c ≥ 0 (N·s/m).
+
+    Raises:
+        ValueError: ``damping_Ns_per_m`` outside its valid range or not finite (concrete
+            values only).
     """
 
     damping_Ns_per_m: ArrayLike
@@ -120,8 +124,12 @@ class HuntCrossley(AbstractDamping):
     falls slowly, and no force jump appears at first contact.
 
     Attributes:
-        alpha_s_per_m: α ≥ 0.
+        alpha_s_per_m: α ≥ 0 (s/m).
         exponent: n ≥ 1 (static).
+
+    Raises:
+        ValueError: ``alpha_s_per_m`` outside its valid range or not finite (concrete values
+            only), or ``exponent`` < 1.
     """
 
     alpha_s_per_m: ArrayLike
@@ -161,7 +169,11 @@ class Zener(AbstractDamping):
 
     Attributes:
         stiffness_ratio: r = k₁/k ≥ 0.
-        relaxation_time_s: τ > 0.
+        relaxation_time_s: τ > 0 (s).
+
+    Raises:
+        ValueError: a field outside its valid range or not finite, named in the message
+            (concrete values only).
     """
 
     stiffness_ratio: ArrayLike

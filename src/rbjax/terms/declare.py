@@ -31,6 +31,9 @@ class Parameter:
             ``log`` (θ = exp φ, for θ > 0), ``interval`` (θ = lower + (upper − lower)·sigmoid φ,
             for a bounded θ) or ``identity``.
         description: what the parameter is, with the equation it enters.
+
+    Raises:
+        ValueError: a ``transform`` other than ``log``, ``interval`` or ``identity``.
     """
 
     unit: str

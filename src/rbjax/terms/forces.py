@@ -36,6 +36,13 @@ def reissner_stiffness_N_per_m(ball) -> jnp.ndarray:
         h_r = h / √(12(1−ν²))                                   (Eq. 3, corrected)
 
     and F_B / δ = 8B / (R h_r) = 4 E h² / (R √(3(1−ν²))).
+
+    Args:
+        ball: the :class:`~rbjax.terms.ball.Ball` (its ``youngs_Pa``, ``wall_m``, ``radius_m``
+            and ``poisson``; array fields broadcast).
+
+    Returns:
+        The stiffness k = F_B/δ of the shell (N/m), with the broadcast shape of the ball's fields.
     """
     e, h, r, nu = ball.youngs_Pa, ball.wall_m, ball.radius_m, ball.poisson
     bending = e * h**3 / (12.0 * (1.0 - nu**2))
@@ -50,7 +57,15 @@ def cap_volume_m3(deflection_m, radius_m):
 
 
 def contact_area_m2(deflection_m, radius_m):
-    """Area πa² = πδ(2R−δ) of the flattened cap (a: the cap's base radius)."""
+    """Area πa² = πδ(2R−δ) of the flattened cap (a: the cap's base radius).
+
+    Args:
+        deflection_m: deflection δ of the shell (m), measured from first contact.
+        radius_m: outer radius R of the ball (m).
+
+    Returns:
+        The contact area (m²), with the broadcast shape of the arguments.
+    """
     d = deflection_m
     return jnp.pi * d * (2.0 * radius_m - d)
 
@@ -68,6 +83,16 @@ def gas_force_N(deflection_m, ball, *, ambient_Pa=AMBIENT_PRESSURE_Pa, gamma=GAM
     the cavity pull the ball into the floor). V0 uses the outer radius R as in Hubbard's
     thin-shell model; for the thick rubber wall the real cavity is smaller, so this
     underestimates the (already secondary) gas force.
+
+    Args:
+        deflection_m: deflection δ of the shell (m), measured from first contact.
+        ball: the :class:`~rbjax.terms.ball.Ball` (its ``radius_m`` is R).
+        ambient_Pa: ambient pressure p_a (Pa), the cavity's pressure before contact (default
+            ``AMBIENT_PRESSURE_Pa``, 101 325 Pa).
+        gamma: ratio of specific heats γ of the gas (default ``GAMMA_AIR``, 1.4).
+
+    Returns:
+        The gas force F_G (N) on the floor, with the broadcast shape of δ and the ball's fields.
     """
     r = ball.radius_m
     d = deflection_m
@@ -109,6 +134,9 @@ class CubicStiffening(eqx.Module):
 
     Attributes:
         beta: dimensionless coefficient β ≥ 0 (0: Reissner's linear shell).
+
+    Raises:
+        ValueError: ``beta`` outside its valid range or not finite (concrete values only).
     """
 
     beta: ArrayLike
@@ -121,7 +149,17 @@ class CubicStiffening(eqx.Module):
 
 
 def shell_force_N(deflection_m, ball, stiffening=None):
-    """F_B = kδ (Eq. 1 with the corrected Eq. 3), times (1 + β(δ/h)²) with stiffening."""
+    """F_B = kδ (Eq. 1 with the corrected Eq. 3), times (1 + β(δ/h)²) with stiffening.
+
+    Args:
+        deflection_m: deflection δ of the shell (m), measured from first contact.
+        ball: the :class:`~rbjax.terms.ball.Ball` (k from :func:`reissner_stiffness_N_per_m`,
+            h its ``wall_m``).
+        stiffening: ``None`` (Reissner's linear shell) or a :class:`CubicStiffening` (its β).
+
+    Returns:
+        The shell force F_B (N), with the broadcast shape of δ and the ball's fields.
+    """
     force = reissner_stiffness_N_per_m(ball) * deflection_m
     if stiffening is not None:
         force = force * (1.0 + stiffening.beta * (deflection_m / ball.wall_m) ** 2)

@@ -82,6 +82,14 @@ class Model(eqx.Module):
             paper's immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
 
     ``Model(blocked_force="momentum")`` sets ``momentum_flux_weight=1``.
+
+    Raises:
+        ValueError: ``blocked_force`` and ``momentum_flux_weight`` both given; an unknown
+            ``gas`` or ``blocked_force``; ``ball_mode`` not a ``BallMode`` or ``series`` not a
+            ``SeriesKelvinVoigt``; a ``damping``, ``stiffening``, ``series_elements`` or
+            ``floor`` of the wrong kind; a damping law or element in series given twice;
+            ``momentum_flux_weight`` outside [0, 1] or ``max_deflection_ratio`` ≤ 0 (concrete
+            values only). The message names the argument.
     """
 
     gas: str = eqx.field(static=True)
@@ -318,6 +326,11 @@ class Solver(eqx.Module):
         max_steps: step budget per phase; exhausting it gives status ``step_limit``.
         adjoint: ``"reverse"`` (works with ``jax.grad``) or ``"forward"`` (works with
             ``jax.jacfwd``/``jax.jvp``, cheaper for a few parameters).
+
+    Raises:
+        ValueError: an unknown ``method`` or ``adjoint``; ``rtol``, ``atol`` or ``step_s``
+            outside (0, 1); a fixed-step method without ``step_s``; ``max_steps`` ≤ 0. The
+            message names the field.
     """
 
     method: str = eqx.field(static=True, default="tsit5")

@@ -92,7 +92,21 @@ class ParameterInfo:
 def parameter_names(
     height_m: ArrayLike = 1.0, ball: Ball | None = None, model: Model | None = None
 ) -> tuple[str, ...]:
-    """Names of the continuous parameters of an impact, in vector order."""
+    """Names of the continuous parameters of an impact, in vector order.
+
+    Args:
+        height_m: drop height h_D (m); its value does not change the names.
+        ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``).
+        model: the :class:`~rbjax.terms.model.Model` (default ``Model()``).
+
+    Returns:
+        The names, ``"height_m"`` first, then the ball's and the model's parameters in the
+            order of the pytree's leaves (the order of :func:`to_vector`).
+
+    Raises:
+        TypeError: a term with an array field that its ``PARAMETERS`` do not declare.
+        ValueError: a parameter name that occurs in more than one term.
+    """
     ball, model = _defaults(ball, model)
     return tuple(n for n, _, _ in _leaf_entries(height_m, ball, model))
 
@@ -100,7 +114,24 @@ def parameter_names(
 def parameter_table(
     height_m: ArrayLike, ball: Ball | None, model: Model | None
 ) -> tuple[ParameterInfo, ...]:
-    """Name, value and declaration of every parameter of the impact (scalar values)."""
+    """Name, value and declaration of every parameter of the impact (scalar values).
+
+    Args:
+        height_m: drop height h_D (m), a scalar.
+        ball: the :class:`~rbjax.terms.ball.Ball` with scalar fields, or ``None`` for
+            ``JIS_RUBBER_BALL``.
+        model: the :class:`~rbjax.terms.model.Model` with scalar parameters, or ``None`` for
+            ``Model()``.
+
+    Returns:
+        One :class:`ParameterInfo` (name, value as a float, declaration) per parameter, in
+            :func:`parameter_names` order.
+
+    Raises:
+        TypeError: a term with an array field that its ``PARAMETERS`` do not declare, or a
+            parameter that is not a scalar.
+        ValueError: a parameter name that occurs in more than one term.
+    """
     ball, model = _defaults(ball, model)
     tree = (height_m, ball, model)
     rows = []

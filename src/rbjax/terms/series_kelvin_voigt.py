@@ -41,6 +41,10 @@ class SeriesKelvinVoigt(AbstractSeriesElement):
     Attributes:
         series_compliance_m_per_N: C = 1/k_b ≥ 0 of the element's spring (0: off).
         series_time_constant_s: τ = c_b/k_b > 0, the element's relaxation time.
+
+    Raises:
+        ValueError: a field outside its valid range or not finite, named in the message
+            (concrete values only).
     """
 
     series_compliance_m_per_N: ArrayLike

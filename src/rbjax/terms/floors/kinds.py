@@ -133,7 +133,14 @@ class _Impedance(AbstractFloor):
 
 
 class Dashpot(_Impedance):
-    """A floor with a given real point impedance Z (N·s/m): u̇ = F/Z (a dashpot to ground)."""
+    """A floor with a given real point impedance Z (N·s/m): u̇ = F/Z (a dashpot to ground).
+
+    Attributes:
+        floor_impedance_Ns_per_m: Z > 0 (N·s/m), the point impedance at the drive point.
+
+    Raises:
+        ValueError: ``floor_impedance_Ns_per_m`` not finite and > 0 (concrete values only).
+    """
 
     floor_impedance_Ns_per_m: ArrayLike
     name = "dashpot"
@@ -155,6 +162,15 @@ def plate_impedance_Ns_per_m(thickness_m, youngs_Pa, density_kg_per_m3, poisson)
     unit area (Cremer, Heckl & Petersson, *Structure-Borne Sound*, 3rd ed., §5.3, Eq. 5.46;
     Vigran, *Building Acoustics*, §5.6). Z is real and frequency-independent: the far field
     of the plate carries the power away as bending waves and nothing returns.
+
+    Args:
+        thickness_m: plate thickness t (m).
+        youngs_Pa: Young's modulus E of the plate (Pa).
+        density_kg_per_m3: density ρ of the plate (kg/m³).
+        poisson: Poisson's ratio ν of the plate.
+
+    Returns:
+        The drive-point impedance Z (N·s/m), with the broadcast shape of the arguments.
     """
     bending = youngs_Pa * thickness_m**3 / (12.0 * (1.0 - poisson**2))
     return 8.0 * jnp.sqrt(bending * density_kg_per_m3 * thickness_m)
@@ -168,6 +184,10 @@ class InfinitePlate(_Impedance):
         plate_youngs_Pa: E > 0.
         plate_density_kg_per_m3: ρ > 0.
         plate_poisson: ν in (−1, 0.5].
+
+    Raises:
+        ValueError: a field outside its valid range or not finite, named in the message
+            (concrete values only).
     """
 
     plate_thickness_m: ArrayLike
@@ -260,6 +280,11 @@ class ModalFloor(AbstractModalFloor):
     Attributes:
         mass_kg, frequency_Hz, loss_factor: one value per mode (sequences of equal length);
             m_k > 0, f_k ≥ 0 (0: a free mass, e.g. a plate's rigid-body mode), η_k ≥ 0.
+            One ``loss_factor`` is shared by every mode.
+
+    Raises:
+        ValueError: an empty sequence or a non-finite value; sequences of different lengths;
+            a mass ≤ 0, a frequency < 0 or a loss factor < 0 (the mode named in the message).
     """
 
     mass_kg: tuple[float, ...] = eqx.field(static=True)
