@@ -100,7 +100,21 @@ MODAL_BANDS_UP_TO_Hz = 100.0
 
 class RoomLevels(eqx.Module):
     """The arrays of the chain (differentiable): per band the maximum Fast level, its time and
-    the normalised level; per source (band or mode) the injected energy and its radiated share."""
+    the normalised level; per source (band or mode) the injected energy and its radiated share.
+
+    Attributes:
+        level_dB: L_i,Fmax per band, dB re (20 µPa)² (−inf in a band without a source).
+        peak_time_s: the time of each band's maximum after the impact, s.
+        normalised_dB: the normalised level per band, dB (``normalised_level_dB``).
+        injected_J: the energy W injected into each source (band or mode), J.
+        radiated_fraction: the share of each source's energy that it radiates into the room,
+            ω η_rad / a.
+        floor_decay_per_s: the decay rate a of each source, 1/s.
+        room_decay_per_s: the room's decay rate b = 6 ln 10/T per band, 1/s.
+        radiation_per_s: the radiation rate ω η_rad of each source, 1/s.
+        membership: (bands × sources), 1 where a source is heard in a band, else 0.
+        pressure_scale: ρ₀c₀²/V, Pa²/J (p² = ρ₀c₀²E_r/V).
+    """
 
     level_dB: jax.Array
     peak_time_s: jax.Array
@@ -138,7 +152,19 @@ def modal_bands(fraction: int) -> np.ndarray:
 def slab_mode_orders(slab: Slab, fraction: int) -> tuple[int, int]:
     """The mode set of the finite slab in the modal bands of ``fraction``
     (``rbjax.room.finite_slab.mode_orders`` at their highest edge): give it as ``orders=`` to
-    ``room_levels`` where the slab's values are traced."""
+    ``room_levels`` where the slab's values are traced.
+
+    Args:
+        slab: the :class:`Slab`, with concrete values.
+        fraction: 1 (octave bands) or 3 (one-third-octave bands).
+
+    Returns:
+        (M, N): the highest mode orders along x and y, ints ≥ 1.
+
+    Raises:
+        RoomChainError: ``fraction`` not 1 or 3.
+        ValueError: the slab's values are traced.
+    """
     _, _, edges = bands(fraction)
     return mode_orders(slab, float(np.max(edges[1][modal_bands(fraction)])))
 
@@ -167,8 +193,22 @@ def _check_floor(floor: AbstractFloor | None, slab: Slab | None) -> None:
 
 
 def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver) -> int:
-    """How many force samples cover the contact (a concrete pre-solve; ``RuntimeError`` if it
-    fails)."""
+    """How many force samples cover the contact (a concrete pre-solve).
+
+    Args:
+        height_m: the drop height, m (or several: the longest contact counts).
+        ball: the :class:`~rbjax.terms.ball.Ball`.
+        model: the impact :class:`~rbjax.terms.model.Model` (its floor is the one struck).
+        rate_Hz: the sampling rate of the force, Hz.
+        solver: the :class:`~rbjax.terms.model.Solver` of the pre-solve.
+
+    Returns:
+        ⌈t_c · rate_Hz⌉ + 2 samples (t_c: the contact time), an ``int``: the ``n_samples`` of
+        :func:`room_levels`.
+
+    Raises:
+        RuntimeError: the pre-solve failed (``ImpactResult.raise_for_status``).
+    """
     res = simulate(height_m, ball, model, solver=solver).raise_for_status()
     return int(math.ceil(float(np.max(np.asarray(res.contact_time_s))) * rate_Hz)) + 2
 
@@ -269,11 +309,40 @@ def room_levels(
     """The chain's arrays for the ball on ``floor`` (``None``: on the bare ``slab``) over
     ``n_samples`` force samples (``contact_samples``); pure JAX, differentiable in the slab,
     room, ball, height and the parameters of a ``FloatingFloor`` (``jax.jvp``/``jax.jacfwd``
-    with ``Solver(adjoint="forward")``). ``n_fft``: the frequency grid of a modal floor's
-    energies (``rbjax.room.injection.modal_grid_size``, the default where the floor's values
-    are concrete; give it where they are traced). ``orders``: the finite slab's mode set for
-    the ball on the bare slab with ``Chain(slab="modal")`` (``slab_mode_orders``, the default
-    where the slab's values are concrete; give it where they are traced)."""
+    with ``Solver(adjoint="forward")``).
+
+    Args:
+        slab: the :class:`Slab` that radiates into the room (struck itself where ``floor`` is
+            ``None``).
+        room: the :class:`ReceivingRoom`.
+        floor: a modal floor over the slab that the ball strikes (``ModalFloor``,
+            ``FloatingFloor``); ``None``: the bare slab.
+        height_m: the drop height, m.
+        ball: the ball (default: ``JIS_RUBBER_BALL``).
+        model: the impact model; its floor is replaced by the one struck (default:
+            ``Model(floor=...)`` of that floor).
+        chain: the steps of the chain taken (:class:`Chain`).
+        fraction: 1 (octaves 31.5 Hz–1 kHz) or 3 (one-third octaves 25 Hz–1.25 kHz).
+        rate_Hz: the sampling rate of the force, Hz.
+        n_samples: the force samples over the contact (:func:`contact_samples`).
+        solver: the :class:`~rbjax.terms.model.Solver` of the force history.
+        n_fft: the frequency grid of a modal floor's energies
+            (``rbjax.room.injection.modal_grid_size``, the default where the floor's values
+            are concrete; give it where they are traced).
+        orders: the finite slab's mode set for the ball on the bare slab with
+            ``Chain(slab="modal")`` (``slab_mode_orders``, the default where the slab's values
+            are concrete; give it where they are traced).
+
+    Returns:
+        The :class:`RoomLevels` of the chain.
+
+    Raises:
+        RoomChainError: a floor the chain cannot follow (not ``None`` nor a modal floor), no
+            ``slab``, ``fraction`` not 1 or 3, or a reverberation time per band whose length
+            is not the bands'.
+        ValueError: ``orders`` or ``n_fft`` not given where the values they are computed from
+            are traced.
+    """
     _check_floor(floor, slab)
     if floor is None and chain.slab == "modal" and orders is None:
         orders = slab_mode_orders(slab, fraction)
@@ -367,7 +436,16 @@ def _band_response(parts, chain: Chain, room_rate, row, t):
 @eqx.filter_jit
 def fast_levels_dB(levels: RoomLevels, chain: Chain, times_s):
     """The Fast-weighted level (or, without the detector, the level of p²) of each band at
-    ``times_s``: shape (bands, times); the same closed form whose maximum is ``level_dB``."""
+    ``times_s``: shape (bands, times); the same closed form whose maximum is ``level_dB``.
+
+    Args:
+        levels: the :class:`RoomLevels` of :func:`room_levels`.
+        chain: the :class:`Chain` they were computed with.
+        times_s: the times after the impact, s (1-D).
+
+    Returns:
+        The levels, dB re (20 µPa)², shape (bands, times).
+    """
     parts = {
         k: getattr(levels, k)
         for k in (
@@ -398,7 +476,22 @@ def rating_levels(levels_dB, fraction: int):
 
 
 def rating_unrounded_dB(levels: RoomLevels, fraction: int, *, normalised: bool = False):
-    """10 lg Σ 10^{(L + A)/10} over the rating bands, unrounded (the differentiable rating)."""
+    """10 lg Σ 10^{(L + A)/10} over the rating bands, unrounded (the differentiable rating).
+
+    Args:
+        levels: the :class:`RoomLevels` of :func:`room_levels`.
+        fraction: their band fraction, 1 (octaves) or 3 (one-third octaves).
+        normalised: rate the normalised levels (``normalised_dB``) rather than the levels in
+            the room (``level_dB``).
+
+    Returns:
+        L_iA,Fmax (ISO 717-2:2020 Annex D), dB, unrounded: a JAX scalar.
+
+    Raises:
+        RoomChainError: ``fraction`` not 1 or 3.
+        ValueError: a non-finite level in a rating band (concrete levels only; e.g. a band
+            without a source).
+    """
     return a_weighted_sum_dB(
         rating_levels(levels.normalised_dB if normalised else levels.level_dB, fraction), fraction
     )

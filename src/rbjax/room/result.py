@@ -38,7 +38,28 @@ class ImpactSound:
     """L_i,Fmax per band, normalised, and the ratings L_iA,Fmax (ISO 717-2:2020 Annex D).
 
     ``warnings`` lists where the prediction is outside the chain's validity
-    (``rbjax.room.chain``)."""
+    (``rbjax.room.chain``).
+
+    Attributes:
+        bands: the nominal mid-band frequencies, Hz (labels such as ``"63"``).
+        level_dB: L_i,Fmax per band in the receiving room, dB.
+        normalised_dB: the levels normalised to V0 = 50 m³, T0 = 0.5 s, dB.
+        peak_time_s: the time of each band's maximum after the impact, s.
+        LiA_Fmax_dB: the rating L_iA,Fmax of ``level_dB``, whole dB.
+        LiA_Fmax_normalised_dB: the rating of ``normalised_dB``, whole dB.
+        LiA_Fmax_unrounded_dB: the rating of ``level_dB`` before rounding, dB.
+        volume_m3: the room's volume, m³.
+        reverberation_s: the room's reverberation time per band, s.
+        height_m: the drop height, m.
+        floor: the name of the floor (``name`` of :func:`impact_sound`).
+        injected_energy_J: the energy injected into the floor, summed over its sources, J.
+        radiated_energy_J: the share of it radiated into the room, J.
+        warnings: where the prediction is outside the chain's validity.
+        levels: the :class:`~rbjax.room.chain.RoomLevels` behind the result.
+        force_N: the force history of the impact, N.
+        rate_Hz: its sampling rate, Hz.
+        chain: the :class:`~rbjax.room.scene.Chain` of the result.
+    """
 
     bands: tuple[str, ...]
     level_dB: tuple[float, ...]
@@ -117,7 +138,30 @@ def impact_sound(
 ) -> ImpactSound:
     """L_i,Fmax, normalised levels and L_iA,Fmax of the ball dropped from ``height_m`` on the
     bare ``slab`` (``floor=None``) or on a modal ``floor`` radiating through ``slab`` into
-    ``room`` (``rbjax.room.chain``)."""
+    ``room`` (``rbjax.room.chain``).
+
+    Args:
+        slab: the :class:`~rbjax.room.scene.Slab` that radiates into the room.
+        room: the :class:`~rbjax.room.scene.ReceivingRoom`.
+        floor: a modal floor over the slab that the ball strikes (``ModalFloor``,
+            ``FloatingFloor``); ``None``: the bare slab.
+        height_m: the drop height, m.
+        ball: the ball (default: ``JIS_RUBBER_BALL``).
+        chain: the steps of the chain taken (:class:`~rbjax.room.scene.Chain`).
+        fraction: 1 (octaves 31.5 Hz–1 kHz) or 3 (one-third octaves 25 Hz–1.25 kHz).
+        rate_Hz: the sampling rate of the force, Hz.
+        name: the floor's name in the result (``ImpactSound.floor``).
+
+    Returns:
+        The :class:`ImpactSound`.
+
+    Raises:
+        RuntimeError: the impact's solve failed, or the contact lasts beyond the samples tried.
+        RoomChainError: a floor the chain cannot follow, ``fraction`` not 1 or 3, or a
+            reverberation time per band whose length is not the bands'.
+        ValueError: a non-finite level in a rating band (a band without a source, e.g. of a
+            modal floor without a mode in it).
+    """
     n = _contact_samples(height_m, ball, slab, floor, rate_Hz)
     lv = room_levels(
         slab,

@@ -50,6 +50,12 @@ class Slab(eqx.Module):
     The slab must be thin: 0 < thickness ≤ min(l_x, l_y)/10 (Kirchhoff plate theory; a thicker
     one is outside every model here). The other fields are JAX leaves: the levels are
     differentiable in each of them.
+
+    Raises:
+        ValueError: a thickness, Young's modulus, density, side or loss factor not finite and
+            > 0; a Poisson ratio outside (−1, 0.5]; an ``edge`` not offered; a slab thicker
+            than a tenth of its shorter side; a drive point not strictly inside the slab
+            (values checked where they are concrete, not under tracing).
     """
 
     thickness_m: ArrayLike
@@ -124,7 +130,19 @@ class Slab(eqx.Module):
 
 
 class ReceivingRoom(eqx.Module):
-    """The room below: volume V (m³) and reverberation time T (s), one value or one per band."""
+    """The room below: volume V (m³) and reverberation time T (s), one value or one per band.
+
+    Attributes:
+        volume_m3: the volume V, m³ (> 0): one value.
+        reverberation_s: the reverberation time T, s (> 0): one value, or one per band of the
+            chain (a 1-D array; its length is checked against the bands where they are used).
+
+    Raises:
+        ValueError: a volume or reverberation time not finite and > 0 (not checked under
+            tracing).
+        RoomChainError: a volume that is not one value, or a reverberation time with more than
+            one axis.
+    """
 
     volume_m3: ArrayLike
     reverberation_s: ArrayLike
@@ -182,6 +200,9 @@ class Chain:
             ``rbjax.room.finite_slab``, each radiating with its own σ) or ``"infinite"`` (the
             infinite plate's band energy and ISO 12354-1's σ, as in the bands above). A
             floating floor's insertion always drives the slab's infinite-plate field.
+
+    Raises:
+        ValueError: a field outside its choices (the message names it and the valid ones).
     """
 
     radiation: str = "iso12354"

@@ -94,7 +94,21 @@ def decay_rate_per_s(reverberation_s):
 
 def fast_max_of_decay(reverberation_s, time_constant_s: float = FAST_TIME_CONSTANT_s):
     """g(C) = C^{C/(1−C)}, C = bτ: the Fast-detector maximum of an exponential decay of
-    p²(0) = 1 (module docstring); differentiable, g(1) = 1/e taken by continuity."""
+    p²(0) = 1 (module docstring); differentiable, g(1) = 1/e taken by continuity.
+
+    Args:
+        reverberation_s: the reverberation time T, s (> 0): a scalar or an array (e.g. one
+            per band).
+        time_constant_s: the detector's time constant τ, s (default: τ_F = 0.125 s).
+
+    Returns:
+        g(C) = y_max/p²(0), dimensionless, between 0 and 1: a JAX array of the shape of
+        ``reverberation_s``.
+
+    Raises:
+        ValueError: a reverberation time that is not finite and > 0 (not checked where it is
+            traced).
+    """
     check_range("reverberation_s", reverberation_s, lower=0.0)
     c = decay_rate_per_s(reverberation_s) * time_constant_s
     near = jnp.abs(c - 1.0) < 1e-6
@@ -106,14 +120,38 @@ def fast_max_of_decay(reverberation_s, time_constant_s: float = FAST_TIME_CONSTA
 
 def fast_correction_dB(reverberation_s, reference_s: float = REFERENCE_REVERBERATION_s):
     """10 lg(g(C(T))/g(C(T0))): how much higher the Fast maximum of a decay of reverberation
-    time T reads than that of the same initial level decaying with T0 (module docstring)."""
+    time T reads than that of the same initial level decaying with T0 (module docstring).
+
+    Args:
+        reverberation_s: the reverberation time T, s (> 0): a scalar or an array.
+        reference_s: the reference reverberation time T0, s (default: 0.5 s, ISO 16283-2).
+
+    Returns:
+        The correction, dB (positive for T > T0): a JAX array of the shape of
+        ``reverberation_s``.
+
+    Raises:
+        ValueError: T or T0 not finite and > 0 (not checked where traced).
+    """
     return 10.0 * jnp.log10(fast_max_of_decay(reverberation_s) / fast_max_of_decay(reference_s))
 
 
 def normalised_level_dB(level_dB, volume_m3, reverberation_s):
     """L_n = L + 10 lg(V/V0) − 10 lg(g(C(T))/g(C(T0))) with V0 = 50 m³, T0 = 0.5 s
-    (ISO 16283-2 heavy impact; module docstring). ``reverberation_s`` broadcasts against the
-    bands of ``level_dB`` (the last axis)."""
+    (ISO 16283-2 heavy impact; module docstring).
+
+    Args:
+        level_dB: the band levels L measured in the room, dB, the bands on the last axis.
+        volume_m3: the room's volume V, m³ (> 0).
+        reverberation_s: the room's reverberation time T, s (> 0): one value, or one per band
+            (it broadcasts against the last axis of ``level_dB``).
+
+    Returns:
+        L_n, dB: a JAX array of the broadcast shape of the arguments.
+
+    Raises:
+        ValueError: V or T not finite and > 0 (not checked where traced).
+    """
     check_range("volume_m3", volume_m3, lower=0.0)
     check_range("reverberation_s", reverberation_s, lower=0.0)
     return (
@@ -136,8 +174,21 @@ def rating_reference_values_dB(fraction: int) -> np.ndarray:
 
 def a_weighted_sum_dB(levels_dB, fraction: int = 1):
     """10 lg Σ 10^{(L_k + A_k)/10} over the rating bands with A_k of ISO 717-2:2020 Table D.3
-    (Formula (D.1); unrounded, differentiable); the last axis of ``levels_dB`` holds one level per
-    rating band (4 octaves or 12 thirds)."""
+    (Formula (D.1); unrounded, differentiable).
+
+    Args:
+        levels_dB: L_i,Fmax,k, dB: the last axis holds one level per rating band (4 octaves
+            63–500 Hz or 12 one-third octaves 50–630 Hz).
+        fraction: 1 (octave bands) or 3 (one-third-octave bands).
+
+    Returns:
+        The unrounded L_iA,Fmax, dB: a JAX array of the shape of ``levels_dB`` less its last
+        axis.
+
+    Raises:
+        ValueError: ``fraction`` not 1 or 3, a last axis of another length than the rating
+            bands', or a non-finite level (checked on concrete levels only).
+    """
     weights = rating_reference_values_dB(fraction)
     levels = jnp.asarray(levels_dB, dtype=jnp.float64)
     if levels.shape[-1:] != weights.shape:
@@ -152,12 +203,31 @@ def a_weighted_sum_dB(levels_dB, fraction: int = 1):
 
 def round_rating(value_dB) -> int:
     """A rating stated as an integer, half away from zero (module docstring), after rounding to
-    1e-9 dB."""
+    1e-9 dB.
+
+    Args:
+        value_dB: the unrounded rating, dB (a number or a one-element array).
+
+    Returns:
+        The rating in whole dB, an ``int``.
+    """
     x = round(float(value_dB), 9)
     return int(math.copysign(math.floor(abs(x) + 0.5), x))
 
 
 def rating_dB(levels_dB, fraction: int = 1) -> int:
     """L_iA,Fmax (ISO 717-2:2020 Annex D) of the band levels L_i,Fmax over the rating bands, an
-    integer (``a_weighted_sum_dB`` rounded by ``round_rating``)."""
+    integer (``a_weighted_sum_dB`` rounded by ``round_rating``).
+
+    Args:
+        levels_dB: L_i,Fmax per rating band, dB, shape (4,) (octaves 63–500 Hz) or (12,)
+            (one-third octaves 50–630 Hz).
+        fraction: 1 (octave bands) or 3 (one-third-octave bands).
+
+    Returns:
+        L_iA,Fmax in whole dB, an ``int``.
+
+    Raises:
+        ValueError: as :func:`a_weighted_sum_dB` (``fraction``, band count, non-finite level).
+    """
     return round_rating(a_weighted_sum_dB(levels_dB, fraction))

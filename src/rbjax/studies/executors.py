@@ -75,8 +75,16 @@ class TaskError(RuntimeError):
 
 @dataclasses.dataclass(frozen=True)
 class Task:
-    """One independent call ``fn(*args)``; ``name`` says what it is in errors and progress
-    (e.g. ``"hunt-crossley/momentum without 0.4 m"``); larger ``cost`` runs first."""
+    """One independent call ``fn(*args)``.
+
+    Attributes:
+        name: what the task is, in errors and progress (e.g.
+            ``"hunt-crossley/momentum without 0.4 m"``).
+        fn: the callable (picklable, e.g. a module-level function, for worker processes and
+            Dask workers).
+        args: its positional arguments.
+        cost: the relative cost: of the ready tasks, the larger ``cost`` runs first.
+    """
 
     name: str
     fn: Callable
@@ -99,6 +107,11 @@ class Parallel:
         lanes: run the fits as lanes of one batched program per structure, in this process
             (:mod:`rbjax.fit.lanes`); ``None`` (default): so where JAX's default device is not
             a CPU and neither ``workers``, ``scheduler`` nor ``executor`` is given.
+
+    Raises:
+        ValueError: both ``scheduler`` and ``executor`` given; ``lanes=True`` with a scheduler,
+            an executor or ``workers`` other than 1; ``workers`` not an integer ≥ 1; ``retries``
+            not an integer ≥ 0.
     """
 
     workers: int | None = None
@@ -356,6 +369,24 @@ def run_tasks(
     tasks (e.g. the folds warm-started from a full fit); their results follow the given tasks'
     in the order they were added. A task that raises fails the run with a :class:`TaskError`
     naming it.
+
+    Args:
+        parallel: where the tasks run: a :class:`Parallel`, a worker count, or ``None`` (every
+            usable core).
+        tasks: the :class:`Task` objects to run.
+        then: ``then(i, result)``, called in this process when task ``i`` is done; it returns
+            the further tasks to run (an empty sequence for none).
+        label: what the tasks are, in errors and progress.
+
+    Returns:
+        The results, a list: those of ``tasks`` in their order, then those of the tasks
+        ``then`` added, in the order they were added.
+
+    Raises:
+        TaskError: a task raised (named, with its error), or a local worker died more than
+            ``parallel.retries`` times (the unfinished tasks named).
+        ValueError: a worker count that is not an integer ≥ 1, or a Dask scheduler that cannot
+            be reached (or ``distributed`` not installed).
     """
     parallel = as_parallel(parallel)
     all_tasks: list[Task] = list(tasks)

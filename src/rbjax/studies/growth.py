@@ -105,7 +105,20 @@ class Growth:
 
 
 def growth_table(growths: Sequence[Growth], *, digits: int = 1) -> str:
-    """A Markdown table: one row per :class:`Growth`, slope ± standard error per band."""
+    """A Markdown table: one row per :class:`Growth`, slope ± standard error per band.
+
+    Args:
+        growths: the :class:`Growth` results, all over the same bands (one row each, headed
+            by its ``label``).
+        digits: decimals of the slopes and standard errors.
+
+    Returns:
+        The table, a Markdown string ("—" for a band without a slope; the standard error left
+        out where it is not finite and > 0).
+
+    Raises:
+        GrowthError: no growths, or growths over different bands.
+    """
     if not growths:
         raise GrowthError("growth_table needs at least one Growth")
     bands = growths[0].bands_Hz
@@ -149,8 +162,13 @@ def growth_per_doubling_dB(
         label: carried into the result.
 
     Returns:
-        :class:`Growth`. Raises :class:`GrowthError` (a ``ValueError``) for fewer than two
-        distinct heights, mismatched shapes or non-positive heights.
+        The :class:`Growth`; NaN slopes in a band with fewer than two distinct heights of
+        finite levels.
+
+    Raises:
+        GrowthError: fewer than two distinct heights, mismatched shapes (``heights_m`` not
+            1-D, levels not (N, n_bands), a ``bands_Hz`` of another length), non-finite or
+            non-positive heights, or a ``ref_height_m`` not finite and > 0 (a ``ValueError``).
     """
 
     h = np.asarray(heights_m, dtype=float)
@@ -239,7 +257,24 @@ def recording_growth(
     recordings=None, *, average: bool = False, ref_height_m: float = 1.0, label: str = "recordings"
 ) -> Growth:
     """Growth per doubling of recorded L_FE (default: the bundled emulated recordings, one
-    point per drop, so the standard error includes the drop-to-drop scatter)."""
+    point per drop, so the standard error includes the drop-to-drop scatter).
+
+    Args:
+        recordings: Recording objects, paths or a folder (:func:`recording_lfe_dB`); ``None``:
+            the bundled emulated recordings.
+        average: one coherent average per height instead of one point per drop.
+        ref_height_m: reference height of log2(h/h_ref), m (sets the intercept only).
+        label: carried into the result.
+
+    Returns:
+        The :class:`Growth` over the octave bands 31.5 Hz–1 kHz.
+
+    Raises:
+        GrowthError: fewer than two distinct heights among the recordings, or a bad
+            ``ref_height_m`` (:func:`growth_per_doubling_dB`).
+        rbjax.data.DataError: recordings that cannot be read or conditioned
+            (:func:`rbjax.fit.prepare_data`).
+    """
 
     h, lfe = recording_lfe_dB(recordings, average=average)
     return growth_per_doubling_dB(h, lfe, OCTAVE_BANDS, ref_height_m=ref_height_m, label=label)
@@ -286,9 +321,26 @@ def model_growth(
 ) -> Growth:
     """Growth per doubling of a model's octave-band L_FE, simulated at ``heights_m``.
 
-    ``model``/``simulate_kwargs`` as in :func:`model_lfe_dB`: e.g.
-    ``model_growth(h)`` (the paper's elastic model), ``model_growth(h, gas="none")``, or
+    E.g. ``model_growth(h)`` (the paper's elastic model), ``model_growth(h, gas="none")``, or
     ``model_growth(h, fit.ball, fit.model)`` for a fitted model.
+
+    Args:
+        heights_m: the drop heights, m (at least two distinct ones).
+        ball: the ball (default: ``JIS_RUBBER_BALL``).
+        model: an ``rbjax.Model`` (e.g. a fit's ``FitResult.model``), or ``None`` for
+            ``rbjax.simulate(heights, ball, **simulate_kwargs)`` (:func:`model_lfe_dB`).
+        ref_height_m: reference height of log2(h/h_ref), m (sets the intercept only).
+        label: carried into the result.
+        simulate_kwargs: options of ``rbjax.simulate`` where ``model`` is ``None``.
+
+    Returns:
+        The :class:`Growth` over the octave bands 31.5 Hz–1 kHz (a failed solve's levels are
+        NaN and left out of its bands' fits).
+
+    Raises:
+        GrowthError: fewer than two distinct heights, or a bad ``ref_height_m``.
+        ValueError: both ``model`` and ``simulate_kwargs`` given, or inputs ``rbjax.simulate``
+            rejects.
     """
 
     h = np.asarray(heights_m, dtype=float).reshape(-1)

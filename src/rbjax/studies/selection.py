@@ -168,9 +168,28 @@ def cross_validate(
 ) -> tuple[HeldOut, ...]:
     """Leave-one-height-out: refit without each height (warm start from ``base``), predict it.
 
-    Returns one :class:`HeldOut` per held-out height (default: every height in the data). The
-    folds are independent tasks: ``workers`` (default 1: in this process; ``None``: every
-    usable core; or a :class:`~rbjax.studies.executors.Parallel`) runs them in parallel.
+    The folds are independent tasks, run where ``workers`` says.
+
+    Args:
+        data: a :class:`~rbjax.fit.FitData`, recordings or paths (see
+            :func:`rbjax.fit.prepare_data`).
+        model: the model name (:mod:`rbjax.fit`).
+        blocked_force: the blocked-force definition, ``"paper"`` or ``"momentum"``.
+        base: the full fit the folds start from (default: fitted here to every height, with
+            ``fit_kwargs``).
+        heights: the heights held out in turn, m (default: every height in the data).
+        workers: where the folds run: 1 (default: in this process), a worker count, ``None``
+            (every usable core) or a :class:`~rbjax.studies.executors.Parallel`.
+        progress: one line per fold on stderr.
+        fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
+
+    Returns:
+        One :class:`HeldOut` per held-out height, a tuple in the order of ``heights``.
+
+    Raises:
+        ValueError: data with fewer than two drop heights, or data that cannot be prepared
+            (``rbjax.data.DataError``).
+        rbjax.studies.executors.TaskError: a fold's fit failed (named).
     """
     data = prepare_data(data)
     _check_folds(data)
@@ -186,7 +205,14 @@ def cross_validate(
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Candidate:
-    """One candidate model: its full fit and its cross-validated (held-out) errors."""
+    """One candidate model: its full fit and its cross-validated (held-out) errors.
+
+    Attributes:
+        model_name: the model name (:mod:`rbjax.fit`).
+        blocked_force: its blocked-force definition, ``"paper"`` or ``"momentum"``.
+        fit: its full fit to every height (:class:`~rbjax.fit.FitResult`).
+        folds: its :class:`HeldOut` errors, one per height left out.
+    """
 
     model_name: str
     blocked_force: str
@@ -240,7 +266,18 @@ class Candidate:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Selection:
-    """The outcome of :func:`select_model`."""
+    """The outcome of :func:`select_model`.
+
+    Attributes:
+        candidates: every :class:`Candidate`, in the order they were tried.
+        recommended: the :class:`Candidate` the rule recommends.
+        within_noise: the candidates within the noise of the best (:func:`recommend`).
+        rule: the rule, in words.
+        blocked_force_note: what the held-out errors say about the blocked-force definition
+            of the recommended model.
+        baseline: the unfitted paper model's :class:`HeldOut` errors at every height.
+        elapsed_s: how long the selection took, s.
+    """
 
     candidates: tuple
     recommended: Candidate
@@ -338,7 +375,19 @@ def _paired(a: Candidate, b: Candidate) -> tuple[float, float]:
 
 
 def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
-    """(recommended, candidates within the noise of the best) by the rule in :data:`RULE`."""
+    """(recommended, candidates within the noise of the best) by the rule in :data:`RULE`.
+
+    Args:
+        candidates: the cross-validated :class:`Candidate` objects; those with a non-finite
+            held-out error are left out.
+
+    Returns:
+        ``(recommended, within)``: the recommended :class:`Candidate` and the tuple of the
+        candidates within the noise of the best (the best among them).
+
+    Raises:
+        ValueError: no candidates, or none with a finite held-out error.
+    """
     if not candidates:
         raise ValueError("no candidates to choose from")
     failed = [c for c in candidates if not math.isfinite(c.cv_error_pct)]
@@ -606,8 +655,28 @@ def held_out_comparison(
 ) -> HoldOutComparison:
     """Fit each candidate to ``fit_heights`` only and predict the other heights; the unfitted
     paper model (``JIS_RUBBER_BALL``, adiabatic gas, ``paper`` blocked force) is the baseline.
-    ``starts``: optional {(model, blocked_force): FitResult} warm starts; ``workers`` as in
-    :func:`select_model` (each candidate's fit is a task)."""
+
+    Args:
+        data: a :class:`~rbjax.fit.FitData`, recordings or paths (see
+            :func:`rbjax.fit.prepare_data`).
+        fit_heights: the heights fitted, m; the other heights of the data are predicted.
+        candidates: model names, as in :func:`select_model`.
+        blocked_forces: the blocked-force definitions each name is tried with, as in
+            :func:`select_model`.
+        starts: optional warm starts, {(model, blocked_force): FitResult}.
+        workers: as in :func:`select_model` (each candidate's fit is a task).
+        progress: one line per fit on stderr.
+        fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
+
+    Returns:
+        The :class:`HoldOutComparison`: the errors at the held-out heights per candidate
+        (``"model/blocked force"``) and of ``"paper (unfitted)"``.
+
+    Raises:
+        ValueError: every height of the data is in ``fit_heights``, bad candidate names or
+            blocked forces, or data that cannot be prepared (``rbjax.data.DataError``).
+        rbjax.studies.executors.TaskError: a candidate's fit failed (named).
+    """
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
     structures = shared_structures(

@@ -147,7 +147,18 @@ DEFAULT_SIZES = {"sobol": 1024, "morris": 100, "fast": 1000, "pawn": 1000, "dgsm
 
 
 def load_config(path) -> dict:
-    """Read a sweep configuration (TOML) into a dict; ``ValueError`` if unreadable."""
+    """Read a sweep configuration (TOML) into a dict (see the module docstring).
+
+    Args:
+        path: the TOML file (a path or a string).
+
+    Returns:
+        The configuration, a dict as ``tomllib`` reads it (not checked here: :func:`run_sweep`
+        checks it).
+
+    Raises:
+        ValueError: the file cannot be read or is not valid TOML.
+    """
     try:
         with open(path, "rb") as fh:
             config = tomllib.load(fh)
@@ -245,11 +256,6 @@ def run_sweep(
 ):
     """Run a sweep configuration (see the module docstring); returns the study's result object.
 
-    ``kind = "sobol"`` → ``rbjax.studies.sensitivity.SobolResult``, ``"morris"`` →
-    ``MorrisResult``, ``"fast"`` → ``FastResult``, ``"pawn"`` → ``PawnResult``, ``"dgsm"`` →
-    ``DGSMResult``, ``"conformance"`` → ``ConformanceProbability``. Each has ``.to_dict()`` (the
-    JSON summary) and ``.samples`` (the inputs and outputs of every evaluation).
-
     Args:
         config: the configuration (``load_config``).
         progress: progress bars on stderr.
@@ -267,7 +273,18 @@ def run_sweep(
         executor: a ``concurrent.futures.Executor`` of the caller's for the chunks (not
             closed here).
 
+    Returns:
+        The study's result, by ``kind``: ``"sobol"`` → ``rbjax.studies.sensitivity.SobolResult``,
+        ``"morris"`` → ``MorrisResult``, ``"fast"`` → ``FastResult``, ``"pawn"`` →
+        ``PawnResult``, ``"dgsm"`` → ``DGSMResult``, ``"conformance"`` →
+        ``ConformanceProbability``. Each has ``.to_dict()`` (the JSON summary) and
+        ``.samples`` (the inputs and outputs of every evaluation).
+
     Raises:
+        ValueError: a configuration with unknown keys or tables, an unknown ``kind``, a
+            missing ``[ranges]`` (or ``[distributions]``) table, a bad ``outputs`` list or
+            method option; a worker count below 1, both ``scheduler`` and ``executor``, or a
+            scheduler that does not answer.
         rbjax.studies.executors.TaskError: a chunk failed (the message names its rows and
             their first values), or its local worker died more often than allowed.
     """
@@ -283,7 +300,16 @@ def write_outputs(result, path, config: dict | None = None) -> list[Path]:
 
     JSON (the summary: indices, probabilities, confidence intervals) is plain text that any
     language reads; NumPy ``.npz`` keeps the N × (inputs + outputs) samples compact, in float64,
-    with their names (``np.load``). Returns the paths written.
+    with their names (``np.load``).
+
+    Args:
+        result: the study's result (:func:`run_sweep`): its ``to_dict()`` and ``samples``.
+        path: the JSON file to write; the samples go beside it, its suffix replaced by
+            ``.samples.npz``.
+        config: the configuration to record in the summary (``None``: not recorded).
+
+    Returns:
+        The paths written: ``[path, samples]``.
     """
     path = Path(path)
     summary = result.to_dict() if config is None else {"config": config, **result.to_dict()}

@@ -137,9 +137,30 @@ def run_part(
     (``part_rows``); this runs slice ``part`` where ``workers``/``scheduler``/``executor``
     say (as :func:`run_sweep`), with the whole design's L_FE window (with L_FE outputs, the
     contact times of every row are computed first: ~1 % of the work on the fast paths, but
-    every part repeats it). ``path`` (NumPy ``.npz``, written whole or not at all) holds the
-    outputs, the rows and the design's digest (``design_digest``), for :func:`merge_parts`.
-    Returns ``path``.
+    every part repeats it).
+
+    Args:
+        config: the sweep configuration (:func:`~rbjax.studies.sweep.load_config`).
+        part: which part, 1 … ``parts``.
+        parts: how many parts the design is cut into.
+        path: the file to write (NumPy ``.npz``, written whole or not at all): the part's
+            outputs, its rows and the design's digest (``design_digest``), for
+            :func:`merge_parts`.
+        progress: progress bars on stderr.
+        devices: the JAX devices of the in-process evaluation (default: all of them).
+        workers: as in :func:`~rbjax.studies.sweep.run_sweep`.
+        scheduler: as in :func:`~rbjax.studies.sweep.run_sweep`.
+        executor: as in :func:`~rbjax.studies.sweep.run_sweep`.
+
+    Returns:
+        ``path``, as a :class:`~pathlib.Path`.
+
+    Raises:
+        ValueError: ``part``/``parts`` not integers with 1 ≤ part ≤ parts, a bad
+            configuration, or ``workers``/``scheduler``/``executor`` as in
+            :func:`~rbjax.studies.sweep.run_sweep`.
+        rbjax.studies.executors.TaskError: a chunk failed, or its local worker died more
+            often than allowed.
     """
     part, parts = _check_part(part, parts)
     parallel = Parallel(workers=workers, scheduler=scheduler, executor=executor)
@@ -205,6 +226,20 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
     Every part 1 … P must be given once, all with this configuration's design digest; a
     missing, repeated or foreign part (another configuration, seed, size or split) is a
     ``ValueError`` naming it, and nothing is analysed.
+
+    Args:
+        config: the sweep configuration the parts were run with.
+        paths: the part files (:func:`run_part`), in any order.
+        progress: progress bars on stderr.
+
+    Returns:
+        The study's result, as :func:`~rbjax.studies.sweep.run_sweep` returns it.
+
+    Raises:
+        ValueError: no paths; a file that is not a sweep part; a part of another design or
+            of another split; a part given twice or missing; a part whose rows or outputs do
+            not match the design; a bad configuration.
+        RuntimeError: the study asks for rows outside its planned design.
     """
     paths = [Path(p) for p in paths]
     if not paths:
