@@ -56,3 +56,39 @@ def test_sphinx_roles_become_optional_autorefs():
         ' and <autoref identifier="rbjax.terms.ball.Ball" optional><code>Ball</code></autoref>,'
         " not ``code``"
     )
+
+
+def test_every_returns_section_renders_as_one_unnamed_item():
+    """mkdocs.yml parses a ``Returns:`` section as one item (``returns_multiple_items: false``),
+    after the hook has turned the roles into links: a first line such as ``The :class:`X`: ...``
+    read before that would make "The" the name of the returned value."""
+    import importlib.util
+
+    import griffe
+
+    path = API.parent / "_hooks" / "sphinx_roles.py"
+    spec = importlib.util.spec_from_file_location("sphinx_roles", path)
+    assert spec is not None and spec.loader is not None
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    src = API.parents[1] / "src"
+    extensions = griffe.load_extensions(hook.SphinxRoles)
+    package = griffe.load("rbjax", search_paths=[str(src)], extensions=extensions)
+
+    def walk(obj):
+        for member in obj.members.values():
+            if not member.is_alias:
+                yield member
+                if member.is_module or member.is_class:
+                    yield from walk(member)
+
+    sections = [
+        (obj.path, section)
+        for obj in walk(package)
+        if obj.docstring is not None
+        for section in obj.docstring.parse("google", returns_multiple_items=False)
+        if section.kind.value == "returns"
+    ]
+    assert len(sections) > 50
+    named = [(name, section.value[0].name) for name, section in sections if section.value[0].name]
+    assert named == []
