@@ -148,8 +148,12 @@ def test_normalisation_bad_input(args, match):
 def test_rating_bad_input():
     with pytest.raises(ValueError, match="valid: 4"):
         st.rating_dB([60.0, 60.0, 60.0])
-    with pytest.raises(ValueError, match="non-finite"):
+    with pytest.raises(ValueError, match="NaN or \\+inf"):
         st.rating_dB([60.0, np.nan, 60.0, 60.0])
+    with pytest.raises(ValueError, match="NaN or \\+inf"):
+        st.rating_dB([60.0, np.inf, 60.0, 60.0])
+    with pytest.raises(ValueError, match="every rating band is silent"):
+        st.a_weighted_sum_dB([-np.inf] * 4)
     assert st.rating_dB([60.0] * 12, fraction=3) == st.round_rating(
         10
         * math.log10(
@@ -173,3 +177,14 @@ def test_normalisation_reproduces_a_published_per_band_example():
     printed += [22.2, 16.8, 15.1, 13.2, 11.7, 9.6, 8.6, 7.9, 9.0, 12.8, 12.8, 9.8]
     out = np.asarray(st.normalised_level_dB(np.array(measured), 41.4, np.array(reverberation_s)))
     np.testing.assert_allclose(out, printed, atol=0.1)
+
+
+def test_a_silent_band_adds_nothing():
+    """A band without a source (−inf dB: a modal floor without a mode in it) contributes no
+    energy to Formula (D.1): the sum over the other bands, by hand."""
+    weights = list(st.ISO_717_2_TABLE_D3_OCTAVE_dB.values())
+    levels = [70.0, -np.inf, 62.0, 55.0]
+    by_hand = 10 * math.log10(
+        sum(10 ** ((lv + a) / 10) for lv, a in zip(levels, weights, strict=True) if lv > -np.inf)
+    )
+    assert float(st.a_weighted_sum_dB(levels)) == pytest.approx(by_hand, abs=1e-12)

@@ -153,3 +153,13 @@ def test_every_candidate_failed_raises():
 def test_no_candidates_raises():
     with pytest.raises(ValueError):
         recommend([])
+
+
+def test_cross_validation_refuses_a_height_the_data_do_not_hold():
+    """Named before any fit runs: the valid heights are the data's."""
+    from rbjax.data import examples_dir
+    from rbjax.studies import cross_validate
+
+    files = [examples_dir() / f"h{h:03d}_d1.csv" for h in (10, 40)]
+    with pytest.raises(ValueError, match=r"heights=\[0\.7\] m .* valid: \[0\.1, 0\.4\]"):
+        cross_validate(files, "kelvin-voigt", heights=[0.1, 0.7])

@@ -98,7 +98,9 @@ def model_histories(
             name, a value is outside its parameter's range, or ``solver`` is not an
             ``rbjax.Solver``.
         DataError: the records cannot be prepared (see :func:`prepare_data`).
+        RuntimeError: JAX runs in float32 (``jax_enable_x64`` switched off).
     """
+    require_x64()
     _, candidate = candidate_model(model, blocked_force, gas)
     names = fitted_parameter_names(candidate)
     missing = [n for n in names if n not in params]

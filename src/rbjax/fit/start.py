@@ -133,8 +133,8 @@ def start_plan(setup: FitSetup, model, start) -> StartPlan:
     if warm is not None:
         if warm.model_name != setup.model_name or warm.theta.size != theta.size:
             raise ValueError(
-                f"start: a FitResult of model {setup.model_name!r} cannot start this "
-                f"{setup.model_name!r} fit"
+                f"start: a FitResult of model {warm.model_name!r} ({warm.theta.size} "
+                f"parameters) cannot start this {setup.model_name!r} fit ({theta.size})"
             )
         theta = warm.theta.copy()
         for k, v in fixed.items():

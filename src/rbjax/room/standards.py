@@ -187,7 +187,8 @@ def a_weighted_sum_dB(levels_dB, fraction: int = 1):
 
     Raises:
         ValueError: ``fraction`` not 1 or 3, a last axis of another length than the rating
-            bands', or a non-finite level (checked on concrete levels only).
+            bands', a NaN or +inf level, or every band silent (checked on concrete levels
+            only). A silent band (−inf dB: a modal floor without a mode in it) adds nothing.
     """
     weights = rating_reference_values_dB(fraction)
     levels = jnp.asarray(levels_dB, dtype=jnp.float64)
@@ -196,8 +197,12 @@ def a_weighted_sum_dB(levels_dB, fraction: int = 1):
             f"levels_dB has {levels.shape[-1:] or 'no'} bands on its last axis; valid: "
             f"{len(weights)} (the rating bands {', '.join(RATING_BANDS[fraction])} Hz)"
         )
-    if not is_traced(levels) and not np.all(np.isfinite(np.asarray(levels))):
-        raise ValueError(f"levels_dB={np.asarray(levels).tolist()} has a non-finite level")
+    if not is_traced(levels):
+        concrete = np.asarray(levels)
+        if np.any(np.isnan(concrete) | np.isposinf(concrete)):
+            raise ValueError(f"levels_dB={concrete.tolist()} has a NaN or +inf level")
+        if np.any(np.all(np.isneginf(concrete), axis=-1)):
+            raise ValueError(f"levels_dB={concrete.tolist()}: every rating band is silent")
     return 10.0 * jnp.log10(jnp.sum(10.0 ** ((levels + weights) / 10.0), axis=-1))
 
 

@@ -187,15 +187,21 @@ def cross_validate(
         One :class:`HeldOut` per held-out height, a tuple in the order of ``heights``.
 
     Raises:
-        ValueError: data with fewer than two drop heights, or data that cannot be prepared
-            (``rbjax.data.DataError``).
+        ValueError: data with fewer than two drop heights, a held-out height that is not one
+            of the data's, or data that cannot be prepared (``rbjax.data.DataError``).
         rbjax.studies.executors.TaskError: a fold's fit failed (named).
     """
     data = prepare_data(data)
     _check_folds(data)
+    folds = data.heights_m if heights is None else np.atleast_1d(np.asarray(heights, dtype=float))
+    absent = [float(h) for h in folds if not np.any(np.isclose(data.heights_m, h, atol=5e-4))]
+    if absent:
+        raise ValueError(
+            f"heights={absent} m are not drop heights of the data; valid: "
+            f"{[float(h) for h in data.heights_m]} m"
+        )
     if base is None:
         base = fit(data, model, blocked_force=blocked_force, progress=False, **fit_kwargs)
-    folds = data.heights_m if heights is None else np.atleast_1d(np.asarray(heights, dtype=float))
     tasks = _fold_tasks(data, model, blocked_force, base, folds, fit_kwargs)
     results = run_tasks(workers, tasks, label=f"cv {model}/{blocked_force}")
     return tuple(

@@ -292,8 +292,9 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
                     {x[len(prefix) :]: v for x, v in arrays.items() if x.startswith(prefix)}
                 )
         flat = {x: np.concatenate([p[x] for p in pieces]) for x in pieces[0]}
-        if any(len(v) != n for v in flat.values()):
-            raise ValueError(f"merge: the parts hold {len(flat)} outputs of the wrong length")
+        wrong = {x: len(v) for x, v in flat.items() if len(v) != n}
+        if wrong:
+            raise ValueError(f"merge: call {k}'s parts hold {wrong} rows, not {n}")
         outputs.append(flat)
     served: list[int] = []
 
