@@ -121,14 +121,37 @@ def test_follow_up_tasks_come_after_the_given_ones_in_order():
 def test_a_worker_that_dies_costs_time_not_results(tmp_path):
     tasks = [Task("dies once", _die_once, (str(tmp_path / "died"), 1))]
     tasks += [Task(f"square {k}", _square, (k,)) for k in range(4)]
-    assert run_tasks(Parallel(workers=2), tasks) == [2, 0, 1, 4, 9]
+    # host=False: a task that kills the process it runs in would end this one too
+    assert run_tasks(Parallel(workers=2, host=False), tasks) == [2, 0, 1, 4, 9]
 
 
 def test_a_task_whose_worker_always_dies_is_named():
     start = time.perf_counter()
     with pytest.raises(TaskError, match="died 2 times; not finished: fatal fit"):
-        run_tasks(Parallel(workers=2, retries=1), [Task("fatal fit", _always_die, (0,))])
+        run_tasks(
+            Parallel(workers=2, retries=1, host=False), [Task("fatal fit", _always_die, (0,))]
+        )
     assert time.perf_counter() - start < 60
+
+
+def _pid(x):
+    time.sleep(0.2)  # long enough that the next task finds this one's process busy
+    return os.getpid(), x * x
+
+
+def test_this_process_runs_tasks_beside_its_workers():
+    """workers=2: one task at a time in this process, the others in one worker process (the
+    tasks' results in order either way); host=False: two worker processes, none here."""
+    tasks = [Task(f"square {k}", _pid, (k,)) for k in range(6)]
+    here = run_tasks(Parallel(workers=2), tasks)
+    assert [x for _, x in here] == [k * k for k in range(6)]
+    pids = {pid for pid, _ in here}
+    assert os.getpid() in pids and len(pids) == 2
+    away = run_tasks(Parallel(workers=2, host=False), tasks)
+    assert [x for _, x in away] == [k * k for k in range(6)]
+    assert os.getpid() not in {pid for pid, _ in away}
+    with pytest.raises(ValueError, match="host='no' must be True or False"):
+        Parallel(workers=2, host="no")
 
 
 @pytest.mark.parametrize("workers", [1, 2])

@@ -7,7 +7,10 @@ folds of a model selection, the chunks of a sweep's design. Each is a picklable 
 * ``Parallel(workers=1)``: in this process, one task after another (no start-up cost; the
   reference every other way is compared with).
 * ``Parallel(workers=N)`` (default: the cores this process may use, ``os.sched_getaffinity``):
-  a local pool of N worker processes (``spawn``), each with one JAX CPU device and the same
+  N tasks at a time: one in a thread of this process (when its JAX is one CPU device, as a
+  worker's: its imports are done and its programs loaded, so it starts at once) and the others
+  in a local pool of N − 1 worker processes (``spawn``; ``host=False``: N processes and none
+  in this one), each with one JAX CPU device and the same
   persistent compilation cache and fit program store as this process
   (:mod:`rbjax.fit.program_store`), so a program compiles once per machine, not once per
   worker. Workers see this process's environment (``JAX_*``, ``XLA_FLAGS``), so they build
@@ -24,7 +27,8 @@ folds of a model selection, the chunks of a sweep's design. Each is a picklable 
 
 A task that raises is reported with its name (the candidate and fold, the chunk's rows); a
 local worker that dies has its unfinished tasks run again in a new pool (``retries`` times),
-then the run fails naming the task: never a silently missing result.
+then the run fails naming the task: never a silently missing result. A task that kills this
+process itself (its share with ``host=True``) ends the run with it.
 """
 
 from __future__ import annotations
@@ -107,11 +111,16 @@ class Parallel:
         lanes: run the fits as lanes of one batched program per structure, in this process
             (:mod:`rbjax.fit.lanes`); ``None`` (default): so where JAX's default device is not
             a CPU and neither ``workers``, ``scheduler`` nor ``executor`` is given.
+        host: with several local workers, this process runs one task at a time beside
+            ``workers − 1`` worker processes, where its JAX is one CPU device as theirs is
+            (default ``True``); ``False``: ``workers`` processes run every task, so a task that
+            kills the process it runs in (a crash, the OOM killer) costs a retry, never this
+            process.
 
     Raises:
         ValueError: both ``scheduler`` and ``executor`` given; ``lanes=True`` with a scheduler,
             an executor or ``workers`` other than 1; ``workers`` not an integer ≥ 1; ``retries``
-            not an integer ≥ 0.
+            not an integer ≥ 0; ``host`` not a bool.
     """
 
     workers: int | None = None
@@ -119,6 +128,7 @@ class Parallel:
     executor: cf.Executor | None = None
     retries: int = 1
     lanes: bool | None = None
+    host: bool = True
 
     def __post_init__(self):
         given = [x is not None for x in (self.scheduler, self.executor)]
@@ -138,6 +148,8 @@ class Parallel:
             )
         if not (isinstance(self.retries, int) and self.retries >= 0):
             raise ValueError(f"retries={self.retries!r} must be an integer ≥ 0")
+        if not isinstance(self.host, bool):
+            raise ValueError(f"host={self.host!r} must be True or False")
 
     @property
     def local_workers(self) -> int:
@@ -170,7 +182,11 @@ class Parallel:
         if self.executor is not None:
             return f"the given executor ({type(self.executor).__name__})"
         n = self.local_workers
-        return "this process" if n == 1 else f"{n} local worker processes"
+        if n == 1:
+            return "this process"
+        if host_takes_part(self):
+            return f"this process and {n - 1} local worker process{'es' if n > 2 else ''}"
+        return f"{n} local worker processes"
 
 
 def as_parallel(parallel: Parallel | int | None) -> Parallel:
@@ -178,6 +194,41 @@ def as_parallel(parallel: Parallel | int | None) -> Parallel:
     if isinstance(parallel, Parallel):
         return parallel
     return Parallel(workers=parallel)
+
+
+class _HostAndPool(cf.Executor):
+    """This process runs one task at a time in a thread beside a pool of local workers: the
+    host's imports are done and its programs are loaded, so its core starts on the first task
+    at once instead of waiting for a worker process to start."""
+
+    def __init__(self, pool: cf.ProcessPoolExecutor):
+        self._pool = pool
+        self._host = cf.ThreadPoolExecutor(max_workers=1, thread_name_prefix="rbjax-task")
+        self._current: cf.Future | None = None
+
+    def submit(self, fn, /, *args, **kwargs):
+        # ``done()`` holds from the moment a result is set, before any waiter wakes up, so the
+        # next task submitted after ``cf.wait`` returns finds the host free
+        if self._current is None or self._current.done():
+            self._current = self._host.submit(fn, *args, **kwargs)
+            return self._current
+        return self._pool.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait=True, *, cancel_futures=False):
+        # the pool is this process's (``local_pool``) and stays; the host's task, if one still
+        # runs after a failure, finishes in its thread (a thread cannot be stopped)
+        self._host.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def host_takes_part(parallel: Parallel) -> bool:
+    """Whether this process runs tasks beside its local workers: with several local workers,
+    where this process's JAX is one CPU device, as each worker's (the same programs, so the
+    same bits); the pool then has one worker fewer."""
+    if not parallel.host or parallel.local_workers < 2 or parallel.use_lanes:
+        return False
+    if parallel.scheduler is not None or parallel.executor is not None:
+        return False
+    return jax.default_backend() == "cpu" and jax.local_device_count() == 1
 
 
 class _InProcess(cf.Executor):
@@ -295,12 +346,17 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     elif parallel.in_process:
         yield _InProcess()
     else:
-        pool = local_pool(parallel.local_workers)
+        host = host_takes_part(parallel)
+        pool = local_pool(parallel.local_workers - host)
+        executor = _HostAndPool(pool) if host else pool
         try:
-            yield pool
+            yield executor
         except cf.process.BrokenProcessPool:
             _drop(pool)
             raise
+        finally:
+            if host:
+                executor.shutdown(wait=False)
 
 
 #: The local pools of this process, by worker count and JAX options: kept until the process
@@ -350,8 +406,9 @@ def prestart(parallel: Parallel | int | None) -> None:
         and not parallel.in_process
         and not parallel.use_lanes
     ):
-        pool = local_pool(parallel.local_workers)
-        for _ in range(parallel.local_workers):
+        n = parallel.local_workers - host_takes_part(parallel)
+        pool = local_pool(n)
+        for _ in range(n):
             pool.submit(_warm)
 
 
