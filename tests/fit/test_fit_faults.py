@@ -140,6 +140,33 @@ def test_every_fault_class_at_once_gives_the_clean_fit(faulty, clean_fit):
     assert_same_fit(result, clean_fit)
 
 
+#: docs/guides/loader.md, the fits' table (benchmarks/loader_faults.py fits these same sets):
+#: E (Pa), c (N s/m), c − truth in its own σ, for the clean and the faulty set at 44.1 kHz; the
+#: clean fit's σ of c; the faulty set's ΔE (%) and Δc (clean σ). Asserted at 10× half a unit of
+#: the printed digit (this module compiles with most optimisations off: round-off apart, the same).
+LOADER_PAGE = {"clean": (1_899_969, 40.0071, 1.27), "faulty": (1_899_975, 40.0078, 1.42)}
+
+
+def test_the_loader_page_fits_table(faulty, clean_fit):
+    _, _, result = faulty
+    c_std = clean_fit.parameters["damping_Ns_per_m"].std
+    assert abs(c_std - 0.0057) <= 5e-4 and abs(100 * c_std / 40.0 - 0.014) <= 5e-3, c_std
+    for name, res in (("clean", clean_fit), ("faulty", result)):
+        e_pa, c, truth_sigma = LOADER_PAGE[name]
+        e, damping = res.parameters["youngs_Pa"].value, res.parameters["damping_Ns_per_m"]
+        assert abs(e - e_pa) <= 5.0, (name, e)
+        assert abs(damping.value - c) <= 5e-4, (name, damping.value)
+        own = (damping.value - FAULT_DAMPING_NS_PER_M) / damping.std
+        assert abs(own - truth_sigma) <= 0.05, (name, own)
+    e0 = clean_fit.parameters["youngs_Pa"].value
+    delta_e = 100 * (result.parameters["youngs_Pa"].value / e0 - 1)
+    assert abs(delta_e - 0.0003) <= 5e-4, delta_e
+    delta_c = (
+        result.parameters["damping_Ns_per_m"].value - clean_fit.parameters["damping_Ns_per_m"].value
+    ) / c_std
+    assert abs(delta_c - 0.12) <= 0.05, delta_c
+
+
 def test_the_report_says_what_conditioning_did(faulty):
     _, data, _ = faulty
     log = {c["source"]: c for c in data.conditioning}

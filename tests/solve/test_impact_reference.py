@@ -10,7 +10,9 @@ gas options and the three damping models, the momentum blocked force with Zener 
 the elastic models the momentum term vanishes at the force peak, δ̇ = 0, so their scalars do
 not depend on the blocked-force definition); the force and deflection histories for the
 elastic model with each gas option and each blocked-force definition, and for the damped
-three-phase path with the Zener state and the momentum term.
+three-phase path with the Zener state and the momentum term. The force histories are also held
+to 10× the figures docs/accuracy.md prints for them (the blocked force's convention is a
+runtime weight: the gas-off momentum history reuses the gas-off program).
 """
 
 from __future__ import annotations
@@ -36,10 +38,12 @@ CONFIGS = {
     "adiabatic-paper": dict(gas="adiabatic", blocked_force="paper"),
     "none-paper": dict(gas="none", blocked_force="paper"),
     "adiabatic-momentum": dict(gas="adiabatic", blocked_force="momentum"),
-    # Moderate damping: restitution about 0.6 (KV), 0.4–0.8 (HC), 0.8–0.9 (Zener).
+    "none-momentum": dict(gas="none", blocked_force="momentum"),
+    # Moderate damping: restitution about 0.6 (KV), 0.4–0.8 (HC), 0.8–0.9 (Zener); the Zener
+    # law is docs/accuracy.md's (r = 0.3, τ = 2 ms, momentum).
     "kelvin-voigt": dict(damping=rbjax.KelvinVoigt(100.0)),
     "hunt-crossley": dict(damping=rbjax.HuntCrossley(0.5)),
-    "zener-momentum": dict(damping=rbjax.Zener(0.3, 1e-3), blocked_force="momentum"),
+    "zener-momentum": dict(damping=rbjax.Zener(0.3, 2e-3), blocked_force="momentum"),
 }
 SCALAR_CONFIGS = [
     "adiabatic-paper",
@@ -48,7 +52,24 @@ SCALAR_CONFIGS = [
     "hunt-crossley",
     "zener-momentum",
 ]
-HISTORY_CONFIGS = ["adiabatic-paper", "none-paper", "adiabatic-momentum", "zener-momentum"]
+HISTORY_CONFIGS = [
+    "adiabatic-paper",
+    "none-paper",
+    "adiabatic-momentum",
+    "none-momentum",
+    "zener-momentum",
+]
+#: docs/accuracy.md, "Against an independent reference", the column "44.1 kHz history (of
+#: peak)": the largest error over 10–160 cm relative to the peak force, as printed there for
+#: these configurations (asserted at 10×; HEIGHTS_M lie in that range, the samples on the same
+#: 44.1 kHz grid).
+HISTORY_ACCURACY_PAGE = {
+    "adiabatic-paper": 2.7e-10,
+    "adiabatic-momentum": 2.9e-10,
+    "none-paper": 4.2e-10,
+    "none-momentum": 4.2e-10,
+    "zener-momentum": 2.9e-10,
+}
 
 
 @dataclass
@@ -130,6 +151,8 @@ def test_force_history_matches_reference(history_case):
     peak = case.ref("peak_force_N")[:, None]
     err = np.max(np.abs(force - expected) / peak, axis=1)
     assert np.all(err <= REL), f"{case.name}: history errors relative to the peak {err}"
+    stated = HISTORY_ACCURACY_PAGE[case.name]
+    assert np.all(err <= 10 * stated), f"{case.name}: {err} against {stated} (docs/accuracy.md)"
     # Contact flags and the zero padding after the contact.
     tc = case.ref("contact_time_s")[:, None]
     np.testing.assert_array_equal(np.asarray(hist.in_contact), t[None, :] < tc)

@@ -135,6 +135,14 @@ def test_recording_growth_of_bundled_recordings():
     assert np.all(np.isfinite(g.stderr_dB)) and np.all(g.stderr_dB < 0.5)
     table = growth_table([g])
     assert "31.5 Hz" in table and "recordings" in table
+    # docs/guides/fitting.md, "Growth of L_FE per doubling of drop height", the row "emulated
+    # recordings (30 drops, 10–160 cm)": slope ± standard error per octave band, as printed
+    np.testing.assert_allclose(
+        g.slope_dB, [2.97, 3.34, 3.71, 4.39, 4.37, 2.55], rtol=0, atol=0.0051
+    )
+    np.testing.assert_allclose(
+        g.stderr_dB, [0.01, 0.02, 0.03, 0.04, 0.04, 0.05], rtol=0, atol=0.0051
+    )
 
 
 def test_plot_growth_draws_data_and_models():

@@ -98,6 +98,19 @@ def test_material_validates(kwargs, words):
 # ------------------------------------------------------------------------------ presets
 
 
+#: docs/guides/floors.md, the presets table, column Z (N·s/m).
+PRESET_IMPEDANCE = {
+    "concrete-140mm": 4.02e5,
+    "concrete-150mm": 4.62e5,
+    "concrete-200mm": 8.21e5,
+    "clt-140mm": 7.10e4,
+    "steel-10mm": 9.83e3,
+    "chipboard-22mm": 1.49e3,
+    "osb-15mm": 653.0,
+    "osb-22mm": 1.41e3,
+}
+
+
 def test_presets_have_the_impedance_of_the_formula():
     assert {
         "rigid",
@@ -116,6 +129,10 @@ def test_presets_have_the_impedance_of_the_formula():
             assert float(floor.impedance_Ns_per_m) == pytest.approx(
                 plate_Z(t, *CITED[mat]), rel=1e-3
             ), name
+    # docs/guides/floors.md, the presets' Z (N·s/m) as printed: to half a unit of the third digit
+    for name, printed in PRESET_IMPEDANCE.items():
+        z = float(floor_preset(name).impedance_Ns_per_m)
+        assert abs(z - printed) <= 0.5 * 10.0 ** (math.floor(math.log10(printed)) - 2), (name, z)
     z150 = float(floor_preset("concrete-150mm").impedance_Ns_per_m)
     assert 3e5 < z150 < 6e5  # of order 4e5 N s/m
     assert z150 == pytest.approx(plate_Z(0.15, 33e9, 2300.0, 0.2), rel=1e-12)
@@ -177,6 +194,8 @@ def test_example_floor_file_loads():
     )
     # its comment's figures: f0 = √(s′/m″)/2π over a rigid base, the base mode ρ t Lx Ly / 4 at f11
     assert math.sqrt(10e6 / 140.0) / (2 * math.pi) == pytest.approx(42.5, abs=0.05)
+    # docs/guides/room.md: "with that file on the 150 mm slab: its f₀ = 42.5 Hz"
+    assert float(floor.layer_resonance_Hz) == pytest.approx(42.5, abs=0.05)
     B, m = 33e9 * 0.15**3 / (12 * (1 - 0.2**2)), 2300.0 * 0.15
     assert m * 20.0 / 4 == 1725.0
     assert math.pi / 2 * math.sqrt(B / m) * (1 / 16 + 1 / 25) == pytest.approx(27.0, abs=0.05)
@@ -425,6 +444,8 @@ def test_cli_floor_json_keys(concrete_rows):
 def test_concrete_150mm_is_the_rigid_floor_to_0_05_dB(concrete_rows):
     ratio = concrete_rows[0]["lfe_ratio_dB"]
     assert max(abs(ratio[b]) for b in OCTAVES) < 0.05, ratio
+    # docs/guides/floors.md, the preset table: max |ΔL_FE| 0.0064–0.0075 dB (w = 0; this is 1 m)
+    assert 0.0064 - 5e-5 <= max(abs(ratio[b]) for b in OCTAVES) < 0.0075 + 5e-5, ratio
 
 
 def test_cli_floor_file_and_ratio_agree_with_simulate(tmp_path, concrete_rows):
@@ -528,6 +549,40 @@ def test_preset_table_peak_restitution_and_floor_energy(preset_table, name):
     at_1m = rows.index((name, 1.0, 0.0))
     assert float(on.restitution[at_1m]) == pytest.approx(restitution, abs=_digits(restitution))
     assert float(blocked.restitution[at_1m]) == pytest.approx(0.889, abs=5e-4)
+
+
+#: docs/guides/floors.md, the preset table, column max |ΔL_FE| over the octave bands (dB): the
+#: range printed for each floor, which its value at 1 m with w = 0 lies in (the bounds "≤ x" as
+#: (0, x)), and half a unit of the printed digits. concrete-150mm's w = 0 range:
+#: test_concrete_150mm_is_the_rigid_floor_to_0_05_dB.
+PRESET_DELTA_LFE_dB = {
+    "concrete-140mm": (0.0, 0.0100, 5e-5),
+    "clt-140mm": (0.0, 0.057, 5e-4),
+    "steel-10mm": (0.30, 0.40, 5e-3),
+    "chipboard-22mm": (1.8, 2.4, 0.05),
+    "osb-15mm": (3.9, 5.0, 0.05),
+}
+
+
+def test_preset_table_band_level_change_at_1_m():
+    """docs/guides/floors.md, the preset table's max |ΔL_FE| column at 1 m, w = 0 (every infinite
+    plate shares the compiled program of the concrete-150mm row above)."""
+    blocked = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(rbjax.simulate(1.0).force_N, 44_100.0))
+    for name, (lo, hi, half) in PRESET_DELTA_LFE_dB.items():
+        on = rbjax.simulate(1.0, floor=floor_preset(name))
+        delta = np.asarray(rbjax.spectrum.levels.lfe_octave_dB(on.force_N, 44_100.0)) - blocked
+        worst = float(np.max(np.abs(delta)))
+        assert lo - half <= worst < hi + half, (name, worst)
+
+
+def test_cap_work_left_out_on_osb(preset_table):
+    """docs/guides/floors.md: the left-out cap work W_cap is ≤ 3 % of the impact energy on OSB
+    (osb-15mm, 0.5–1.5 m) with w = 0 and ≤ 0.24 % with w = 1."""
+    rows, _, energy, _ = preset_table
+    share = np.abs(np.asarray(energy.cap_work_J)) / np.asarray(energy.impact_energy_J)
+    for w, bound in ((0.0, 0.03), (1.0, 0.0024)):
+        idx = [i for i, r in enumerate(rows) if r[0] == "osb-15mm" and r[2] == w]
+        assert share[idx].max() <= bound, (w, share[idx])
 
 
 def test_energy_balance_closes_on_every_preset_and_height(preset_table):

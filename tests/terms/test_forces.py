@@ -58,6 +58,7 @@ def test_corrected_stiffness_reproduces_the_papers_contact_time():
     # prediction at 1 m (§4.1) and JIS A 1418-2's 20 ± 2 ms; the printed Eq. 3 would give ~78 ms.
     _, _, m, _, _ = _params(JIS)
     k = float(rbjax.reissner_stiffness_N_per_m(JIS))
+    assert k / 1e3 == pytest.approx(49.1, abs=0.05)  # docs/guides/physics.md: 49.1 kN/m
     assert 0.020 < math.pi * math.sqrt(m / k) < 0.023
     assert math.pi * math.sqrt(12.0 * m / k) > 0.07
 

@@ -114,6 +114,10 @@ def test_incompressible_limit_converges():
     assert np.all(d2 < 0.2 * d1)  # linear in 0.5 − ν: each factor 10 closer shrinks the change ~10×
     assert np.all(d2 < 1e-3)
     np.testing.assert_array_equal(roots[3], roots[2])  # ν = 0.5 is evaluated at the substitute
+    # docs/guides/physics.md: 0.4999 is "within ~2·10⁻⁵ of the incompressible limit": the limit
+    # extrapolated linearly in 0.5 − ν from 0.499 and 0.4999 (asserted at 10×)
+    limit = roots[2] + (roots[2] - roots[1]) * (0.5 - INCOMPRESSIBLE_POISSON) / 0.0009
+    assert np.all(np.abs(roots[2] / limit - 1) < 2e-4), roots[2] / limit - 1
 
 
 def test_jis_values_and_paper_60Hz():
@@ -125,6 +129,23 @@ def test_jis_values_and_paper_60Hz():
         assert list(f[t].n) == sorted(f[t].n)
     assert f["elastic"].poisson_used == INCOMPRESSIBLE_POISSON
     assert "| 2 | 0 |" in f["thin"].table()
+    # docs/guides/physics.md, the JIS ball's table, as printed (0.1 Hz): (n, branch) → membrane,
+    # thin shell, exact 3-D; and the exact fundamental's period, 15.3 ms
+    for (n, branch), printed in JIS_TABLE.items():
+        for t, value in zip(("membrane", "thin", "elastic"), printed, strict=True):
+            assert f[t].frequency(n, branch) == pytest.approx(value, abs=0.05), (n, branch, t)
+    assert 1e3 / f["elastic"].fundamental_Hz == pytest.approx(15.3, abs=0.05)
+
+
+#: docs/guides/physics.md, "Shell eigenfrequencies": (n, branch) → (membrane, thin shell, exact
+#: 3-D) in Hz; n = 1, branch 1 is the first elastic mode (branch 0 is the rigid translation).
+JIS_TABLE = {
+    (2, 0): (57.1, 68.7, 65.2),
+    (3, 0): (68.9, 125.2, 103.5),
+    (0, 0): (162.8, 162.8, 172.3),
+    (1, 1): (199.3, 200.9, 186.4),
+    (2, 1): (268.0, 275.3, 229.7),
+}
 
 
 @pytest.mark.parametrize(
