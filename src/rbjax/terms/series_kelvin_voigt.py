@@ -1,8 +1,8 @@
 """A massless spring and damper in series with the shell: the ball mode's overdamped limit.
 
 Fits of ``rbjax.BallMode`` to the bundled recordings run towards a limit: at loss factors
-η = 4, 5.9 and 10 the fitted mode has nearly the same stiffness k_b = m_b ω² (330–343 kN/m)
-and damping c_b = η ω m_b (1.5–1.7 kN s/m) while its mass m_b falls 0.53 → 0.21 → 0.07 kg.
+η = 4 and 5.9 the fitted mode has nearly the same stiffness k_b = m_b ω² (330–345 kN/m)
+and damping c_b = η ω m_b (1.5–1.7 kN s/m) while its mass m_b falls 0.53 → 0.21 kg.
 The mode's equation m_b (ẅ + η ω ẇ + ω² w) = −F_c then tends, as m_b → 0 at fixed k_b and
 c_b, to
 
