@@ -614,3 +614,12 @@ def test_average_warns_on_heights_and_needs_onsets():
         D.average(recs)
     with pytest.raises(DataError, match="h100_s0: no onset_s"):
         D.average([recs[0].replace(onset_s=None)])
+
+
+def test_fractional_shift_names_an_unknown_method_even_for_no_shift():
+    from rbjax.data import fractional_shift
+
+    with pytest.raises(ValueError, match="method='sinc'"):
+        fractional_shift(np.ones(8), 0.0, method="sinc")
+    with pytest.raises(ValueError, match="method='sinc'"):
+        fractional_shift(np.ones(8), 0.5, method="sinc")

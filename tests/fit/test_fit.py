@@ -289,6 +289,8 @@ def test_bad_input_names_the_parameter():
         fit(data, "paper", fix={"poisson": 0.7})
     with pytest.raises(ValueError, match="optimizer='newton'"):
         fit(data, "paper", options=FitOptions(optimizer="newton"))
+    with pytest.raises(ValueError, match="hold_poisson='0.5' is outside"):
+        FitOptions(hold_poisson="0.5")
     assert parameter_names("zener+stiffening") == (
         "youngs_Pa",
         "poisson",

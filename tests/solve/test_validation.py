@@ -88,6 +88,20 @@ def test_ball_argument_must_be_a_ball():
         rbjax.simulate(1.0, ball=dict(GOOD))
 
 
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: rbjax.simulate(1.0, model="paper"),
+        lambda: rbjax.trajectory(1.0, np.linspace(0.0, 1e-3, 4), model="paper"),
+        lambda: rbjax.energy_balance(1.0, model="paper"),
+    ],
+    ids=["simulate", "trajectory", "energy_balance"],
+)
+def test_model_argument_must_be_a_model(call):
+    with pytest.raises(ValueError, match=r"model='paper' must be an rbjax.Model"):
+        call()
+
+
 # --- model and solver options ------------------------------------------------------------------
 
 

@@ -41,8 +41,8 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
         The shifted samples, a float64 array as long as ``x``.
 
     Raises:
-        ValueError: ``x`` is not 1-D, ``shift_samples`` is not finite, or (for a non-zero
-            shift) an unknown ``method``.
+        ValueError: ``x`` is not 1-D, ``shift_samples`` is not finite, or an unknown
+            ``method``.
     """
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
@@ -51,6 +51,8 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
     d = float(shift_samples)
     if not math.isfinite(d):
         raise ValueError(f"shift_samples={shift_samples!r} must be finite")
+    if method not in ("fourier", "linear", "cubic"):
+        raise ValueError(f"method={method!r}: use 'fourier', 'cubic' or 'linear'")
     if d == 0:
         return x.copy()
     if method == "fourier":
@@ -64,17 +66,16 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
         if N % 2 == 0:  # the Nyquist bin must stay real: keep its cosine part
             ph[-1] = math.cos(math.pi * d)
         return np.fft.irfft(np.fft.rfft(x, N) * ph, N)[:n]
-    if method in ("linear", "cubic"):
-        pos = np.arange(n) - d
-        ip = np.floor(pos).astype(np.int64)
-        u = pos - ip
-        xp = np.concatenate([[0.0, 0.0], x, [0.0, 0.0, 0.0]])  # index k -> xp[k + 2]
+    # "linear" or "cubic"
+    pos = np.arange(n) - d
+    ip = np.floor(pos).astype(np.int64)
+    u = pos - ip
+    xp = np.concatenate([[0.0, 0.0], x, [0.0, 0.0, 0.0]])  # index k -> xp[k + 2]
 
-        def at(j):
-            j = np.clip(j, -2, n + 2)
-            return xp[j + 2]
+    def at(j):
+        j = np.clip(j, -2, n + 2)
+        return xp[j + 2]
 
-        if method == "linear":
-            return (1 - u) * at(ip) + u * at(ip + 1)
-        return lagrange4((at(ip - 1), at(ip), at(ip + 1), at(ip + 2)), u)
-    raise ValueError(f"method={method!r}: use 'fourier', 'cubic' or 'linear'")
+    if method == "linear":
+        return (1 - u) * at(ip) + u * at(ip + 1)
+    return lagrange4((at(ip - 1), at(ip), at(ip + 1), at(ip + 2)), u)

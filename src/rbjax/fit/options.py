@@ -83,7 +83,11 @@ class FitOptions:
         check_choice("path", self.path, FIT_METHODS)
         if not (isinstance(self.decimate, int) and self.decimate >= 1):
             raise ValueError(f"decimate={self.decimate!r} must be an integer >= 1")
-        if not -1.0 < self.hold_poisson <= 0.5:
+        if not (
+            isinstance(self.hold_poisson, int | float)
+            and not isinstance(self.hold_poisson, bool)
+            and -1.0 < self.hold_poisson <= 0.5
+        ):
             raise ValueError(
                 f"hold_poisson={self.hold_poisson!r} is outside the valid range (-1, 0.5]"
             )

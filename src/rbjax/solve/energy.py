@@ -30,6 +30,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
 from .ode import final_state, impact_status, solve_phases
+from .options import model_from_shortcuts
 from .outcome import nan_where
 from .simulate import broadcast_inputs, check_inputs
 from .vector_field import body_velocity_m_per_s, split_energy
@@ -124,13 +125,13 @@ def energy_balance(
 
     Raises:
         ValueError: a model with elements in series with the shell (named in the message);
-            ``height_m`` not finite and > 0, or ``ball`` not a ``Ball`` (the argument named in
-            the message).
+            ``height_m`` not finite and > 0, ``ball`` not a ``Ball`` or ``model`` not a
+            ``Model`` (the argument named in the message).
         RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
 
     check_inputs(height_m, ball)
-    model = Model() if model is None else model
+    model = model_from_shortcuts("energy_balance", model, {})
     if model.series_elements:
         names = ", ".join(f"{e.description()} ({e.name})" for e in model.series_elements)
         raise ValueError(

@@ -502,15 +502,16 @@ def trajectory(
             failed).
 
     Raises:
-        ValueError: ``times_s`` not 1-D or not finite; ``height_m`` not finite and > 0, or
-            ``ball`` not a ``Ball`` (the argument named in the message).
+        ValueError: ``times_s`` not 1-D or not finite; ``height_m`` not finite and > 0,
+            ``ball`` not a ``Ball`` or ``model`` not a ``Model`` (the argument named in the
+            message).
         RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
     check_inputs(height_m, ball)
     if np.ndim(times_s) != 1:
         raise ValueError(f"times_s has shape {np.shape(times_s)}; expected a 1-D array of times")
     check_range("times_s", times_s)
-    model = Model() if model is None else model
+    model = model_from_shortcuts("trajectory", model, {})
     solver = Solver() if solver is None else solver
     shape, height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
     times = jnp.asarray(times_s, dtype=jnp.float64)
