@@ -14,6 +14,7 @@ recommendation and held-out errors.
 from __future__ import annotations
 
 import math
+from statistics import fmean
 
 import pytest
 
@@ -90,7 +91,7 @@ def test_the_runner_up_is_kept_out_by_its_paired_excess(selection):
 #: docs/guides/fitting.md, "Model selection on the bundled emulated recordings", the rest of the
 #: rows of these three candidates and of the unfitted paper model: fitted params, history rms (N),
 #: |Δt_c| (%), |Δpeak| (%) and |ΔL| 31.5 … 1000 Hz (dB), means of |Δ| over the folds.
-README_ROWS = {
+PAGE_ROWS = {
     "hunt-crossley/momentum": (
         2,
         19.7,
@@ -108,14 +109,14 @@ README_ROWS = {
     ),
 }
 #: the unfitted paper model's row: history err (%), |Δt_c|, |Δpeak| (%), |ΔL| per band (dB)
-README_BASELINE = (8.22, 1.48, 4.72, (0.26, 0.49, 2.41, 3.02, 8.19, 19.18))
+PAGE_BASELINE = (8.22, 1.48, 4.72, (0.26, 0.49, 2.41, 3.02, 8.19, 19.18))
 #: within the rounding of the printed digit, plus 0.001 (this run against the page's twelve)
 TWO_DECIMALS = 0.006
 
 
-@pytest.mark.parametrize("label", sorted(README_ROWS))
+@pytest.mark.parametrize("label", sorted(PAGE_ROWS))
 def test_the_rest_of_the_rows_are_the_page_table(selection, label):
-    params, rms, tc, peak, bands = README_ROWS[label]
+    params, rms, tc, peak, bands = PAGE_ROWS[label]
     candidate = next(c for c in selection.candidates if c.label == label)
     assert candidate.n_physical == params
     assert abs(candidate.fit.residual_rms_N - rms) <= 0.051, candidate.fit.residual_rms_N
@@ -126,15 +127,14 @@ def test_the_rest_of_the_rows_are_the_page_table(selection, label):
 
 
 def test_the_unfitted_paper_row_is_the_page_table(selection):
-    err, tc, peak, bands = README_BASELINE
+    err, tc, peak, bands = PAGE_BASELINE
     base = selection.baseline
     assert len(base) == 6
-    mean = lambda values: sum(values) / len(values)  # noqa: E731
-    assert abs(mean([b.history_error_pct for b in base]) - err) <= TWO_DECIMALS
-    assert abs(mean([abs(b.contact_time_pct) for b in base]) - tc) <= TWO_DECIMALS
-    assert abs(mean([abs(b.peak_force_pct) for b in base]) - peak) <= TWO_DECIMALS
+    assert abs(fmean([b.history_error_pct for b in base]) - err) <= TWO_DECIMALS
+    assert abs(fmean([abs(b.contact_time_pct) for b in base]) - tc) <= TWO_DECIMALS
+    assert abs(fmean([abs(b.peak_force_pct) for b in base]) - peak) <= TWO_DECIMALS
     for j, printed in enumerate(bands):
-        assert abs(mean([abs(b.lfe_octave_dB[j]) for b in base]) - printed) <= TWO_DECIMALS, j
+        assert abs(fmean([abs(b.lfe_octave_dB[j]) for b in base]) - printed) <= TWO_DECIMALS, j
 
 
 def test_the_fitted_ball_mode_and_series_element_read_as_the_pages_say(selection):
