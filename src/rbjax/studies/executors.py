@@ -33,21 +33,27 @@ process itself (its share with ``host=True``) ends the run with it.
 
 from __future__ import annotations
 
-import atexit
 import concurrent.futures as cf
 import concurrent.futures.process  # noqa: F401  (cf.process.BrokenProcessPool, also before any pool)
 import contextlib
 import dataclasses
 import heapq
-import multiprocessing
 import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import jax
-from threadpoolctl import threadpool_limits
 
 from .._progress import progress as say
+from .worker_pool import (
+    HostAndPool,
+    drop_pool,
+    local_pool,
+    shutdown_pools,
+    single_threaded_blas,
+    warm,
+    worker_start,
+)
 
 __all__ = [
     "Parallel",
@@ -196,30 +202,6 @@ def as_parallel(parallel: Parallel | int | None) -> Parallel:
     return Parallel(workers=parallel)
 
 
-class _HostAndPool(cf.Executor):
-    """This process runs one task at a time in a thread beside a pool of local workers: the
-    host's imports are done and its programs are loaded, so its core starts on the first task
-    at once instead of waiting for a worker process to start."""
-
-    def __init__(self, pool: cf.ProcessPoolExecutor):
-        self._pool = pool
-        self._host = cf.ThreadPoolExecutor(max_workers=1, thread_name_prefix="rbjax-task")
-        self._current: cf.Future | None = None
-
-    def submit(self, fn, /, *args, **kwargs):
-        # ``done()`` holds from the moment a result is set, before any waiter wakes up, so the
-        # next task submitted after ``cf.wait`` returns finds the host free
-        if self._current is None or self._current.done():
-            self._current = self._host.submit(fn, *args, **kwargs)
-            return self._current
-        return self._pool.submit(fn, *args, **kwargs)
-
-    def shutdown(self, wait=True, *, cancel_futures=False):
-        # the pool is this process's (``local_pool``) and stays; the host's task, if one still
-        # runs after a failure, finishes in its thread (a thread cannot be stopped)
-        self._host.shutdown(wait=wait, cancel_futures=cancel_futures)
-
-
 def host_takes_part(parallel: Parallel) -> bool:
     """Whether this process runs tasks beside its local workers: with several local workers,
     where this process's JAX is one CPU device, as each worker's (the same programs, so the
@@ -241,66 +223,6 @@ class _InProcess(cf.Executor):
         except BaseException as err:  # noqa: BLE001  (handed to the caller through the future)
             future.set_exception(err)
         return future
-
-
-#: JAX options a local worker takes from the process that starts it, so that it builds the
-#: same programs (the compilation cache's folder among them: one compile a machine).
-INHERITED_OPTIONS = (
-    "jax_compilation_cache_dir",
-    "jax_persistent_cache_min_compile_time_secs",
-    "jax_disable_most_optimizations",
-    "jax_default_matmul_precision",
-)
-
-
-#: Worker processes run one task at a time on one core: BLAS runs single-threaded in them.
-#: (OpenBLAS's threads, started at import and left to roam, made two workers on two cores run
-#: the fits of a selection slower than one process; one thread each, the same bits.)
-_BLAS_LIMIT: list = []
-
-
-#: The environment variables by which the BLAS libraries (and OpenMP) read their thread count
-#: when they are loaded.
-BLAS_THREAD_VARIABLES = (
-    "OPENBLAS_NUM_THREADS",
-    "OMP_NUM_THREADS",
-    "MKL_NUM_THREADS",
-    "BLIS_NUM_THREADS",
-)
-
-
-def single_threaded_blas() -> None:
-    """One thread for every BLAS library (OpenBLAS, MKL, BLIS) of this process and of the worker
-    processes it starts, for the rest of the process: those loaded already through
-    ``threadpoolctl``, those loaded later (SciPy's own OpenBLAS, imported on first use) and the
-    workers' through the environment (a count the user set is kept)."""
-    for name in BLAS_THREAD_VARIABLES:
-        os.environ.setdefault(name, "1")
-    if not _BLAS_LIMIT:
-        _BLAS_LIMIT.append(threadpool_limits(limits=1))
-
-
-def _worker_start(options: dict) -> None:
-    """A worker process's JAX: one CPU device, float64, the parent's options; BLAS on one
-    thread."""
-    single_threaded_blas()
-    jax.config.update("jax_platforms", "cpu")
-    try:
-        jax.config.update("jax_num_cpu_devices", 1)
-    except RuntimeError:  # a Dask worker whose JAX already runs (an earlier run): as it is
-        pass
-    jax.config.update("jax_enable_x64", True)
-    for name, value in options.items():
-        jax.config.update(name, value)
-
-
-def _local_pool(n: int, options: dict) -> cf.ProcessPoolExecutor:
-    return cf.ProcessPoolExecutor(
-        max_workers=n,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_start,
-        initargs=(options,),
-    )
 
 
 def _dask_client(address: str):
@@ -339,7 +261,7 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     elif parallel.scheduler is not None:
         client = _dask_client(parallel.scheduler)
         try:
-            client.run(_worker_start, {})  # x64 and one CPU device on every worker
+            client.run(worker_start, {})  # x64 and one CPU device on every worker
             yield client.get_executor(pure=False)
         finally:
             client.close()
@@ -348,52 +270,15 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     else:
         host = host_takes_part(parallel)
         pool = local_pool(parallel.local_workers - host)
-        executor = _HostAndPool(pool) if host else pool
+        executor = HostAndPool(pool) if host else pool
         try:
             yield executor
         except cf.process.BrokenProcessPool:
-            _drop(pool)
+            drop_pool(pool)
             raise
         finally:
             if host:
                 executor.shutdown(wait=False)
-
-
-#: The local pools of this process, by worker count and JAX options: kept until the process
-#: ends, so that a second study (or the selection after its data are read) finds its workers
-#: started, their imports done and their programs loaded.
-_POOLS: dict[tuple, cf.ProcessPoolExecutor] = {}
-
-
-def local_pool(n: int) -> cf.ProcessPoolExecutor:
-    """This process's pool of ``n`` local workers with its current JAX options (made on first
-    use, kept until the process ends or a worker dies)."""
-    options = {k: jax.config.values[k] for k in INHERITED_OPTIONS if k in jax.config.values}
-    key = (n, tuple(sorted(options.items())))
-    pool = _POOLS.get(key)
-    if pool is None:
-        pool = _POOLS[key] = _local_pool(n, options)
-    return pool
-
-
-def _drop(pool: cf.ProcessPoolExecutor) -> None:
-    for key, value in list(_POOLS.items()):
-        if value is pool:
-            del _POOLS[key]
-    pool.shutdown(wait=False, cancel_futures=True)
-
-
-@atexit.register
-def shutdown_pools() -> None:
-    """Stop every local pool of this process (at exit; or to free the workers' memory)."""
-    for pool in list(_POOLS.values()):
-        pool.shutdown(wait=True, cancel_futures=True)
-    _POOLS.clear()
-
-
-def _warm() -> None:
-    """Imports JAX and the fit (a worker's first task would otherwise wait for them)."""
-    import rbjax.fit  # noqa: F401  (lazy: this import is the worker's warm-up)
 
 
 def prestart(parallel: Parallel | int | None) -> None:
@@ -409,7 +294,7 @@ def prestart(parallel: Parallel | int | None) -> None:
         n = parallel.local_workers - host_takes_part(parallel)
         pool = local_pool(n)
         for _ in range(n):
-            pool.submit(_warm)
+            pool.submit(warm)
 
 
 def run_tasks(
