@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import rbjax
 from rbjax.room import (
     Chain,
     ReceivingRoom,
@@ -28,6 +29,7 @@ from rbjax.room import (
 )
 from rbjax.room.chain import bands, modal_bands, slab_mode_orders
 from rbjax.room.injection import modal_energies_J, modal_grid_size
+from rbjax.spectrum import lfe_octave_dB
 from rbjax.terms import JIS_RUBBER_BALL, FloatingFloor, Solver, floating_floor
 from rbjax.terms.floors.kinds import Rigid
 from tests.cli_runner import run_cli
@@ -145,6 +147,37 @@ def test_rating_is_smooth_in_thickness(thickness_program):
     assert at[0.15] > at[0.18] > at[0.2]
     # and the model's departure from it (docs/guides/room.md): it rises again from 210 mm
     assert at[0.2] < at[0.21] < at[0.24]
+
+
+DROP_HEIGHTS_M = (0.25, 0.5, 1.0, 1.6)
+#: docs/guides/room.md: the rating of the bare 150 mm slab by drop height (unvalidated)
+DROP_HEIGHT_RATINGS_dB = (45.2, 48.2, 51.0, 52.6)
+
+
+def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
+    """The chain is linear in the force's energy per band: between two drop heights each band's
+    level moves by the blocked force's own L_FE change, computed apart from the room chain
+    (rbjax.simulate and rbjax.spectrum's octave L_FE on the rigid floor), to 0.01 dB in the
+    bands the infinite plate carries (125-1000 Hz) and 0.15 dB in the modal ones (31.5, 63 Hz:
+    the modes weight the spectrum inside the band). So the rating falls with the height as the
+    force does: ~3 dB per halving (docs/guides/room.md)."""
+    orders = slab_mode_orders(SLAB, 1)
+
+    @jax.jit
+    def program(height):
+        levels = room_levels(SLAB, ROOM, height_m=height, n_samples=1000, orders=orders)
+        return rating_unrounded_dB(levels, 1), levels.level_dB
+
+    out = [program(h) for h in DROP_HEIGHTS_M]
+    force = [np.asarray(lfe_octave_dB(rbjax.simulate(h).force_N, RATE)) for h in DROP_HEIGHTS_M]
+    for k in range(len(DROP_HEIGHTS_M) - 1):
+        moved = np.asarray(out[k + 1][1]) - np.asarray(out[k][1])
+        expected = force[k + 1] - force[k]
+        np.testing.assert_allclose(moved[2:], expected[2:], atol=0.01)
+        np.testing.assert_allclose(moved[:2], expected[:2], atol=0.15)
+    ratings = [float(r) for r, _ in out]
+    assert ratings == sorted(ratings)
+    np.testing.assert_allclose(ratings, DROP_HEIGHT_RATINGS_dB, atol=0.05)
 
 
 def test_readme_predicted_levels(bare, thickness_program):
