@@ -1,0 +1,184 @@
+"""What a model selection yields: a :class:`Candidate` (one model's full fit and its held-out
+errors) and the :class:`Selection` (every candidate, the one recommended, and their table).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..fit import FitResult
+from ..spectrum.bands import OCTAVE_BANDS
+from ..text import fmt, format_table
+
+__all__ = ["Candidate", "Selection"]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Candidate:
+    """One candidate model: its full fit and its cross-validated (held-out) errors.
+
+    Attributes:
+        model_name: the model name (:mod:`rbjax.fit`).
+        blocked_force: its blocked-force definition, ``"paper"`` or ``"momentum"``.
+        fit: its full fit to every height (:class:`~rbjax.fit.FitResult`).
+        folds: its :class:`~rbjax.studies.cross_validation.HeldOut` errors, one per height left
+            out.
+    """
+
+    model_name: str
+    blocked_force: str
+    fit: FitResult
+    folds: tuple
+
+    @property
+    def label(self) -> str:
+        return f"{self.model_name}/{self.blocked_force}"
+
+    @property
+    def n_physical(self) -> int:
+        """Fitted physical parameters (E and the damping/stiffening ones; ν is held)."""
+        return len(self.fit.correlations[0])
+
+    @property
+    def fold_errors_pct(self) -> np.ndarray:
+        return np.array([f.history_error_pct for f in self.folds])
+
+    @property
+    def cv_error_pct(self) -> float:
+        return float(np.mean(self.fold_errors_pct))
+
+    @property
+    def cv_se_pct(self) -> float:
+        e = self.fold_errors_pct
+        return float(np.std(e, ddof=1) / math.sqrt(e.size)) if e.size > 1 else float("nan")
+
+    def mean_abs(self, name: str):
+        values = np.array([getattr(f, name) for f in self.folds], dtype=float)
+        return np.mean(np.abs(values), axis=0)
+
+    def to_dict(self) -> dict:
+        return {
+            "model_name": self.model_name,
+            "blocked_force": self.blocked_force,
+            "n_physical": self.n_physical,
+            "converged": self.fit.converged,
+            "residual_rms_N": self.fit.residual_rms_N,
+            "aic": self.fit.aic,
+            "bic": self.fit.bic,
+            "cv_history_error_pct": self.cv_error_pct,
+            "cv_history_error_se_pct": self.cv_se_pct,
+            "cv_mean_abs_contact_time_pct": float(self.mean_abs("contact_time_pct")),
+            "cv_mean_abs_peak_force_pct": float(self.mean_abs("peak_force_pct")),
+            "cv_mean_abs_lfe_octave_dB": self.mean_abs("lfe_octave_dB").tolist(),
+            "parameters": {k: v.to_dict() for k, v in self.fit.parameters.items()},
+            "folds": [f.to_dict() for f in self.folds],
+        }
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Selection:
+    """The outcome of :func:`~rbjax.studies.selection.select_model`.
+
+    Attributes:
+        candidates: every :class:`Candidate`, in the order they were tried.
+        recommended: the :class:`Candidate` the rule recommends.
+        within_noise: the candidates within the noise of the best
+            (:func:`~rbjax.studies.selection_rule.recommend`).
+        rule: the rule, in words.
+        blocked_force_note: what the held-out errors say about the blocked-force definition
+            of the recommended model.
+        baseline: the unfitted paper model's :class:`~rbjax.studies.cross_validation.HeldOut`
+            errors at every height.
+        elapsed_s: how long the selection took, s.
+    """
+
+    candidates: tuple
+    recommended: Candidate
+    within_noise: tuple
+    rule: str
+    blocked_force_note: str
+    baseline: tuple
+    elapsed_s: float
+
+    def table(self) -> str:
+
+        header = [
+            "model",
+            "blocked force",
+            "p",
+            "conv",
+            "rms (N)",
+            "CV err (%)",
+            "± SE",
+            "|Δt_c| (%)",
+            "|Δpeak| (%)",
+        ]
+        header += [f"|ΔL| {b}" for b in OCTAVE_BANDS] + ["AIC", "BIC", ""]
+        rows = []
+        for c in self.candidates:
+            mark = (
+                "recommended"
+                if c is self.recommended
+                else ("within noise" if c in self.within_noise else "")
+            )
+            rows.append(
+                [
+                    c.model_name,
+                    c.blocked_force,
+                    str(c.n_physical),
+                    "yes" if c.fit.converged else "no",
+                    fmt(c.fit.residual_rms_N, ".1f"),
+                    fmt(c.cv_error_pct, ".2f"),
+                    fmt(c.cv_se_pct, ".2f"),
+                    fmt(c.mean_abs("contact_time_pct"), ".2f"),
+                    fmt(c.mean_abs("peak_force_pct"), ".2f"),
+                ]
+                + [fmt(x, ".2f") for x in c.mean_abs("lfe_octave_dB")]
+                + [fmt(c.fit.aic, ".0f"), fmt(c.fit.bic, ".0f"), mark]
+            )
+        base = self.baseline
+        rows.append(
+            [
+                "paper (unfitted)",
+                "paper",
+                "0",
+                "—",
+                "—",
+                fmt(np.mean([b.history_error_pct for b in base]), ".2f"),
+                "—",
+                fmt(np.mean([abs(b.contact_time_pct) for b in base]), ".2f"),
+                fmt(np.mean([abs(b.peak_force_pct) for b in base]), ".2f"),
+            ]
+            + [fmt(x, ".2f") for x in np.mean([np.abs(b.lfe_octave_dB) for b in base], axis=0)]
+            + ["—", "—", "JIS ball, E = 1.6 MPa"]
+        )
+        lines = [
+            format_table(header, rows),
+            "",
+            f"held-out errors: leave-one-height-out over {len(self.recommended.folds)} heights "
+            "(|Δ|: mean over the folds).",
+            f"rule: {self.rule}.",
+            f"recommended: {self.recommended.label}.",
+            self.blocked_force_note,
+            f"selection took {self.elapsed_s:.0f} s.",
+        ]
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+
+        return {
+            "recommended": {
+                "model_name": self.recommended.model_name,
+                "blocked_force": self.recommended.blocked_force,
+            },
+            "within_noise": [c.label for c in self.within_noise],
+            "rule": self.rule,
+            "blocked_force_note": self.blocked_force_note,
+            "octave_bands_Hz": list(OCTAVE_BANDS),
+            "candidates": [c.to_dict() for c in self.candidates],
+            "baseline_paper_unfitted": [b.to_dict() for b in self.baseline],
+            "elapsed_s": self.elapsed_s,
+        }
