@@ -4,6 +4,7 @@ and the JAX causal filter of the fit (rbjax.spectrum.filters.sosfilt_jax), check
 from __future__ import annotations
 
 import dataclasses
+import re
 import struct
 import wave
 
@@ -319,6 +320,30 @@ def test_height_sources_and_unknown_height(tmp_path):
     assert {r.source: r.height_m for r in recs} == {"h080_d1.csv": 0.81, "drop7.csv": 0.55}
     assert D.height_from_name("raw_h100_two_impacts.wav") == 1.0
     assert D.height_from_name("h1000.csv") is None and D.height_from_name("ch100.csv") is None
+
+
+def test_a_missing_file_or_manifest_is_a_data_error_naming_the_path(tmp_path):
+    readers = {
+        "h100.csv": D.read_csv,
+        "h100.npy": lambda p: D.read_npy(p, rate_Hz=44100.0),
+        "h100.wav": D.read_wav,
+        "h100.mat": D.read_mat,
+        "h100.uff": D.read_uff,
+        "h100.tdms": D.read_tdms,
+    }
+    for name, read in readers.items():
+        missing = tmp_path / "gone" / name
+        with pytest.raises(DataError, match=f"^{re.escape(str(missing))}: no such file"):
+            read(missing)
+        with pytest.raises(DataError, match="no such file"):
+            D.read_file(str(missing), rate_Hz=44100.0)
+    (tmp_path / "h100.csv").mkdir()
+    with pytest.raises(DataError, match=r"h100\.csv: a directory, not a file"):
+        D.read_csv(tmp_path / "h100.csv")
+    write_csv(tmp_path / "h080_d1.csv", raw_force())
+    manifest = tmp_path / "heights.csv"
+    with pytest.raises(DataError, match=f"^manifest {re.escape(str(manifest))}: no such file"):
+        D.load(tmp_path / "h080_d1.csv", manifest=manifest)
 
 
 def test_different_rates_rejected(tmp_path):

@@ -14,6 +14,7 @@ The per-fault checks without a fit are tests/data/test_faults.py.
 from __future__ import annotations
 
 import json
+import os
 import warnings
 
 import numpy as np
@@ -236,3 +237,37 @@ def test_the_same_drops_at_other_rates_condition_to_the_same_records(drops, rate
     np.testing.assert_allclose(fb["contact_time_s"], fa["contact_time_s"], atol=2e-5)
     np.testing.assert_allclose(fb["lfe_octave_dB"][:, :4], fa["lfe_octave_dB"][:, :4], atol=0.03)
     np.testing.assert_allclose(fb["lfe_octave_dB"][:, 4:], fa["lfe_octave_dB"][:, 4:], atol=0.11)
+
+
+class _Where(os.PathLike):
+    """A path of another kind than ``str`` and ``pathlib.Path`` (an ``os.PathLike``)."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __fspath__(self):
+        return os.fspath(self.path)
+
+
+def test_prepare_data_reads_any_path_like_and_an_iterator_of_paths():
+    files = [D.examples_dir() / "h010_d1.csv", D.examples_dir() / "h020_d1.csv"]
+    by_list = prepare_data(files)
+    for given in (
+        (p for p in files),  # a generator of paths
+        map(_Where, files),  # an iterator of os.PathLike
+        [_Where(p) for p in files],  # a list of os.PathLike
+        iter(load_data(files)),  # an iterator of recordings
+    ):
+        data = prepare_data(given)
+        assert data.sources == by_list.sources and data.lowpass_Hz == by_list.lowpass_Hz == 1250.0
+        np.testing.assert_array_equal(data.force_N, by_list.force_N)
+    one = prepare_data(_Where(files[0]))  # a file as an os.PathLike
+    assert one.sources == (("h010_d1.csv",),) and one.lowpass_Hz == 1250.0
+    with pytest.raises(TypeError, match=r"recordings=3 \(of type int\): expected Recording"):
+        prepare_data(3)
+    with pytest.raises(
+        TypeError, match=r"recordings\[1\]=.* \(of type ndarray\) is not a Recording"
+    ):
+        prepare_data([D.load(files[0])[0], np.zeros(100)])
+    with pytest.raises(D.DataError, match="no recordings to fit"):
+        prepare_data(p for p in ())

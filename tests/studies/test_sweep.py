@@ -484,3 +484,30 @@ def _toml(config: dict) -> str:
         text.append(f"[{name}]")
         text += [f"{k} = {json.dumps(v)}" for k, v in table.items()]
     return "\n".join(text) + "\n"
+
+
+def test_a_planned_call_without_rows_or_parts_with_other_outputs_are_named(tmp_path, monkeypatch):
+    from rbjax.studies import sweep_parts
+
+    config = {"kind": "sobol"}  # the plan is given below: nothing is evaluated
+
+    def plan_of(*counts):
+        samples = [{"x": np.arange(n, dtype=float)} for n in counts]
+        calls = [types.SimpleNamespace(samples=x, gradients=False, settings={}) for x in samples]
+        monkeypatch.setattr(sweep_parts, "design_plan", lambda config: calls)
+        return calls
+
+    plan_of(0)  # a call of 0 rows: run_part writes no outputs for it
+    paths = [sweep_parts.run_part(config, i, 2, tmp_path / f"empty{i}.npz") for i in (1, 2)]
+    with pytest.raises(ValueError, match="merge: call 0 of this configuration's design has 0 rows"):
+        sweep_parts.merge_parts(config, paths)
+    plan = plan_of(2)
+    digest = sweep_parts.design_digest(config, plan)
+    paths = []
+    for i, output in ((1, "y"), (2, "z")):
+        meta = {"format": sweep_parts.PART_FORMAT, "digest": digest, "part": i, "parts": 2}
+        meta["calls"] = [{"rows": [i - 1, i], "n": 2, "gradients": False}]
+        paths.append(tmp_path / f"part{i}.npz")
+        np.savez(paths[-1], meta=np.array(json.dumps(meta)), **{f"0/{output}": np.ones(1)})
+    with pytest.raises(ValueError, match=r"part2\.npz': call 0's outputs \['z'\] differ from"):
+        sweep_parts.merge_parts(config, paths)

@@ -298,6 +298,17 @@ def test_model_names_with_the_ball_mode():
     ]
 
 
+def test_a_model_name_that_is_not_a_str_is_a_type_error_naming_it():
+    for name in (3, None, rbjax.Model()):
+        kind = type(name).__name__
+        with pytest.raises(
+            TypeError, match=rf"(?s)^model=.*\(of type {kind}\) is not a model name"
+        ):
+            parse_model_terms(name)
+        with pytest.raises(TypeError, match=rf"\(of type {kind}\) is not a model name: expected"):
+            model_from_name(name)
+
+
 def test_the_shared_structure_holds_the_mode_off_for_candidates_without_it():
     assert shared_structure(["paper", "zener"]).ball_mode is None  # no candidate has it: no cost
     sup = shared_structure(["hunt-crossley", "hunt-crossley+ball-mode"])

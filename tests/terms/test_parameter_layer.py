@@ -97,6 +97,20 @@ def test_vector_round_trip_and_replace():
     assert params.canonical_name("YOUNGS_PA", JIS_RUBBER_BALL, model) == "youngs_Pa"
 
 
+def test_parameter_table_defaults_as_parameter_names_and_names_an_array_field():
+    table = rbjax.parameter_table()
+    assert tuple(r.name for r in table) == rbjax.parameter_names()
+    assert table == params.parameter_table(1.0, JIS_RUBBER_BALL, Model())
+    assert {r.name: r.value for r in table}["youngs_Pa"] == float(JIS_RUBBER_BALL.youngs_Pa)
+    batch = JIS_RUBBER_BALL.replace(youngs_Pa=np.array([1.5e6, 1.6e6]))
+    with pytest.raises(ValueError, match=r"^Ball\.youngs_Pa=\[1500000\. 1600000\.\] is an array "):
+        rbjax.parameter_table(1.0, batch)
+    with pytest.raises(ValueError, match=r"Zener\.relaxation_time_s=.* of shape \(3,\): .*scalar"):
+        rbjax.parameter_table(model=Model(damping=Zener(0.3, np.full(3, 2e-3))))
+    with pytest.raises(ValueError, match=r"^height_m=\[0\.5 1\. \] is an array of shape \(2,\)"):
+        rbjax.parameter_table(np.array([0.5, 1.0]))
+
+
 @pytest.mark.parametrize("transform", ["log", "interval", "identity"])
 def test_transforms_invert_and_their_slope_is_the_derivative(transform):
     spec = Parameter(

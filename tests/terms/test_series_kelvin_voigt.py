@@ -5,6 +5,7 @@ its place in the model names, the files and the fit layer."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -14,10 +15,16 @@ import rbjax
 from rbjax import JIS_RUBBER_BALL as BALL
 from rbjax import BallMode, HuntCrossley, SeriesKelvinVoigt
 from rbjax.fit import all_model_names, model_from_name, parse_model_terms
-from rbjax.fit.layout import fitted_parameter_names
+from rbjax.fit.layout import (
+    BALL_MODE_SUFFIX,
+    SERIES_SUFFIX,
+    STIFFENING_SUFFIX,
+    fitted_parameter_names,
+)
 from rbjax.fit.physical import series_structure
 from rbjax.studies.selection import shared_structure, shared_structures
 from rbjax.terms import model_from_dict, model_to_dict
+from rbjax.terms.damping import DAMPING_MODELS
 
 from scipy_series_reference import reference_series_impact
 
@@ -170,3 +177,25 @@ def test_names_files_and_the_fit_layer():
     reading = series_structure(_model(None, "paper", 1.0 / 3.3e5, 1.5e3 / 3.3e5))
     assert "3.3e+05 N/m" in reading and "1.5e+03 N s/m" in reading
     assert series_structure(superset) == ""
+
+
+def test_every_name_the_parser_accepts_is_listed_and_builds_its_model():
+    # the grammar: a base, then up to three suffixes in any order, repeats included
+    suffixes = (STIFFENING_SUFFIX, BALL_MODE_SUFFIX, SERIES_SUFFIX)
+    bases = ("paper", *DAMPING_MODELS, "maxwell", "")
+    accepted = set()
+    for base in bases:
+        for count in range(4):
+            for tail in itertools.product(suffixes, repeat=count):
+                name = base + "".join(tail)
+                try:
+                    parse_model_terms(name)
+                except ValueError:
+                    continue
+                accepted.add(name)
+    listed = all_model_names()
+    assert len(listed) == len(set(listed)) and set(listed) == accepted
+    both = "hunt-crossley+stiffening+ball-mode+series-kelvin-voigt"
+    assert both in listed and parse_model_terms(both) == ((HuntCrossley,), True, True, True)
+    for name in listed:  # each builds the model that Model.name writes back as the name
+        assert model_from_name(name).name == name

@@ -21,7 +21,7 @@ from .errors import ClippedRecordError, DataError
 from .matlab import read_mat
 from .readers import read_csv, read_npy
 from .recording import Recording, require_same_rate
-from .sources import as_source, height_from_name
+from .sources import as_source, existing_file, height_from_name
 from .tdms import read_tdms
 from .uff import read_uff
 from .wav import read_wav
@@ -145,7 +145,7 @@ def _read_manifest(manifest) -> dict[str, dict]:
             out[Path(k).name] = dict(v) if isinstance(v, Mapping) else {"height_m": v}
         return out
     src = as_source(manifest)
-    text = Path(manifest).read_text(encoding="utf-8-sig")
+    text = existing_file(manifest, "manifest ").read_text(encoding="utf-8-sig")
     rows = [r for r in csv.reader(io.StringIO(text)) if any(c.strip() for c in r)]
     if not rows:
         raise DataError(f"manifest {src}: empty file")
@@ -227,7 +227,9 @@ def load(
     ``calibration_N_per_FS``, ``rate_Hz``, ``lowpass_Hz``, ``channel`` (a number, or a
     name for MAT/UFF/TDMS files), matched on the file name; or a mapping ``{file name:
     height_m}`` or ``{file name: {column: value}}``), the file name (``h100_d1.csv`` ->
-    1.00 m: ``hNNN`` in centimetres). Manifest values override the arguments for that file.
+    1.00 m: ``hNNN`` in centimetres). The manifest's other values (``calibration_N_per_FS``,
+    ``rate_Hz``, ``lowpass_Hz``, ``channel``) override the arguments for that file; its height
+    does not override a ``height_m`` argument.
 
     Args:
         paths_or_dir: a file or directory (``str`` or path), or an iterable of them.
@@ -252,10 +254,10 @@ def load(
 
     Raises:
         DataError: a file cannot be read (see the readers), a path is neither a file nor
-            a directory, a directory holds no recording, a height cannot be known, the
-            manifest is empty, lacks the ``file`` and ``height_m`` columns, has a line of
-            the wrong length or a non-numeric value, the files have different sample
-            rates, nothing to read.
+            a directory, a directory holds no recording, a height cannot be known, no file
+            at the ``manifest`` path, the manifest is empty, lacks the ``file`` and
+            ``height_m`` columns, has a line of the wrong length or a non-numeric value, the
+            files have different sample rates, nothing to read.
         ClippedRecordError: a clipped file, with ``strict=True``.
         MissingFormatError: a file's optional reader is not installed.
     """

@@ -11,15 +11,13 @@ A channel named like a force column (``force_N``, ``F_kN``) declares its unit.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .channels import Channel, channel_recording, import_extra, pick_channel
 from .columns import FORCE_NAMES, parse_column
 from .errors import DataError
 from .recording import MIN_SAMPLES, Recording
-from .sources import as_source
+from .sources import as_source, existing_file
 
 __all__ = ["read_mat"]
 
@@ -147,13 +145,13 @@ def read_mat(
         The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-        DataError: not a .mat file, no or an unknown channel (the channels are listed), a
-            missing or disagreeing rate, a missing calibration, a non-uniform time vector,
-            clipping, too few samples.
+        DataError: no file at ``path``, not a .mat file, no or an unknown channel (the
+            channels are listed), a missing or disagreeing rate, a missing calibration, a
+            non-uniform time vector, clipping, too few samples.
         MissingFormatError: a v7.3 file without h5py (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
-    if Path(path).stat().st_size == 0:
+    if existing_file(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     variables = _variables_v73(path, source) if _is_hdf5(path) else _variables_v5(path, source)
     ch = pick_channel(_channels(variables, source), channel, source)

@@ -14,14 +14,13 @@ from __future__ import annotations
 import csv
 import io
 import os
-from pathlib import Path
 
 import numpy as np
 
 from .columns import decimal_places, infer_rate, parse_column
 from .errors import DataError
 from .recording import Recording, check_force, check_height, file_recording
-from .sources import as_source, height_from_name
+from .sources import as_source, existing_file, height_from_name
 
 __all__ = ["read_csv", "read_npy"]
 
@@ -63,15 +62,15 @@ def read_csv(
             that does not start at 0 or is written coarsely.
 
     Raises:
-        DataError: empty, truncated or non-text file, missing/unknown/ambiguous columns,
-            non-numeric or non-finite values, fewer than ``MIN_SAMPLES`` rows, a constant
-            signal, non-uniform time, no ``rate_Hz`` without a time column or one that
-            disagrees with it, a drop height that is not positive; clipping
-            (:class:`ClippedRecordError`).
+        DataError: no file at ``path``; an empty, truncated or non-text file,
+            missing/unknown/ambiguous columns, non-numeric or non-finite values, fewer than
+            ``MIN_SAMPLES`` rows, a constant signal, non-uniform time, no ``rate_Hz``
+            without a time column or one that disagrees with it, a drop height that is not
+            positive; clipping (:class:`ClippedRecordError`).
     """
     source = as_source(path)
     try:
-        text = Path(path).read_text(encoding="utf-8-sig")
+        text = existing_file(path).read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as e:
         raise DataError(f"{source}: not a text CSV file ({e})") from None
     lines = [
@@ -230,14 +229,14 @@ def read_npy(
         The :class:`Recording` (``source`` the file's name, or ``source`` for an array).
 
     Raises:
-        DataError: an empty or unreadable file, a ``.npz`` archive, a non-numeric array or
-            one that is not 1-D, no ``rate_Hz``, NaN or inf, fewer than ``MIN_SAMPLES``
-            samples, a constant signal, a drop height that is not positive; a flat top
-            (:class:`ClippedRecordError`).
+        DataError: no file at the path given, an empty or unreadable file, a ``.npz``
+            archive, a non-numeric array or one that is not 1-D, no ``rate_Hz``, NaN or
+            inf, fewer than ``MIN_SAMPLES`` samples, a constant signal, a drop height that
+            is not positive; a flat top (:class:`ClippedRecordError`).
     """
     if isinstance(path_or_array, (str, os.PathLike)):
         src = as_source(path_or_array)
-        p = Path(path_or_array)
+        p = existing_file(path_or_array)
         if p.stat().st_size == 0:
             raise DataError(f"{src}: empty file")
         try:

@@ -1,11 +1,13 @@
-"""Where a record comes from: its source string and the drop height read from a file name
-(``h100`` → 1.00 m)."""
+"""Where a record comes from: its source string, the drop height read from a file name
+(``h100`` → 1.00 m), and the check that a file to read is there."""
 
 from __future__ import annotations
 
 import os
 import re
 from pathlib import Path
+
+from .errors import DataError
 
 _HEIGHT_RE = re.compile(r"(?<![A-Za-z0-9])h(\d{3})(?!\d)", re.IGNORECASE)
 
@@ -31,3 +33,17 @@ def height_from_name(name: str | os.PathLike) -> float | None:
 
 def as_source(path) -> str:
     return Path(path).name if isinstance(path, (str, os.PathLike)) else str(path)
+
+
+def existing_file(path, what: str = "") -> Path:
+    """``path`` as a ``Path``, checked to be a file: a :class:`DataError` naming it if not.
+
+    The readers and :func:`rbjax.data.load` say this, not a bare ``FileNotFoundError`` (or
+    ``IsADirectoryError``) from deep inside a reader. ``what`` prefixes the message (e.g.
+    ``"manifest "``).
+    """
+    p = Path(path)
+    if not p.is_file():
+        problem = "a directory, not a file" if p.is_dir() else "no such file or directory"
+        raise DataError(f"{what}{p}: {problem}")
+    return p

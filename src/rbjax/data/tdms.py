@@ -9,15 +9,13 @@ channels when they have no ``wf_increment``.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .channels import Channel, channel_recording, import_extra, pick_channel
 from .columns import parse_column
 from .errors import DataError
 from .recording import MIN_SAMPLES, Recording
-from .sources import as_source
+from .sources import as_source, existing_file
 
 __all__ = ["read_tdms"]
 
@@ -71,12 +69,13 @@ def read_tdms(
         The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-        DataError: not a TDMS file, an unknown channel (the channels are listed), a missing
-            or disagreeing rate, a missing calibration, clipping, too few samples.
+        DataError: no file at ``path``, not a TDMS file, an unknown channel (the channels
+            are listed), a missing or disagreeing rate, a missing calibration, clipping, too
+            few samples.
         MissingFormatError: npTDMS is not installed (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
-    if Path(path).stat().st_size == 0:
+    if existing_file(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     nptdms = import_extra("nptdms", "TDMS (.tdms) files")
     try:

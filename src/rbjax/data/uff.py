@@ -8,14 +8,12 @@ that is empty, ``node N dir D`` of its response point; the ordinate's unit label
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from .channels import Channel, channel_recording, import_extra, pick_channel
 from .errors import DataError
 from .recording import Recording
-from .sources import as_source
+from .sources import as_source, existing_file
 
 __all__ = ["read_uff"]
 
@@ -85,13 +83,14 @@ def read_uff(
         The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-        DataError: not a UFF file or no dataset 58 in it, a dataset that is not a real time
-            response, an unknown channel (the channels are listed), a ``rate_Hz`` that
-            disagrees with the file, a missing calibration, clipping, too few samples.
+        DataError: no file at ``path``, not a UFF file or no dataset 58 in it, a dataset
+            that is not a real time response, an unknown channel (the channels are listed),
+            a ``rate_Hz`` that disagrees with the file, a missing calibration, clipping, too
+            few samples.
         MissingFormatError: pyuff is not installed (``pip install 'rbjax[formats]'``).
     """
     source = as_source(path)
-    if Path(path).stat().st_size == 0:
+    if existing_file(path).stat().st_size == 0:
         raise DataError(f"{source}: empty file")
     pyuff = import_extra("pyuff", "Universal File Format (.uff/.unv) files")
     try:

@@ -13,7 +13,7 @@ import numpy as np
 from .channels import check_calibration, integer_newtons
 from .errors import DataError
 from .recording import Recording, check_force, file_recording
-from .sources import as_source
+from .sources import as_source, existing_file
 
 _UNKNOWN_FORMAT_RE = re.compile(r"Unknown wave file format: (\w+)")
 
@@ -67,14 +67,14 @@ def read_wav(
         The :class:`Recording` of the channel (``source`` the file's name).
 
     Raises:
-        DataError: empty, truncated or not a WAV file, an unsupported format, a missing
-            or invalid channel, a missing calibration, clipping, non-finite or too few
-            samples.
+        DataError: no file at ``path``; an empty, truncated or not a WAV file, an
+            unsupported format, a missing or invalid channel, a missing calibration,
+            clipping, non-finite or too few samples.
     """
     from scipy.io import wavfile  # lazy: scipy.io costs 0.1–0.2 s at import (RESULTS.md)
 
     source = as_source(path)
-    _check_riff_header(path, source)
+    _check_riff_header(existing_file(path), source)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", wavfile.WavFileWarning)
         try:

@@ -92,18 +92,19 @@ def fit_declaration(name: str, ball, model):
 
 
 def all_model_names() -> tuple[str, ...]:
-    """Every model name that :func:`model_from_name` builds from one suffix of each kind.
+    """Every model name that :func:`parse_model_terms` accepts and :func:`model_from_name`
+    builds: a base, then at most one suffix of each kind, in ``Model.name``'s order.
 
     Returns:
         The names, a tuple of str: ``paper`` and each registered damping law, then each of
         these with ``+stiffening``, then all of those with ``+ball-mode``, then all of them
-        with ``+series-kelvin-voigt``.
+        with ``+series-kelvin-voigt``, then all of them with ``+ball-mode+series-kelvin-voigt``
+        (both elements in series with the shell).
     """
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
     with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
-    return with_stiffening + tuple(
-        m + suffix for suffix in (BALL_MODE_SUFFIX, SERIES_SUFFIX) for m in with_stiffening
-    )
+    elements = (BALL_MODE_SUFFIX, SERIES_SUFFIX, BALL_MODE_SUFFIX + SERIES_SUFFIX)
+    return with_stiffening + tuple(m + suffix for suffix in elements for m in with_stiffening)
 
 
 class ModelTerms(NamedTuple):
@@ -128,12 +129,14 @@ def parse_model_terms(name: str) -> ModelTerms:
         (empty for ``paper``) and whether the name has each of the three suffixes.
 
     Raises:
-        ValueError: ``name`` is not a str, or what is left of it without the suffixes is
-            neither ``paper`` nor a registered damping law.
+        TypeError: ``name`` is not a str (the message names the type received).
+        ValueError: what is left of ``name`` without the suffixes is neither ``paper`` nor a
+            registered damping law.
     """
     if not isinstance(name, str):
-        raise ValueError(
-            f"model={name!r} must be a model name; valid: {', '.join(all_model_names())}"
+        raise TypeError(
+            f"model={name!r} (of type {type(name).__name__}) is not a model name: expected a "
+            f"str; valid: {', '.join(all_model_names())}"
         )
 
     def strip(rest, suffix):
@@ -162,6 +165,7 @@ def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool
         whether the name has the ``+stiffening`` suffix.
 
     Raises:
+        TypeError: ``name`` is not a str.
         ValueError: ``name`` is not a model name (see :func:`parse_model_terms`).
     """
     terms = parse_model_terms(name)
@@ -185,6 +189,7 @@ def model_from_name(
         The ``rbjax.Model`` with the terms the name stands for.
 
     Raises:
+        TypeError: ``name`` is not a str.
         ValueError: ``name`` is not a model name, ``gas`` or ``blocked_force`` is not an
             option, or a value is outside its parameter's range.
     """

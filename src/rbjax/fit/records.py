@@ -6,7 +6,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+import os
+import reprlib
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import jax
@@ -89,7 +91,8 @@ def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_k
     """Read recordings with ``rbjax.data.load``; resolve the measuring chain's low-pass.
 
     Args:
-        paths_or_dir: a file or directory (``str`` or path), or an iterable of them.
+        paths_or_dir: a file or directory (``str`` or any ``os.PathLike``), or an iterable
+            of them.
         lowpass_Hz: the measuring chain's cutoff, Hz. ``"auto"``: the cutoff the recordings
             declare (all equal), else, for the shipped emulated recordings
             (``rbjax.data.examples_dir()``), their documented 1250 Hz; else none. A number or
@@ -110,7 +113,7 @@ def load_data(paths_or_dir, *, lowpass_Hz="auto", strict: bool = False, **load_k
         ClippedRecordError: a clipped file, with ``strict=True``.
     """
 
-    items = [paths_or_dir] if isinstance(paths_or_dir, (str, Path)) else list(paths_or_dir)
+    items = [paths_or_dir] if isinstance(paths_or_dir, (str, os.PathLike)) else list(paths_or_dir)
     recs = data.load(items, strict=strict, **load_kwargs)
     if lowpass_Hz == "auto":
         declared = {r.lowpass_Hz for r in recs if isinstance(r, data.Recording)}
@@ -152,8 +155,10 @@ def prepare_data(
 
     Args:
         recordings: Recording objects (``rbjax.data.Excluded`` entries among them are left
-            out), or paths/a directory (read by :func:`load_data`); a :class:`FitData` is
-            returned as it is (the other arguments are then not used).
+            out), or a file or directory (``str`` or any ``os.PathLike``), or paths (read by
+            :func:`load_data`); any iterable of either (a generator too) is read into a list
+            first. A :class:`FitData` is returned as it is (the other arguments are then not
+            used).
         average: average the drops of each height into one record (True) or keep every
             drop a record (False).
         window_s: length of the window kept of each record, s.
@@ -171,16 +176,34 @@ def prepare_data(
             record cannot be conditioned (e.g. ``rbjax.data.NoImpactError``,
             ``rbjax.data.RecordCutOffError``) or read (:func:`load_data`).
         ValueError: ``window_s`` or ``pre_onset_s`` is not a positive finite number.
+        TypeError: ``recordings`` is none of these (not iterable, or an item that is
+            neither a ``Recording`` nor a path among recordings).
     """
 
     if isinstance(recordings, FitData):
         return recordings
-    if isinstance(recordings, (str, Path)) or (
-        isinstance(recordings, Sequence) and recordings and isinstance(recordings[0], (str, Path))
+    if not isinstance(recordings, (str, os.PathLike, Sequence)):
+        if not isinstance(recordings, Iterable):
+            raise TypeError(
+                f"recordings={reprlib.repr(recordings)} (of type {type(recordings).__name__}): "
+                "expected Recording objects, a file or directory, paths, or a FitData"
+            )
+        recordings = list(recordings)  # a generator or other iterable: looked at once, here
+    if isinstance(recordings, (str, os.PathLike)) or (
+        recordings and isinstance(recordings[0], (str, os.PathLike))
     ):
         recs = load_data(recordings, lowpass_Hz=lowpass_Hz)
     else:
         recs = list(recordings)
+        other = [
+            (k, r) for k, r in enumerate(recs) if not isinstance(r, (Recording, data.Excluded))
+        ]
+        if other:
+            k, item = other[0]
+            raise TypeError(
+                f"recordings[{k}]={reprlib.repr(item)} (of type {type(item).__name__}) is not a "
+                "Recording: give Recording objects (rbjax.data.load) or else paths"
+            )
         if lowpass_Hz != "auto":
             recs = _with_lowpass(recs, lowpass_Hz)
     excluded = tuple(r.to_dict() for r in recs if isinstance(r, data.Excluded))

@@ -238,7 +238,8 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
     Raises:
         ValueError: no paths; a file that is not a sweep part; a part of another design or
             of another split; a part given twice or missing; a part whose rows or outputs do
-            not match the design; a bad configuration.
+            not match the design (or another part's); an evaluation of the design with 0
+            rows (its parts hold no outputs); a bad configuration.
         RuntimeError: the study asks for rows outside its planned design.
     """
     paths = [Path(p) for p in paths]
@@ -280,7 +281,12 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
     outputs = []
     for k, call in enumerate(plan):
         n = row_count(call.samples)
-        pieces = []
+        if n == 0:  # run_part evaluates nothing for it: no part holds its outputs' names
+            raise ValueError(
+                f"merge: call {k} of this configuration's design has 0 rows: the parts "
+                "hold no outputs for it, and a study cannot be analysed without its rows"
+            )
+        pieces: list[tuple[Path, dict]] = []
         for i in range(1, parts + 1):
             path, meta, arrays = found[i]
             a, b = part_rows(n, i, parts)
@@ -288,10 +294,14 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
                 raise ValueError(f"{str(path)!r}: rows {meta['calls'][k]['rows']}, not {[a, b]}")
             if b > a:
                 prefix = f"{k}/"
-                pieces.append(
-                    {x[len(prefix) :]: v for x, v in arrays.items() if x.startswith(prefix)}
-                )
-        flat = {x: np.concatenate([p[x] for p in pieces]) for x in pieces[0]}
+                piece = {x[len(prefix) :]: v for x, v in arrays.items() if x.startswith(prefix)}
+                if pieces and set(piece) != set(pieces[0][1]):
+                    raise ValueError(
+                        f"{str(path)!r}: call {k}'s outputs {sorted(piece)} differ from "
+                        f"those of {str(pieces[0][0])!r} ({sorted(pieces[0][1])})"
+                    )
+                pieces.append((path, piece))
+        flat = {x: np.concatenate([p[x] for _, p in pieces]) for x in pieces[0][1]}
         wrong = {x: len(v) for x, v in flat.items() if len(v) != n}
         if wrong:
             raise ValueError(f"merge: call {k}'s parts hold {wrong} rows, not {n}")

@@ -112,34 +112,42 @@ def parameter_names(
 
 
 def parameter_table(
-    height_m: ArrayLike, ball: Ball | None, model: Model | None
+    height_m: ArrayLike = 1.0, ball: Ball | None = None, model: Model | None = None
 ) -> tuple[ParameterInfo, ...]:
     """Name, value and declaration of every parameter of the impact (scalar values).
 
     Args:
-        height_m: drop height h_D (m), a scalar.
-        ball: the :class:`~rbjax.terms.ball.Ball` with scalar fields, or ``None`` for
-            ``JIS_RUBBER_BALL``.
-        model: the :class:`~rbjax.terms.model.Model` with scalar parameters, or ``None`` for
-            ``Model()``.
+        height_m: drop height h_D (m), a scalar (default 1 m).
+        ball: the :class:`~rbjax.terms.ball.Ball` with scalar fields (default
+            ``JIS_RUBBER_BALL``).
+        model: the :class:`~rbjax.terms.model.Model` with scalar parameters (default
+            ``Model()``).
 
     Returns:
         One :class:`ParameterInfo` (name, value as a float, declaration) per parameter, in
             :func:`parameter_names` order.
 
     Raises:
-        TypeError: a term with an array field that its ``PARAMETERS`` do not declare, or a
-            parameter that is not a scalar.
-        ValueError: a parameter name that occurs in more than one term.
+        TypeError: a term with an array field that its ``PARAMETERS`` do not declare.
+        ValueError: a parameter that is not a scalar (an array of values: the message names
+            the field and its shape), or a parameter name that occurs in more than one term.
     """
     ball, model = _defaults(ball, model)
     tree = (height_m, ball, model)
     rows = []
     for name, spec, path in _leaf_entries(height_m, ball, model):
-        node = tree
+        owner, node = None, tree
         for key in path:
-            node = _step(node, key)
-        rows.append(ParameterInfo(name, float(np.asarray(node)), spec))
+            owner, node = node, _step(node, key)
+        value = np.asarray(node)
+        if value.ndim != 0:
+            field = name if len(path) == 1 else f"{type(owner).__name__}.{name}"
+            raise ValueError(
+                f"{field}={np.array2string(value, threshold=6, edgeitems=2)} is an array of "
+                f"shape {value.shape}: parameter_table takes one impact, a scalar per parameter "
+                "(shape ())"
+            )
+        rows.append(ParameterInfo(name, float(value), spec))
     return tuple(rows)
 
 
