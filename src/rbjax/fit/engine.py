@@ -118,7 +118,8 @@ def fit(
             :class:`~rbjax.fit.options.FitOptions` or is given with deprecated keywords;
             ``fit_heights`` names a height without records; the ``superset`` lacks a term
             of the model or has another gas.
-        TypeError: an unknown keyword.
+        TypeError: an unknown keyword; ``model`` neither a str nor an ``rbjax.Model``; data
+            that are neither paths nor recordings.
         DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()

@@ -48,6 +48,7 @@ def predict(
         RuntimeError: float64 was switched off after importing rbjax.
         ValueError: ``solver`` is not an ``rbjax.Solver``, or ``superset`` has another gas
             or lacks a term of ``model``.
+        TypeError: a model name that is not a str.
         DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()
