@@ -157,8 +157,9 @@ def test_library_never_imports_the_commands():
 def test_top_level_holds_packages_and_a_few_helpers():
     files = sorted(p.stem for p in SRC.glob("*.py"))
     packages = sorted(p.name for p in SRC.iterdir() if (p / "__init__.py").exists())
-    assert files == sorted(["__init__", "cli", *HELPERS])
-    assert packages == sorted(LAYERS)
+    # every layer is a package; a helper is one module, or a package once it outgrows one (plot/)
+    assert set(LAYERS) <= set(packages)
+    assert sorted(files + packages) == sorted(["__init__", "cli", *HELPERS, *LAYERS])
 
 
 def statements(path: Path) -> int:
