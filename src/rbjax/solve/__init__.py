@@ -5,7 +5,8 @@ general path and the reference), the quadrature of the undamped rigid-floor impa
 (:mod:`~rbjax.solve.quadrature`, histories in :mod:`~rbjax.solve.quadrature_history`), the
 phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`) and histories
 sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
-:func:`~rbjax.solve.simulate.simulate` choosing among them, the energy balance
+:func:`~rbjax.solve.simulate.simulate` choosing among them (:mod:`~rbjax.solve.method`) and
+running the path chosen (:mod:`~rbjax.solve.engine`), the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
 (:mod:`~rbjax.solve.batch`). Concrete batches of both are cut in chunks split over the local
 devices, each device running its own program (:mod:`~rbjax.solve.devices`; several hosts:
@@ -15,6 +16,7 @@ from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian
 from .energy import EnergyBalance, energy_balance
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
+from .method import METHODS
 from .ode import impact_batch, recontact_horizon_s, trajectory_batch
 from .options import EvaluationSpec, ModelShortcuts
 from .outcome import (
@@ -28,7 +30,7 @@ from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
 from .sampled import sampled_history
 from .sharded import sharded_map
-from .simulate import METHODS, ImpactResult, force_history, make_model, simulate, trajectory
+from .simulate import ImpactResult, force_history, make_model, simulate, trajectory
 
 __all__ = [
     "impact_angle",

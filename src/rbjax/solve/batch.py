@@ -50,14 +50,14 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from .angle import impact_angle
 from .devices import default_chunk_size, local_devices
-from .inputs import padded_rows
+from .inputs import PAPER_RATE_Hz, padded_rows
+from .method import resolve_method
 from .ode import impact_ode, ode_trajectory
 from .options import EvaluationSpec, spec_from_keywords
 from .outcome import STATUS_CODES, nan_where
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
 from .sharded import sharded_map
-from .simulate import PAPER_RATE_Hz, resolve_method
 
 BALL_PARAMETERS = tuple(Ball.PARAMETERS)
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m")
@@ -115,7 +115,7 @@ def evaluation_paths(
     model: Model, solver: Solver | None = None, method: str = "auto"
 ) -> tuple[str, str]:
     """(scalar path, history path) of ``evaluate``: ``"quadrature"``, ``"angle"`` or ``"ode"``
-    (``rbjax.solve.simulate.resolve_method``), and ``"sampled"`` or ``"ode"``."""
+    (``rbjax.solve.method.resolve_method``), and ``"sampled"`` or ``"ode"``."""
     scalar = resolve_method(method, model, solver)
     history = "sampled" if scalar != "ode" and sampled_history_unsupported(model) is None else "ode"
     return scalar, history

@@ -28,7 +28,7 @@ from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz
 
 #: The solve paths (``"auto"``: the fastest exact path the model allows; see
-#: ``rbjax.solve.simulate.resolve_method``).
+#: ``rbjax.solve.method.resolve_method``).
 PATHS = ("auto", "ode", "quadrature", "angle")
 
 

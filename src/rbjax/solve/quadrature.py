@@ -31,11 +31,11 @@ evaluated), d0 an upper bound of δ_max in closed form, and the root of the inte
 antiderivative gives d1 ≈ δ_max (a few digits); F is sampled again at n points on [0, d1]. Every
 quantity above is a linear functional of these n samples (integrals and sub-interval averages of
 the degree-(n − 1) interpolant of g and of F(2R − s)), expanded in a short Taylor series in
-ε = δ_max/d1 − 1, so one precomputed matrix product gives them all; δ_max = d1(1 + ε) is the
-root of a polynomial in ε. Accuracy: the interpolant's Chebyshev tail, the φ rule's analyticity
-ellipse and the Taylor remainder give an error estimate; above ``RULE_TOLERANCE`` the impact is
-flagged ``solver_failed`` (more nodes, or the ODE, then; ``rbjax.simulate`` falls back to the
-ODE).
+ε = δ_max/d1 − 1, so one precomputed matrix product gives them all (the points and the matrices:
+:mod:`rbjax.solve.quadrature_rules`); δ_max = d1(1 + ε) is the root of a polynomial in ε.
+Accuracy: the interpolant's Chebyshev tail, the φ rule's analyticity ellipse and the Taylor
+remainder give an error estimate; above ``RULE_TOLERANCE`` the impact is flagged
+``solver_failed`` (more nodes, or the ODE, then; ``rbjax.simulate`` falls back to the ODE).
 
 The force histories (:mod:`rbjax.solve.quadrature_history`) invert t(δ) with nested Gauss–Legendre
 rules in σ, δ = δ_max(1 − σ²): W_c(σ) = (4R δ_max/M) ∫₀¹ g(s) dτ and
@@ -58,7 +58,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from numpy.polynomial import chebyshev
 
 from .._validate import check_range
 from .._x64 import require_x64
@@ -71,6 +70,18 @@ from ..terms.forces import (
 )
 from ..terms.model import Model
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, ImpactScalars, impact_velocity_m_per_s
+from .quadrature_rules import (
+    ROOT_TERMS,
+    SUB_TERMS,
+    TAIL_COEFFICIENTS,
+    bernstein_decay,
+    bracket_rules,
+    legendre_tail,
+    refine_rules,
+    row_norms,
+    time_nodes,
+)
+from .quadrature_rules import gauss_legendre_01 as gauss_legendre_01  # its former home
 
 # --- scalar outputs (impact_quadrature) ---------------------------------------------------------
 #: Chebyshev–Lobatto points of the interpolant on [0, δ_max] and Gauss–Legendre points of the
@@ -85,25 +96,12 @@ BRACKET_NEWTON_STEPS = 4
 UPPER_BOUND_NEWTON_STEPS = 6
 #: Newton steps on the refined root's polynomial in ε (then one differentiable step).
 REFINE_NEWTON_STEPS = 2
-#: Terms of the Taylor series in ε = δ_max/d1 − 1: of the antiderivative (the root, the rebound
-#: velocity, the peak force) and of the sub-interval averages (the phase times).
-ROOT_TERMS = 4
-SUB_TERMS = 3
-#: Highest Chebyshev coefficients of the interpolant kept for its error estimate.
-TAIL_COEFFICIENTS = 4
 #: Largest |ε| accepted (the bracketing root must be this close; else ``solver_failed``).
 MAX_SHIFT = 1e-2
 #: Largest accepted error estimate of the scalar path (else status ``solver_failed``).
 RULE_TOLERANCE = 1e-9
 #: Largest accepted |G(δ_max) − M v0²/4R| relative to M v0²/4R.
 RESIDUAL_TOLERANCE = 1e-9
-
-
-@functools.cache
-def gauss_legendre_01(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss–Legendre nodes and weights on [0, 1] (numpy's ``leggauss``, mapped)."""
-    x, w = np.polynomial.legendre.leggauss(n_nodes)
-    return 0.5 * (x + 1.0), 0.5 * w
 
 
 def check_quadrature(height_m, ball, model, n_nodes, lowest: int = 2, highest: int = 512) -> None:
@@ -134,106 +132,8 @@ def undamped_force(d, ball, model):
 
 
 # ------------------------------------------------------------------------------------------------
-# Scalar outputs: interpolants on Chebyshev–Lobatto points, one matrix product.
-
-
-@functools.cache
-def _lobatto_01(n: int) -> np.ndarray:
-    """n Chebyshev–Lobatto points on [0, 1], ascending, with both ends exact."""
-    t = 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
-    t[0], t[-1] = 0.0, 1.0
-    return t
-
-
-@functools.cache
-def _values_to_coefficients(n: int) -> np.ndarray:
-    """The matrix from values at ``_lobatto_01(n)`` to Chebyshev coefficients in x = 2t − 1."""
-    return np.linalg.inv(chebyshev.chebvander(2.0 * _lobatto_01(n) - 1.0, n - 1))
-
-
-@functools.cache
-def _bracket_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lobatto points t on [0, 1]; the matrices from values p(t_j) to the Chebyshev coefficients
-    of p and of its antiderivative ∫₀^t p (both in x = 2t − 1)."""
-    to_coef = _values_to_coefficients(n)
-    integrate = np.stack([chebyshev.chebint(e, lbnd=-1.0, scl=0.5) for e in np.eye(n)], axis=1)
-    return _lobatto_01(n), to_coef, integrate @ to_coef
-
-
-def time_nodes(n_nodes: int) -> int:
-    """Gauss–Legendre points of the φ rule for ``n_nodes`` interpolation points (as many: the
-    integrands' left singularity, near δ = −δ_max, moves in with the gas force's asymmetry)."""
-    return n_nodes
-
-
-@functools.cache
-def _legendre_tail(m: int) -> np.ndarray:
-    """Rows giving the two highest Legendre coefficients a_{m−2}, a_{m−1} and a_0 of the
-    degree-(m − 1) interpolant of values at the m Gauss–Legendre points (the discrete
-    projection)."""
-    x, w = np.polynomial.legendre.leggauss(m)
-    rows = [
-        (2 * k + 1) / 2.0 * w * np.polynomial.legendre.legval(x, np.eye(m)[k])
-        for k in (0, m - 2, m - 1)
-    ]
-    return np.stack(rows)
-
-
-@functools.cache
-def _refine_rules(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lobatto points t_1..t_{n−1} on (0, 1] (t_0 = 0 is left out: F(0) = 0), the φ rule (sin φ_i,
-    weights; ``time_nodes(n)`` points) and one matrix whose rows are linear functionals of the
-    values p(t_1..t_{n−1}) of a degree-(n − 1) polynomial p with p(0) = 0:
-
-    * row 0: ∫₀¹ p dt; rows 1..ROOT_TERMS: p^(q)(1)/q! for q = 0..ROOT_TERMS − 1 (the Taylor
-      series of ∫₀^λ p dt about λ = 1 has coefficients p^(q)(1)/(q + 1)!, and of p(λ) these);
-    * rows (q, i), q = 0..SUB_TERMS − 1, i over the φ points:
-      (1/q!)(1/μ_i) ∫_{1−μ_i}^1 t^q p^(q)(t) dt, μ_i = 1 − sin φ_i (the Taylor coefficients in
-      λ − 1 of the average of p(λt) over [1 − μ_i, 1]);
-    * the last TAIL_COEFFICIENTS rows: the highest Chebyshev coefficients (the interpolant's tail).
-    """
-    to_coef = _values_to_coefficients(n)
-    m = time_nodes(n)
-    x, w = np.polynomial.legendre.leggauss(m)
-    phi, w_phi = np.pi / 4.0 * (x + 1.0), np.pi / 4.0 * w
-    mu = 1.0 - np.sin(phi)
-    lower = 2.0 * (1.0 - mu) - 1.0  # 1 − μ_i in x = 2t − 1
-    end = np.zeros((ROOT_TERMS + 1, n))
-    sub = np.zeros((SUB_TERMS, m, n))
-    t_power = [np.array([1.0])]
-    for _ in range(SUB_TERMS):
-        t_power.append(chebyshev.chebmul(t_power[-1], np.array([0.5, 0.5])))  # t = (x + 1)/2
-    for j in range(n):
-        coef = to_coef[:, j]
-        end[0, j] = chebyshev.chebval(1.0, chebyshev.chebint(coef, lbnd=-1.0, scl=0.5))
-        for q in range(ROOT_TERMS):
-            deriv = chebyshev.chebder(coef, q, scl=2.0) if q else coef
-            end[q + 1, j] = chebyshev.chebval(1.0, deriv) / math.factorial(q)
-            if q < SUB_TERMS:
-                anti = chebyshev.chebint(chebyshev.chebmul(t_power[q], deriv), lbnd=-1.0, scl=0.5)
-                sub[q, :, j] = (
-                    (chebyshev.chebval(1.0, anti) - chebyshev.chebval(lower, anti))
-                    / mu
-                    / math.factorial(q)
-                )
-    rows = np.concatenate(
-        [end, sub.reshape(SUB_TERMS * m, n), to_coef[-TAIL_COEFFICIENTS:]], axis=0
-    )
-    return _lobatto_01(n)[1:], np.sin(phi), w_phi, rows[:, 1:]
-
-
-@functools.cache
-def _row_norms(n: int) -> np.ndarray:
-    """Largest absolute row sum of ``_refine_rules(n)`` per Taylor order (their round-off scale)."""
-    rows, m = _refine_rules(n)[3], time_nodes(n)
-    sub = rows[ROOT_TERMS + 1 : ROOT_TERMS + 1 + SUB_TERMS * m].reshape(SUB_TERMS, m, -1)
-    end = np.abs(rows[1 : ROOT_TERMS + 1]).sum(axis=1)
-    return np.array(
-        [
-            max(end[q], np.abs(sub[q]).sum(axis=1).max() if q < SUB_TERMS else 0.0)
-            for q in range(ROOT_TERMS)
-        ]
-    )
+# Scalar outputs: interpolants on Chebyshev–Lobatto points, one matrix product (the points and the
+# matrices: quadrature_rules.py).
 
 
 def _weighted_sum(weights, values):
@@ -293,7 +193,7 @@ def _upper_bound(v0, ball, model, target):
 
 def _bracket(v0, ball, model, target, d_limit):
     """d1 ≈ δ_max from an interpolant of g on BRACKET_NODES points of [0, d0] (no derivatives)."""
-    t, to_coef, to_anti = (jnp.asarray(a) for a in _bracket_rules(BRACKET_NODES))
+    t, to_coef, to_anti = (jnp.asarray(a) for a in bracket_rules(BRACKET_NODES))
     d0 = jnp.minimum(_upper_bound(v0, ball, model, target), d_limit)
     s = d0 * t[1:]  # g(0) = 0: not evaluated
     g = jnp.concatenate([jnp.zeros(1), undamped_force(s, ball, model) / (2.0 * ball.radius_m - s)])
@@ -313,13 +213,6 @@ def _tail_estimate(tail):
     last = jnp.abs(tail[-1]) + jnp.abs(tail[-2])
     before = jnp.abs(tail[-3]) + jnp.abs(tail[-4])
     return last * jnp.minimum(1.0, last / jnp.maximum(before, 1e-300))
-
-
-def bernstein_decay(a, n):
-    """ρ^(−2n), ρ = a + √(a² − 1): the error decay of an n-point rule for a function analytic
-    inside the Bernstein ellipse whose semi-major axis is a (in units of the half interval)."""
-    rho = a + jnp.sqrt(jnp.maximum(a**2 - 1.0, 0.0))
-    return jnp.exp(-2.0 * n * jnp.log(jnp.maximum(rho, 1.0 + 1e-16)))
 
 
 def _phi_rule_error(d_max, two_r, n: int):
@@ -346,7 +239,7 @@ class _Scalars(eqx.Module):
 
 
 def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
-    t, sin_phi, w_phi, rows = (jnp.asarray(a) for a in _refine_rules(n_nodes))
+    t, sin_phi, w_phi, rows = (jnp.asarray(a) for a in refine_rules(n_nodes))
     m_phi = time_nodes(n_nodes)
     height = jnp.asarray(height_m, dtype=jnp.float64)
     v0 = impact_velocity_m_per_s(height)
@@ -407,11 +300,11 @@ def _solve_scalars(height_m, ball, model, n_nodes: int) -> _Scalars:
     e_c = jnp.abs(jax.lax.stop_gradient(e))
     shift_estimate = (e_c * d1 / jnp.maximum(consts[1].radius_m * 2.0 - d1, 1e-300)) ** k_sub
     shift_estimate = shift_estimate + np.finfo(np.float64).eps * _horner(
-        jnp.asarray(_row_norms(n_nodes)), e_c
+        jnp.asarray(row_norms(n_nodes)), e_c
     )
     # the φ rule: a priori from the nearest singularities, a posteriori from the integrands'
     # Legendre tail (the rule's error falls as the square of the interpolant's)
-    legendre_rows = jnp.asarray(_legendre_tail(m_phi)).T
+    legendre_rows = jnp.asarray(legendre_tail(m_phi)).T
     phi_estimate = _phi_rule_error(d_max_c, jax.lax.stop_gradient(two_r), m_phi)
     for rate in (rate_c, rate_r):
         a = jax.lax.stop_gradient(rate) @ legendre_rows

@@ -20,13 +20,8 @@ from ..terms.ball import Ball
 from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import Model
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, Trajectory, impact_velocity_m_per_s
-from .quadrature import (
-    RESIDUAL_TOLERANCE,
-    bernstein_decay,
-    check_quadrature,
-    gauss_legendre_01,
-    undamped_force,
-)
+from .quadrature import RESIDUAL_TOLERANCE, check_quadrature, undamped_force
+from .quadrature_rules import bernstein_decay, gauss_legendre_01
 
 # --- force histories (force_history_quadrature) -------------------------------------------------
 #: Gauss–Legendre points of the nested rules of the history path.

@@ -1,12 +1,15 @@
-"""The public forward model: ``simulate`` and its frozen result."""
+"""The public forward model: ``simulate``, ``trajectory`` and the frozen result of ``simulate``.
+
+:func:`simulate` checks its inputs, takes the path :func:`~rbjax.solve.method.resolve_method`
+chooses and has :mod:`rbjax.solve.engine` run it; :class:`ImpactResult` holds the scalar outputs
+and computes the force histories (:func:`force_history`) and their band levels on request.
+"""
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import math
 import warnings
-from typing import NamedTuple, Unpack
+from typing import Unpack
 
 import equinox as eqx
 import jax
@@ -18,26 +21,22 @@ from .._validate import check_choice, check_range, is_traced
 from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
-from .angle import angle_unsupported, impact_angle
-from .devices import cached_jit, default_chunk_size, device_map
-from .inputs import (
-    PAPER_DURATION_S,
-    PAPER_RATE_Hz,
-    as_arrays,
-    broadcast_inputs,
-    check_inputs,
-    padded_rows,
-)
-from .ode import impact_batch, trajectory_batch
-from .options import PATHS, ModelShortcuts, model_from_shortcuts
+from .engine import Rows, fast_program, rows_program, run_rows, scalar_outputs
+from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inputs
+from .inputs import as_arrays as as_arrays
+from .method import METHODS as METHODS
+from .method import quadrature_unsupported as quadrature_unsupported
+from .method import resolve_method
+from .ode import trajectory_batch
+from .options import ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
-from .quadrature import DEFAULT_NODES, check_quadrature, impact_quadrature
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
 
-#: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
-#: ``quadrature_unsupported``), else ``angle`` where that allows it (``angle_unsupported``: the
-#: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
-METHODS = PATHS
+# The engine's names as the tests and benchmarks import them from here (they lived here once).
+_Rows = Rows
+_fast_program = fast_program
+_rows_program = rows_program
+_run_rows = run_rows
 
 
 def make_model(**shortcuts: Unpack[ModelShortcuts]) -> Model:
@@ -48,46 +47,6 @@ def make_model(**shortcuts: Unpack[ModelShortcuts]) -> Model:
         stacklevel=2,
     )
     return Model(**shortcuts)
-
-
-def quadrature_unsupported(model: Model) -> str | None:
-    """Why the quadrature path (``rbjax.solve.quadrature``) cannot solve ``model``; None if it can.
-
-    It solves Eq. 7 for a contact force F(δ) of the deflection alone: the shell (with or
-    without ``CubicStiffening``), the gas force or none, either blocked-force convention, any
-    ``max_deflection_ratio``. A damping law makes the force depend on δ̇ or on internal states.
-    """
-    if model.damping:
-        names = ", ".join(d.name for d in model.damping)
-        return (
-            f"the damping ({names}) makes the contact force depend on the velocity or on internal "
-            "states, not on δ alone"
-        )
-    return model.coupling
-
-
-def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
-    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or
-    ``"ode"``.
-
-    ``auto`` is the fastest exact path the model allows when no ``solver`` is given (a ``Solver``
-    describes an ODE integration: passing one asks for it): the quadrature where
-    ``quadrature_unsupported(model)`` is None, else the phase-angle integration where
-    ``angle_unsupported(model)`` is None, else the ODE. Asking for a path that cannot solve the
-    model raises ``ValueError`` saying why.
-    """
-    check_choice("method", method, METHODS)
-    reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
-    if method in reasons:
-        if reasons[method] is not None:
-            raise ValueError(
-                f"method={method!r} cannot solve this model: {reasons[method]}; valid: "
-                "method='ode' or method='auto'"
-            )
-        return method
-    if method == "ode" or solver is not None:
-        return "ode"
-    return next((path for path, reason in reasons.items() if reason is None), "ode")
 
 
 class ImpactResult(eqx.Module):
@@ -324,10 +283,7 @@ def simulate_model(
     method="ode",
     fallback=False,
 ) -> ImpactResult:
-    if is_traced((height_m, ball, model)) or _staged():
-        height, out = _traced_scalars(method, height_m, ball, model, solver)
-    else:
-        height, out, method = _concrete_scalars(method, height_m, ball, model, solver, fallback)
+    height, out, method = scalar_outputs(method, height_m, ball, model, solver, fallback)
     return ImpactResult(
         height_m=height,
         contact_time_s=out.contact_time_s,
@@ -344,136 +300,6 @@ def simulate_model(
         duration_s=float(duration_s),
         method=method,
     )
-
-
-def _staged() -> bool:
-    """Inside ``jax.jit``, where even constants are staged: no concrete result to split."""
-    return isinstance(jnp.zeros(()), jax.core.Tracer)
-
-
-def _check_quadrature(path: str, height_m, ball, model) -> None:
-    if path == "quadrature":
-        check_quadrature(height_m, ball, model, DEFAULT_NODES)
-
-
-@eqx.filter_jit
-def _fast_program(path: str, height_m, ball, model):
-    """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
-
-    shape, height, ball, model = broadcast_inputs(height_m, ball, model)
-    solve = impact_quadrature if path == "quadrature" else impact_angle
-    out = jax.vmap(solve)(height, ball, model)
-    return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
-
-
-def _traced_scalars(path: str, height_m, ball, model, solver):
-    """Traced inputs, or inside ``jax.jit``: one program, staged like any JAX function (no
-    fallback)."""
-    if path == "ode":
-        shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
-        out = impact_batch(flat_height, flat_ball, flat_model, solver)
-        return flat_height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
-    _check_quadrature(path, height_m, ball, model)
-    return _fast_program(path, *as_arrays((height_m, ball, model)))
-
-
-class _Rows(NamedTuple):
-    """Concrete (height, ball, model) as one batch axis on the host: the array leaves of the
-    broadcast shape flattened to rows, the scalar leaves shared by every row."""
-
-    shape: tuple
-    spec: tuple  # (treedef, static part, which leaves are rows): hashable, keys the programs
-    rows: tuple
-    shared: tuple
-
-    @classmethod
-    def of(cls, height_m, ball, model) -> _Rows:
-        arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
-        leaves, treedef = jax.tree_util.tree_flatten(arrays)
-        leaves = [np.asarray(x, dtype=np.float64) for x in leaves]
-        shape = np.broadcast_shapes(*(x.shape for x in leaves))
-        is_row = tuple(x.ndim > 0 for x in leaves)
-        rows = tuple(
-            np.ascontiguousarray(np.broadcast_to(x, shape)).reshape(-1)
-            for x, r in zip(leaves, is_row)
-            if r
-        )
-        shared = tuple(x for x, r in zip(leaves, is_row) if not r)
-        if not rows:  # a single impact: one row
-            rows, shared, is_row = tuple(x.reshape(1) for x in leaves), (), (True,) * len(leaves)
-        return cls(shape, (treedef, static, is_row), rows, shared)
-
-    @property
-    def size(self) -> int:
-        return self.rows[0].shape[0]
-
-    def take(self, index: np.ndarray) -> _Rows:
-        return self._replace(shape=index.shape, rows=tuple(x[index] for x in self.rows))
-
-
-@functools.lru_cache(maxsize=64)
-def _rows_program(path: str, spec: tuple, solver: Solver):
-    """The scalar solve of a chunk of rows on ``path`` (one function object per configuration:
-    ``devices.device_map`` jits it once and compiles it once per device and chunk shape)."""
-
-    treedef, static, is_row = spec
-
-    def run(rows, shared):
-        rows, shared = iter(rows), iter(shared)
-        leaves = [next(rows) if r else next(shared) for r in is_row]
-        height, ball, model = eqx.combine(jax.tree_util.tree_unflatten(treedef, leaves), static)
-        _, height, ball, model = broadcast_inputs(height, ball, model)
-        if path == "ode":
-            return impact_batch(height, ball, model, solver)
-        solve = impact_quadrature if path == "quadrature" else impact_angle
-        return jax.vmap(solve)(height, ball, model)
-
-    return run
-
-
-def _run_rows(path: str, batch: _Rows, solver: Solver, devices=None):
-    """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
-    batch fits one chunk of one device (JAX arrays), else chunks split over the local
-    ``devices`` (default: all; NumPy arrays)."""
-
-    fn = _rows_program(path, batch.spec, solver)
-    devices = jax.local_devices() if devices is None else list(devices)
-    chunk_size = default_chunk_size(path, devices)
-    if batch.size <= chunk_size:  # one chunk, whatever the number of devices
-        return cached_jit(fn)(batch.rows, batch.shared)
-    return device_map(fn, batch.rows, batch.shared, chunk_size=chunk_size, devices=devices)
-
-
-def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
-    """(broadcast height, outputs, path) of concrete inputs, split over the local devices
-    (``rbjax.solve.devices``: every row as on one device, bit for bit). On a fast path with
-    ``fallback``, the impacts it flags ``solver_failed`` are solved again by the ODE (the rows
-    padded by ``inputs.padded_rows``, so that few shapes compile)."""
-    if path != "ode":
-        _check_quadrature(path, height_m, ball, model)
-    # a list of heights is one array (as a pytree its floats would be leaves of their own)
-    height_m = np.asarray(height_m, dtype=np.float64)
-    batch = _Rows.of(*as_arrays((height_m, ball, model)))
-    reshape = lambda x: np.reshape(x, batch.shape)  # noqa: E731
-    out = _run_rows(path, batch, solver)
-    failed = np.flatnonzero(np.asarray(out.status) == STATUS_CODES["solver_failed"])
-    if path != "ode" and fallback and failed.size:
-        redo = _run_rows("ode", batch.take(padded_rows(failed)), solver)
-        columns = {f.name: np.array(getattr(out, f.name)) for f in dataclasses.fields(out)}
-        for name, column in columns.items():
-            column[failed] = np.asarray(getattr(redo, name))[: failed.size]
-        out, path = type(out)(**columns), path + "+ode"
-    height = np.broadcast_to(np.asarray(height_m, dtype=np.float64), batch.shape)
-    if isinstance(out.status, jax.Array):  # one call: the outputs are on the default device
-        height, out = jax.device_put(height), _reshaped(out, batch.shape)
-    else:  # NumPy outputs of the devices' chunks, on the default device at once
-        height, out = jax.device_put((height, jax.tree_util.tree_map(reshape, out)))
-    return height, out, path
-
-
-@functools.partial(jax.jit, static_argnums=1)
-def _reshaped(tree, shape: tuple):
-    return jax.tree_util.tree_map(lambda x: x.reshape(shape), tree)
 
 
 def trajectory(

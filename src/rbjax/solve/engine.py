@@ -1,0 +1,170 @@
+"""``simulate``'s engine: the scalar outputs of a batch of impacts on the path chosen for it.
+
+:func:`scalar_outputs` runs one path (``"quadrature"``, ``"angle"`` or ``"ode"``, as
+:func:`~rbjax.solve.method.resolve_method` chose it) over the broadcast inputs. Traced inputs,
+or a call inside ``jax.jit``, are staged as one program like any JAX function. Concrete inputs
+are solved on the host as one batch of rows (:class:`Rows`), cut in chunks split over the local
+devices (``rbjax.solve.devices``: every row as on one device, bit for bit); there, with the
+fallback on, the impacts a fast path flags ``solver_failed`` are solved again by the ODE.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import NamedTuple
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._validate import is_traced
+from ..terms.model import Solver
+from .angle import impact_angle
+from .devices import cached_jit, default_chunk_size, device_map
+from .inputs import as_arrays, broadcast_inputs, padded_rows
+from .ode import impact_batch
+from .outcome import STATUS_CODES
+from .quadrature import DEFAULT_NODES, check_quadrature, impact_quadrature
+
+
+def scalar_outputs(path: str, height_m, ball, model, solver, fallback: bool):
+    """(broadcast height, outputs, path) of the impacts of ``height_m``, ``ball`` and ``model``
+    on ``path``: one staged program where the inputs are traced (or inside ``jax.jit``; no
+    fallback, the path returned as given), else the concrete batch split over the local devices
+    (``path + "+ode"`` where the fallback solved some impacts again)."""
+    if is_traced((height_m, ball, model)) or _staged():
+        height, out = _traced_scalars(path, height_m, ball, model, solver)
+        return height, out, path
+    return _concrete_scalars(path, height_m, ball, model, solver, fallback)
+
+
+def _staged() -> bool:
+    """Inside ``jax.jit``, where even constants are staged: no concrete result to split."""
+    return isinstance(jnp.zeros(()), jax.core.Tracer)
+
+
+def _check_quadrature(path: str, height_m, ball, model) -> None:
+    if path == "quadrature":
+        check_quadrature(height_m, ball, model, DEFAULT_NODES)
+
+
+@eqx.filter_jit
+def fast_program(path: str, height_m, ball, model):
+    """Broadcast, vmapped solve and reshape as ONE compiled program (one dispatch)."""
+
+    shape, height, ball, model = broadcast_inputs(height_m, ball, model)
+    solve = impact_quadrature if path == "quadrature" else impact_angle
+    out = jax.vmap(solve)(height, ball, model)
+    return height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+
+
+def _traced_scalars(path: str, height_m, ball, model, solver):
+    """Traced inputs, or inside ``jax.jit``: one program, staged like any JAX function (no
+    fallback)."""
+    if path == "ode":
+        shape, flat_height, flat_ball, flat_model = broadcast_inputs(height_m, ball, model)
+        out = impact_batch(flat_height, flat_ball, flat_model, solver)
+        return flat_height.reshape(shape), jax.tree_util.tree_map(lambda x: x.reshape(shape), out)
+    _check_quadrature(path, height_m, ball, model)
+    return fast_program(path, *as_arrays((height_m, ball, model)))
+
+
+class Rows(NamedTuple):
+    """Concrete (height, ball, model) as one batch axis on the host: the array leaves of the
+    broadcast shape flattened to rows, the scalar leaves shared by every row."""
+
+    shape: tuple
+    spec: tuple  # (treedef, static part, which leaves are rows): hashable, keys the programs
+    rows: tuple
+    shared: tuple
+
+    @classmethod
+    def of(cls, height_m, ball, model) -> Rows:
+        arrays, static = eqx.partition((height_m, ball, model), eqx.is_array_like)
+        leaves, treedef = jax.tree_util.tree_flatten(arrays)
+        leaves = [np.asarray(x, dtype=np.float64) for x in leaves]
+        shape = np.broadcast_shapes(*(x.shape for x in leaves))
+        is_row = tuple(x.ndim > 0 for x in leaves)
+        rows = tuple(
+            np.ascontiguousarray(np.broadcast_to(x, shape)).reshape(-1)
+            for x, r in zip(leaves, is_row)
+            if r
+        )
+        shared = tuple(x for x, r in zip(leaves, is_row) if not r)
+        if not rows:  # a single impact: one row
+            rows, shared, is_row = tuple(x.reshape(1) for x in leaves), (), (True,) * len(leaves)
+        return cls(shape, (treedef, static, is_row), rows, shared)
+
+    @property
+    def size(self) -> int:
+        return self.rows[0].shape[0]
+
+    def take(self, index: np.ndarray) -> Rows:
+        return self._replace(shape=index.shape, rows=tuple(x[index] for x in self.rows))
+
+
+@functools.lru_cache(maxsize=64)
+def rows_program(path: str, spec: tuple, solver: Solver):
+    """The scalar solve of a chunk of rows on ``path`` (one function object per configuration:
+    ``devices.device_map`` jits it once and compiles it once per device and chunk shape)."""
+
+    treedef, static, is_row = spec
+
+    def run(rows, shared):
+        rows, shared = iter(rows), iter(shared)
+        leaves = [next(rows) if r else next(shared) for r in is_row]
+        height, ball, model = eqx.combine(jax.tree_util.tree_unflatten(treedef, leaves), static)
+        _, height, ball, model = broadcast_inputs(height, ball, model)
+        if path == "ode":
+            return impact_batch(height, ball, model, solver)
+        solve = impact_quadrature if path == "quadrature" else impact_angle
+        return jax.vmap(solve)(height, ball, model)
+
+    return run
+
+
+def run_rows(path: str, batch: Rows, solver: Solver, devices=None):
+    """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
+    batch fits one chunk of one device (JAX arrays), else chunks split over the local
+    ``devices`` (default: all; NumPy arrays)."""
+
+    fn = rows_program(path, batch.spec, solver)
+    devices = jax.local_devices() if devices is None else list(devices)
+    chunk_size = default_chunk_size(path, devices)
+    if batch.size <= chunk_size:  # one chunk, whatever the number of devices
+        return cached_jit(fn)(batch.rows, batch.shared)
+    return device_map(fn, batch.rows, batch.shared, chunk_size=chunk_size, devices=devices)
+
+
+def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
+    """(broadcast height, outputs, path) of concrete inputs, split over the local devices
+    (``rbjax.solve.devices``: every row as on one device, bit for bit). On a fast path with
+    ``fallback``, the impacts it flags ``solver_failed`` are solved again by the ODE (the rows
+    padded by ``inputs.padded_rows``, so that few shapes compile)."""
+    if path != "ode":
+        _check_quadrature(path, height_m, ball, model)
+    # a list of heights is one array (as a pytree its floats would be leaves of their own)
+    height_m = np.asarray(height_m, dtype=np.float64)
+    batch = Rows.of(*as_arrays((height_m, ball, model)))
+    reshape = lambda x: np.reshape(x, batch.shape)  # noqa: E731
+    out = run_rows(path, batch, solver)
+    failed = np.flatnonzero(np.asarray(out.status) == STATUS_CODES["solver_failed"])
+    if path != "ode" and fallback and failed.size:
+        redo = run_rows("ode", batch.take(padded_rows(failed)), solver)
+        columns = {f.name: np.array(getattr(out, f.name)) for f in dataclasses.fields(out)}
+        for name, column in columns.items():
+            column[failed] = np.asarray(getattr(redo, name))[: failed.size]
+        out, path = type(out)(**columns), path + "+ode"
+    height = np.broadcast_to(np.asarray(height_m, dtype=np.float64), batch.shape)
+    if isinstance(out.status, jax.Array):  # one call: the outputs are on the default device
+        height, out = jax.device_put(height), _reshaped(out, batch.shape)
+    else:  # NumPy outputs of the devices' chunks, on the default device at once
+        height, out = jax.device_put((height, jax.tree_util.tree_map(reshape, out)))
+    return height, out, path
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _reshaped(tree, shape: tuple):
+    return jax.tree_util.tree_map(lambda x: x.reshape(shape), tree)
