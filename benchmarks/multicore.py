@@ -130,8 +130,8 @@ ZENER = Model(
 
 def engine_rows(quick: bool, devices) -> list[dict]:
     """``simulate``'s engine: one call of the whole batch, chunks on one device, on two."""
+    from rbjax.solve.engine import Rows, fast_program, run_rows
     from rbjax.solve.inputs import as_arrays
-    from rbjax.solve.simulate import _fast_program, _Rows, _run_rows
 
     rows = []
     for name, path, model, n in (
@@ -142,16 +142,16 @@ def engine_rows(quick: bool, devices) -> list[dict]:
         n = n // (4 if path == "ode" else 10) if quick else n
         heights = np.linspace(0.1, 1.6, n)
         inputs = as_arrays((heights, rbjax.JIS_RUBBER_BALL, model))
-        batch = _Rows.of(*inputs)
+        batch = Rows.of(*inputs)
         if path == "ode":
             _, h, b, m = broadcast_inputs(*inputs)
             whole = lambda: impact_batch(h, b, m, rbjax.Solver()).contact_time_s  # noqa: E731
         else:
-            whole = lambda: _fast_program(path, *inputs)[1].contact_time_s  # noqa: E731
+            whole = lambda: fast_program(path, *inputs)[1].contact_time_s  # noqa: E731
         variants = {
             "1 device, one call (before)": whole,
-            "1 device, chunks": lambda: _run_rows(path, batch, rbjax.Solver(), devices[:1]),
-            f"{len(devices)} devices, chunks": lambda: _run_rows(
+            "1 device, chunks": lambda: run_rows(path, batch, rbjax.Solver(), devices[:1]),
+            f"{len(devices)} devices, chunks": lambda: run_rows(
                 path, batch, rbjax.Solver(), devices
             ),
         }

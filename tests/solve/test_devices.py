@@ -58,13 +58,13 @@ def test_device_map_pads_the_last_chunk_and_trims_the_padding():
 def test_a_large_batch_in_chunks_agrees_with_one_call():
     # 20 000 impacts: three chunks of 6784 (the last one padded) against one call of them all
     # (XLA may round a row differently in a loop of another length: ~1e-16, not bit for bit)
+    from rbjax.solve.engine import fast_program
     from rbjax.solve.inputs import as_arrays
-    from rbjax.solve.simulate import _fast_program
 
     heights = np.linspace(0.05, 12.0, 20_000)
     chunked = rbjax.simulate(heights)
     assert chunked.method == "quadrature"
-    _, whole = _fast_program(
+    _, whole = fast_program(
         "quadrature", *as_arrays((heights, rbjax.JIS_RUBBER_BALL, rbjax.Model()))
     )
     np.testing.assert_array_equal(chunked.status, whole.status)
@@ -126,7 +126,8 @@ SCRIPT = textwrap.dedent(
     sys.path.insert(0, sys.argv[2])
     import test_devices as t
     from rbjax.solve.devices import cached_jit
-    from rbjax.solve.simulate import _Rows, _rows_program, as_arrays
+    from rbjax.solve.engine import Rows, rows_program
+    from rbjax.solve.simulate import as_arrays
     import rbjax
 
     assert jax.local_device_count() == int(sys.argv[3]), jax.devices()
@@ -134,9 +135,9 @@ SCRIPT = textwrap.dedent(
     for name in t._cases():
         out |= t._run(name)
     # a per-device program holds no collective: nothing ties one device's loops to another's
-    batch = _Rows.of(*as_arrays((np.linspace(0.1, 1.6, 8), rbjax.JIS_RUBBER_BALL, t.ZENER)))
+    batch = Rows.of(*as_arrays((np.linspace(0.1, 1.6, 8), rbjax.JIS_RUBBER_BALL, t.ZENER)))
     rows = jax.device_put(batch.rows, jax.devices()[-1])
-    fn = cached_jit(_rows_program("ode", batch.spec, rbjax.Solver()))
+    fn = cached_jit(rows_program("ode", batch.spec, rbjax.Solver()))
     hlo = fn.lower(rows, batch.shared).compile().as_text()
     collectives = ("all-reduce", "all-gather", "all-to-all", "collective-permute")
     out["collectives"] = np.array(sum(hlo.count(op) for op in collectives))

@@ -21,7 +21,7 @@ from .._validate import check_choice, check_range, is_traced
 from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
-from .engine import Rows, fast_program, rows_program, run_rows, scalar_outputs
+from .engine import scalar_outputs
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inputs
 from .inputs import as_arrays as as_arrays
 from .method import METHODS as METHODS
@@ -31,12 +31,6 @@ from .ode import trajectory_batch
 from .options import ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
-
-# The engine's names as the tests and benchmarks import them from here (they lived here once).
-_Rows = Rows
-_fast_program = fast_program
-_rows_program = rows_program
-_run_rows = run_rows
 
 
 def make_model(**shortcuts: Unpack[ModelShortcuts]) -> Model:
