@@ -13,6 +13,20 @@ from .axes import figure_and_axes, finish
 __all__ = ["plot_lfe_increase", "plot_increase_per_doubling", "plot_growth"]
 
 
+def _paper_points(ax, x, paper, color) -> None:
+    """The paper's values (§4.2, read off its figures) as open squares beside the curves."""
+    ax.plot(
+        x,
+        np.asarray(paper, dtype=float),
+        ls="none",
+        marker="s",
+        ms=9,
+        mfc="none",
+        color=color,
+        label="paper (≈, §4.2)",
+    )
+
+
 def plot_lfe_increase(height_ratio, increase_dB, bands, ax=None, *, slopes_dB=None, title=None):
     """L_FE increase (dB) per band against the drop-height ratio, log2 axis (paper Fig. 10).
 
@@ -51,16 +65,7 @@ def plot_increase_per_doubling(
     for name, values in slopes.items():
         ax.plot(x, np.asarray(values, dtype=float), marker="o", label=name)
     if paper is not None:
-        ax.plot(
-            x,
-            np.asarray(paper, dtype=float),
-            ls="none",
-            marker="s",
-            ms=9,
-            mfc="none",
-            color="k",
-            label="paper (≈, §4.2)",
-        )
+        _paper_points(ax, x, paper, "k")
     ax.set_xticks(x, list(bands))
     return finish(
         fig,
@@ -102,16 +107,7 @@ def plot_growth(growths, ax=None, *, paper=None, title=None):
             x + dx, g.slope_dB, yerr=err, capsize=3, label=g.label or f"series {k + 1}", **style
         )
     if paper is not None:
-        ax.plot(
-            x,
-            np.asarray(paper, dtype=float),
-            ls="none",
-            marker="s",
-            ms=9,
-            mfc="none",
-            color="0.4",
-            label="paper (≈, §4.2)",
-        )
+        _paper_points(ax, x, paper, "0.4")
     ax.axhline(10.0 * np.log10(2.0), color="0.6", lw=0.8, ls=":")
     ax.set_xticks(x, list(bands))
     return finish(
