@@ -1,6 +1,8 @@
 """The finite slab at low frequencies: the modes of a rectangular thin plate with simply
-supported edges, its drive-point mobility and the energy a force injects into each mode per
-band.
+supported or clamped edges, its drive-point mobility and the energy a force injects into each
+mode per band. Below, the simply supported modes in closed form; the clamped ones (Warburton's
+beam-function modes, their frequencies by Rayleigh's quotient and their radiation) are in
+``rbjax.room.clamped_slab``, and everything from the mobility on is the same for both.
 
 **Modes.** A thin (Kirchhoff) plate l_x × l_y of bending stiffness B′ = Et³/(12(1 − ν²)) and
 mass per area m″ = ρt, simply supported on its four edges, has the modes (Leissa, *Vibration of
@@ -41,9 +43,9 @@ resonances, < 1e-3 of a band's energy). M, N are a shape: computed from concrete
 passed on under a transformation.
 
 **Validity.** Thin plate (t ≤ min(l_x, l_y)/10, checked by ``Slab``), isotropic, edges simply
-supported (a slab cast into walls lies between simply supported and clamped; clamped edges
-raise the lowest modes, by up to 1.9× for a square plate in Leissa's tables, so the modal bands
-depend on the edge), one drive point (ISO 16283-2 averages over positions), the ball's force
+supported or clamped (a slab cast into walls lies between the two; clamped edges raise the
+lowest modes, by 1.83× for a square plate, so the modal bands depend on the edge), one drive
+point (ISO 16283-2 averages over positions), the ball's force
 that on the infinite plate of the section (the slab's drive-point impedance, ≈ 4.5e5 N·s/m for
 150 mm of concrete, is far above the ball's: the force is that on a rigid floor).
 """
@@ -58,12 +60,13 @@ import numpy as np
 
 from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import is_traced
+from .clamped_slab import beam_function, clamped_frequencies_Hz, clamped_radiation_efficiency
 from .injection import dtft_Ns
 from .mode_radiation import mode_radiation_efficiency
 from .radiation import AIR_DENSITY_kg_per_m3, SPEED_OF_SOUND_m_per_s, bending_stiffness_Nm
 
 #: The edge conditions offered.
-EDGE_CONDITIONS = ("simply-supported",)
+EDGE_CONDITIONS = ("simply-supported", "clamped")
 #: Modes are taken up to this multiple of the highest band edge.
 MODE_CUTOFF = 4.0
 #: Gauss–Legendre nodes per panel of a mode's band integral (two panels).
@@ -104,16 +107,24 @@ def mode_indices(orders: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 def slab_modes(slab, orders: tuple[int, int]):
     """Per mode of the set ``orders``: (f_k in Hz, 1/m_k in 1/kg at the drive point, σ_k,
-    η_k, η_rad,k) of the slab (module docstring); differentiable in the slab."""
+    η_k, η_rad,k) of the slab with its ``edge`` condition (module docstring; clamped edges:
+    ``rbjax.room.clamped_slab``); differentiable in the slab."""
     m, n = mode_indices(orders)
     lx, ly = slab.length_x_m, slab.length_y_m
-    omega = bending_speed_constant(slab) * ((m * math.pi / lx) ** 2 + (n * math.pi / ly) ** 2)
-    freq = omega / (2.0 * math.pi)
     x0, y0 = slab.drive_point_m
-    shape = jnp.sin(m * math.pi * x0 / lx) * jnp.sin(n * math.pi * y0 / ly)
     mass = slab.mass_per_area_kg_per_m2
-    inverse_mass = 4.0 * shape**2 / (mass * lx * ly)
-    sigma = mode_radiation_efficiency(freq, m, n, lx, ly)
+    if slab.edge == "clamped":
+        freq = clamped_frequencies_Hz(bending_speed_constant(slab), m, n, lx, ly)
+        shape = beam_function(m, x0 / lx) * beam_function(n, y0 / ly)
+        inverse_mass = shape**2 / (mass * lx * ly)
+        sigma = clamped_radiation_efficiency(freq, m, n, lx, ly)
+    else:
+        k_sq = (m * math.pi / lx) ** 2 + (n * math.pi / ly) ** 2
+        freq = bending_speed_constant(slab) * k_sq / (2.0 * math.pi)
+        shape = jnp.sin(m * math.pi * x0 / lx) * jnp.sin(n * math.pi * y0 / ly)
+        inverse_mass = 4.0 * shape**2 / (mass * lx * ly)
+        sigma = mode_radiation_efficiency(freq, m, n, lx, ly)
+    omega = 2.0 * math.pi * freq
     eta_rad = AIR_DENSITY_kg_per_m3 * SPEED_OF_SOUND_m_per_s * sigma / (omega * mass)
     eta = slab.structural_loss(freq) + 2.0 * eta_rad
     return freq, inverse_mass, sigma, eta, eta_rad
