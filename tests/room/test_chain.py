@@ -103,64 +103,100 @@ def test_modal_floor_energy_balance():
     assert injected == pytest.approx(ref.injected_energy_J, rel=1e-6)
 
 
-@pytest.fixture(scope="module")
-def thickness_program():
+def _thickness_program(edge):
     """One forward-mode program of the bare 4 m × 5 m slab of thickness t (concrete C30/37, room
-    50 m³, T = 0.5 s): (rating, band levels) and their derivatives in t. The finite slab's modes
-    in the 31.5 and 63 Hz octaves (Chain(slab="modal"), the default) over the mode set of the
-    150 mm slab (a shape, given from the concrete slab; thicker slabs have fewer modes below the
-    cutoff, so it holds theirs)."""
+    50 m³, T = 0.5 s) with ``edge``: (rating, band levels) and their derivatives in t. The
+    finite slab's modes in the 31.5 and 63 Hz octaves (Chain(slab="modal"), the default) over
+    the mode set of the 150 mm slab (a shape, given from the concrete slab; thicker slabs have
+    fewer modes below the cutoff, so it holds theirs)."""
     solver = Solver(adjoint="forward")
     orders = slab_mode_orders(SLAB, 1)
 
     def outputs(thickness):
-        slab = Slab.of_material("concrete", thickness)
+        slab = Slab.of_material("concrete", thickness, edge=edge)
         lv = room_levels(slab, ROOM, n_samples=1000, solver=solver, orders=orders)
         return rating_unrounded_dB(lv, 1), lv.level_dB
 
     return jax.jit(lambda t: jax.jvp(outputs, (t,), (1.0,)))
 
 
-def test_gradient_of_the_rating_against_finite_differences(thickness_program):
+@pytest.fixture(scope="module")
+def thickness_program():
+    """The default slab: clamped edges."""
+    return _thickness_program("clamped")
+
+
+@pytest.fixture(scope="module")
+def simply_supported_program():
+    return _thickness_program("simply-supported")
+
+
+@pytest.mark.parametrize("program", ["thickness_program", "simply_supported_program"])
+def test_gradient_of_the_rating_against_finite_differences(program, request):
     # d L_iA,Fmax / d thickness by jax.jvp against central differences (its primal outputs)
+    thickness_program = request.getfixturevalue(program)
     t0, h = 0.15, 1e-5
     _, (tangent, _) = thickness_program(t0)
     fd = (float(thickness_program(t0 + h)[0][0]) - float(thickness_program(t0 - h)[0][0])) / (2 * h)
     assert float(tangent) == pytest.approx(fd, rel=1e-4)
 
 
-def test_rating_is_smooth_in_thickness(thickness_program):
-    # issue 33: bare slabs of one plan, 150-240 mm. No staircase: between steps of 10 mm the
-    # rating changes as the trapezoidal integral of its derivative says (a jump where a mode or
-    # the coincidence frequency crosses a band edge would not be in the derivative)
-    steps = [round(0.15 + 0.01 * i, 3) for i in range(10)]  # Python floats: one compiled program
-    values, slopes = zip(
-        *((float(r), float(d)) for (r, _), (d, _) in map(thickness_program, steps))
-    )
+#: 150-270 mm in steps of 10 mm (Python floats: one compiled program)
+THICKNESSES_M = [round(0.15 + 0.01 * i, 3) for i in range(13)]
+
+
+def _ratings(program):
+    values, slopes = zip(*((float(r), float(d)) for (r, _), (d, _) in map(program, THICKNESSES_M)))
+    # No staircase: between steps of 10 mm the rating changes as the trapezoidal integral of
+    # its derivative says (a jump where a mode or the coincidence frequency crosses a band
+    # edge would not be in the derivative)
     change = np.diff(values)
     by_slope = 0.5 * (np.array(slopes[1:]) + np.array(slopes[:-1])) * 0.01
-    np.testing.assert_allclose(change, by_slope, atol=0.05)  # measured ≤ 0.03 dB
-    # the published trend (heavier slabs rate lower) holds from 150 to 200 mm; the room page
-    # (docs/guides/room.md) says where and why it does not above (the first mode nears the
-    # 63 Hz octave)
-    at = dict(zip(steps, values))
+    # measured ≤ 0.03 dB clamped; ≤ 0.06 dB simply supported, at 240-250 mm where its slope
+    # turns within the step
+    np.testing.assert_allclose(change, by_slope, atol=0.1)
+    return dict(zip(THICKNESSES_M, values))
+
+
+#: docs/guides/room.md: the bare slab's rating against thickness, clamped and simply supported
+CLAMPED_dB = {0.15: 59.83, 0.18: 55.33, 0.2: 51.62, 0.21: 49.8, 0.24: 45.84, 0.27: 43.58}
+SIMPLY_SUPPORTED_dB = {0.15: 50.95, 0.18: 49.4, 0.2: 49.16, 0.21: 49.37, 0.24: 51.97, 0.27: 53.56}
+
+
+def test_clamped_slabs_rate_lower_at_every_thickness_step(thickness_program):
+    # issue 33's trend (heavier slabs of one plan rate lower, smoothly): with clamped edges, the
+    # default, the rating falls at every step from 150 to 270 mm, as the first mode climbs
+    # through the 63 Hz octave (50 Hz at 150 mm, 90 Hz at 270 mm)
+    at = _ratings(thickness_program)
+    assert all(a > b for a, b in zip(list(at.values()), list(at.values())[1:]))
+    np.testing.assert_allclose([at[t] for t in CLAMPED_dB], list(CLAMPED_dB.values()), atol=0.01)
+
+
+def test_simply_supported_slabs_depart_from_the_trend(simply_supported_program):
+    # the other bound of the edge: the rating falls from 150 to 200 mm and rises again from
+    # 210 mm, where the (1,1) mode nears the 63 Hz octave's lower edge and the coincidence
+    # frequency enters it (docs/guides/room.md)
+    at = _ratings(simply_supported_program)
     assert at[0.15] > at[0.18] > at[0.2]
-    # and the model's departure from it (docs/guides/room.md): it rises again from 210 mm
-    assert at[0.2] < at[0.21] < at[0.24]
+    assert at[0.2] < at[0.21] < at[0.24] < at[0.27]
+    np.testing.assert_allclose(
+        [at[t] for t in SIMPLY_SUPPORTED_dB], list(SIMPLY_SUPPORTED_dB.values()), atol=0.01
+    )
 
 
 DROP_HEIGHTS_M = (0.25, 0.5, 1.0, 1.6)
 #: docs/guides/room.md: the rating of the bare 150 mm slab by drop height (unvalidated)
-DROP_HEIGHT_RATINGS_dB = (45.2, 48.2, 51.0, 52.6)
+DROP_HEIGHT_RATINGS_dB = (52.7, 56.2, 59.8, 62.4)
 
 
 def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
     """The chain is linear in the force's energy per band: between two drop heights each band's
     level moves by the blocked force's own L_FE change, computed apart from the room chain
     (rbjax.simulate and rbjax.spectrum's octave L_FE on the rigid floor), to 0.01 dB in the
-    bands the infinite plate carries (125-1000 Hz) and 0.15 dB in the modal ones (31.5, 63 Hz:
-    the modes weight the spectrum inside the band). So the rating falls with the height as the
-    force does: ~3 dB per halving (docs/guides/room.md)."""
+    bands the infinite plate carries (125-1000 Hz) and 0.25 dB in the modal ones (31.5, 63 Hz:
+    the modes weight the spectrum inside the band, the octave L_FE does not; measured 0.18 dB).
+    So the rating falls with the height as the force does: ~3.5 dB per halving
+    (docs/guides/room.md)."""
     orders = slab_mode_orders(SLAB, 1)
 
     @jax.jit
@@ -174,7 +210,7 @@ def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
         moved = np.asarray(out[k + 1][1]) - np.asarray(out[k][1])
         expected = force[k + 1] - force[k]
         np.testing.assert_allclose(moved[2:], expected[2:], atol=0.01)
-        np.testing.assert_allclose(moved[:2], expected[:2], atol=0.15)
+        np.testing.assert_allclose(moved[:2], expected[:2], atol=0.25)
     ratings = [float(r) for r, _ in out]
     assert ratings == sorted(ratings)
     np.testing.assert_allclose(ratings, DROP_HEIGHT_RATINGS_dB, atol=0.05)
@@ -182,15 +218,15 @@ def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
 
 def test_readme_predicted_levels(bare, thickness_program):
     # docs/guides/room.md: the ball from 1 m on a bare C30/37 slab of
-    # 4 m × 5 m at its centre, room 50 m³, T = 0.5 s; 63-500 Hz octaves as printed (0.1 dB)
+    # 4 m × 5 m (clamped) at its centre, room 50 m³, T = 0.5 s; 63-500 Hz octaves as printed
     rating_bands = slice(1, 5)
-    np.testing.assert_allclose(bare.level_dB[rating_bands], [69.9, 63.8, 54.1, 42.2], atol=0.05)
-    assert bare.LiA_Fmax_dB == 51
+    np.testing.assert_allclose(bare.level_dB[rating_bands], [85.6, 63.8, 54.1, 42.2], atol=0.05)
+    assert bare.LiA_Fmax_dB == 60
     (rating, levels), _ = thickness_program(0.2)
     np.testing.assert_allclose(
-        np.asarray(levels)[rating_bands], [72.3, 60.1, 50.0, 38.4], atol=0.05
+        np.asarray(levels)[rating_bands], [76.4, 60.1, 50.0, 38.4], atol=0.05
     )
-    assert round_rating(rating) == 49
+    assert round_rating(rating) == 52
     # the same slab as an infinite plate in every band (Chain(slab="infinite"), the field a
     # floating floor's insertion drives): 76.5 dB at 63 Hz, 53 dB
     plate = impact_sound(SLAB, ROOM, chain=Chain(slab="infinite"))

@@ -13,10 +13,11 @@ radiation → diffuse room → Fast detector.
 The bare slab is given either by --slab-material and --slab-thickness-m or by --floor, a plate
 preset (concrete-150mm, ...) or plate file; its plan is --slab-length-m × --slab-width-m (in-situ
 loss f^-1/2 unless --loss-factor). The ball strikes it at its centre unless --drive-x-m,
---drive-y-m; in the bands up to 100 Hz the slab's own modes (simply supported edges) carry the
-sound (--slab-model modal, the default), above them the infinite plate. A modal floor file
-(--floor FILE, e.g. a floating floor) also needs the slab below it (--slab-material,
---slab-thickness-m). --reverberation-s takes one value or one per band (comma-separated).
+--drive-y-m; in the bands up to 100 Hz the slab's own modes (clamped edges unless
+--slab-edge simply-supported) carry the sound (--slab-model modal, the default), above them
+the infinite plate. A modal floor file (--floor FILE, e.g. a floating floor) also needs the
+slab below it (--slab-material, --slab-thickness-m). --reverberation-s takes one value or one
+per band (comma-separated).
 
 examples:
   rbjax room --slab-material concrete --slab-thickness-m 0.2 --slab-length-m 4 \
@@ -107,6 +108,12 @@ def register(subparsers) -> None:
         help="where the ball strikes, from a corner along y, m (default: the centre)",
     )
     p.add_argument(
+        "--slab-edge",
+        choices=("clamped", "simply-supported"),
+        default="clamped",
+        help="edge condition of the slab's modes (default clamped: cast in place)",
+    )
+    p.add_argument(
         "--slab-model",
         choices=("modal", "infinite"),
         default="modal",
@@ -152,6 +159,7 @@ def run(args) -> int:
         loss_factor=args.loss_factor,
         drive_x_m=args.drive_x_m,
         drive_y_m=args.drive_y_m,
+        edge=args.slab_edge,
     )
     given_slab = args.slab_material is not None or args.slab_thickness_m is not None
     if given_slab and (args.slab_material is None or args.slab_thickness_m is None):

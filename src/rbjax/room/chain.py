@@ -10,8 +10,8 @@ term of ``Chain`` that can be left out:
    a resonant slab (``floor=None``: the ball on the bare ``Slab``, point impedance
    Z = 8√(B′m″); SEA) holds the band energy W_b = E_F,b/Z, decaying at
    a_b = ω_b(η_s + 2η_rad); in the bands of nominal frequency ≤ 100 Hz (``Chain(slab="modal")``,
-   the default) the finite slab's modes instead (``rbjax.room.finite_slab``: simply supported
-   edges, the drive point of the ``Slab``), one source per mode and band holding W_kb, decaying
+   the default) the finite slab's modes instead (``rbjax.room.finite_slab``: the edge condition
+   and the drive point of the ``Slab``), one source per mode and band holding W_kb, decaying
    at ω_kη_k and radiating with the mode's own σ_k; a floating floor over the slab
    (``FloatingFloor``, ``Chain(floating="insertion")``, the default) is an insertion: the ball
    strikes the screed (its force from the two-mode floor), the layer passes F_slab = T F to the

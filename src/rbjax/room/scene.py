@@ -44,8 +44,11 @@ class Slab(eqx.Module):
         drive_x_m, drive_y_m: where the ball strikes, measured from a corner (``None``: the
             centre): the drive point of the finite slab's modes (``rbjax.room.finite_slab``);
             strictly inside the slab.
-        edge: the edge condition of the finite slab's modes; ``"simply-supported"`` (the one
-            offered: ``rbjax.room.finite_slab.EDGE_CONDITIONS``). Static.
+        edge: the edge condition of the finite slab's modes (``rbjax.room.finite_slab
+            .EDGE_CONDITIONS``): ``"clamped"`` (default: a slab cast in place, continuous with
+            the walls and the bays around it, restrains the rotation of its edges; Warburton's
+            modes, ``rbjax.room.clamped_slab``) or ``"simply-supported"`` (edges free to
+            rotate: the lower bound of its frequencies). Static.
 
     The slab must be thin: 0 < thickness ≤ min(l_x, l_y)/10 (Kirchhoff plate theory; a thicker
     one is outside every model here). The other fields are JAX leaves: the levels are
@@ -67,7 +70,7 @@ class Slab(eqx.Module):
     loss_factor: ArrayLike | None = None
     drive_x_m: ArrayLike | None = None
     drive_y_m: ArrayLike | None = None
-    edge: str = eqx.field(static=True, default="simply-supported")
+    edge: str = eqx.field(static=True, default="clamped")
 
     def __check_init__(self):
         for name in ("thickness_m", "youngs_Pa", "density_kg_per_m3", "length_x_m", "length_y_m"):
