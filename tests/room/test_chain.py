@@ -393,6 +393,9 @@ def test_cli_room_json_and_errors(bare, tmp_path):
     data = json.loads(out)
     assert data["LiA_Fmax_unrounded_dB"] == pytest.approx(bare.LiA_Fmax_unrounded_dB, abs=1e-9)
     np.testing.assert_allclose(data["Li_Fmax_dB"], bare.level_dB, atol=1e-9)
+    # --slab-edge: the simply supported slab (SIMPLY_SUPPORTED_dB at 150 mm)
+    code, out, _ = run_cli(["room", *slab_args, *plan, *room, "--slab-edge", "simply-supported"])
+    assert code == 0 and "unrounded 50.95 dB" in out
     for args, message in [
         (["--slab-material", "concrete", *plan, *room], "--slab-thickness-m"),
         ([*slab_args, "--slab-length-m", "-4", *room], "length_x_m=-4.0"),
