@@ -173,6 +173,11 @@ def test_large_slab_joins_the_infinite_plate(edge):
     assert np.all(np.abs(difference_dB) <= 0.5), difference_dB
 
 
+def test_a_slab_of_a_material_in_millimetres_is_refused():
+    with pytest.raises(ValueError, match=r"thickness_m=150.0 is outside the plausible range"):
+        Slab.of_material("concrete", 150.0)
+
+
 @pytest.mark.parametrize(
     ("fields", "match"),
     [

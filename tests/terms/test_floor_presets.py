@@ -27,6 +27,7 @@ from rbjax.terms.floors.presets import (
     floor_preset,
     load_floor,
     load_named_floor,
+    plate,
 )
 
 from cli_runner import run_cli
@@ -93,6 +94,22 @@ def test_material_validates(kwargs, words):
     assert all(w in str(err.value) for w in words)
     with pytest.raises(ValueError, match="'marble'.*concrete"):
         material("marble")
+
+
+def test_a_thickness_outside_the_materials_plausible_range_is_refused():
+    # every preset lies inside its material's range; a unit slip does not
+    for name, (mat, thickness) in PLATE_PRESETS.items():
+        MATERIALS[mat].check_thickness(thickness)
+    with pytest.raises(ValueError, match=r"thickness_m=0.0015 is outside the plausible range "):
+        MATERIALS["concrete"].check_thickness(0.0015)
+    with pytest.raises(
+        ValueError, match=r"thickness_m=0.9 .*\[0.05, 0.6\] m of material 'concrete'"
+    ):
+        MATERIALS["concrete"].check_thickness(np.array([0.15, 0.9]))
+    with pytest.raises(ValueError, match="thickness_m=150.0"):
+        plate("concrete", 150.0)
+    with pytest.raises(ValueError, match="thickness_range_m"):
+        Material("x", 1e9, 500.0, 0.3, "test", (0.2, 0.1))
 
 
 # ------------------------------------------------------------------------------ presets
@@ -325,6 +342,10 @@ def test_floor_file_round_trip(tmp_path, key, suffix):
         (
             {"type": "infinite-plate", "material": "osb", "thickness_m": "thin"},
             ["thickness_m", "'thin'", "not a number"],
+        ),
+        (  # millimetres given as metres
+            {"type": "infinite-plate", "material": "osb", "thickness_m": 22},
+            ["thickness_m=22.0", "plausible range [0.006, 0.04] m", "'osb'"],
         ),
         (
             {"type": "infinite-plate", "material": "marble", "thickness_m": 0.02},

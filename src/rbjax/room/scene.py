@@ -101,8 +101,11 @@ class Slab(eqx.Module):
     @classmethod
     def of_material(cls, name: str, thickness_m, **sides) -> Slab:
         """The slab of a material of ``rbjax.terms.floors.materials`` (``sides``: the other
-        fields)."""
+        fields); a concrete thickness outside the material's plausible range is refused
+        (``Material.check_thickness``)."""
         m = material(name)
+        if not is_traced(thickness_m):
+            m.check_thickness(thickness_m)
         return cls(thickness_m, m.youngs_Pa, m.density_kg_per_m3, m.poisson, **sides)
 
     @classmethod

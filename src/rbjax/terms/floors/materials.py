@@ -40,12 +40,21 @@ material grade, not of a given product: take a product's declared values where i
 
 Poisson's ratio of the wood-based panels is taken as 0.3 (no code value; it enters Z as
 1/√(1 − ν²), so ±0.1 changes Z by < 3 %).
+
+Each material also names the plate thicknesses a floor of it plausibly has
+(``Material.thickness_range_m``, generous on purpose): concrete 50–600 mm (a screed-like
+topping to the thickest flat slabs), steel 1–100 mm, OSB 6–40 mm and particleboard 10–50 mm
+(the thickness classes of EN 300 and EN 312), solid timber 15–300 mm, CLT 50–500 mm (three to
+eleven lamellas of EN 16351). A thickness outside is refused where a plate is built from a
+material name (``Material.check_thickness``): mostly a unit slip (millimetres given as metres).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+
+import numpy as np
 
 from ..._validate import check_range
 
@@ -60,6 +69,12 @@ class Material:
         density_kg_per_m3: density ρ (kg/m³, > 0).
         poisson: Poisson's ratio ν in (−1, 0.5].
         source: where the values come from (code, table).
+        thickness_range_m: the plausible plate thicknesses (lower, upper), m, of a floor of the
+            material (module docstring; default: any positive thickness).
+
+    Raises:
+        ValueError: a Young's modulus or density not finite and > 0, a Poisson ratio outside
+            (−1, 0.5], or a thickness range that is not 0 ≤ lower < upper.
     """
 
     name: str
@@ -67,11 +82,38 @@ class Material:
     density_kg_per_m3: float
     poisson: float
     source: str
+    thickness_range_m: tuple[float, float] = (0.0, math.inf)
 
     def __post_init__(self):
         check_range("youngs_Pa", self.youngs_Pa, lower=0.0)
         check_range("density_kg_per_m3", self.density_kg_per_m3, lower=0.0)
         check_range("poisson", self.poisson, lower=-1.0, upper=0.5, upper_open=False)
+        lower, upper = self.thickness_range_m
+        if not 0.0 <= lower < upper:
+            raise ValueError(
+                f"thickness_range_m={self.thickness_range_m!r} is not a range 0 ≤ lower < upper"
+            )
+
+    def check_thickness(self, thickness_m) -> None:
+        """Refuse a plate thickness outside ``thickness_range_m``.
+
+        Args:
+            thickness_m: the plate's thickness, m (a concrete number or array: every value is
+                checked).
+
+        Raises:
+            ValueError: a thickness not finite and > 0, or outside the material's plausible
+                range (the message names the parameter, the first such value and the range).
+        """
+        check_range("thickness_m", thickness_m, lower=0.0)
+        lower, upper = self.thickness_range_m
+        values = np.asarray(thickness_m, dtype=float).reshape(-1)
+        outside = values[(values < lower) | (values > upper)]
+        if outside.size:
+            raise ValueError(
+                f"thickness_m={float(outside[0])!r} is outside the plausible range "
+                f"[{lower:g}, {upper:g}] m of material {self.name!r} (millimetres given as m?)"
+            )
 
 
 def cross_laminated_youngs_Pa(parallel_Pa: float, perpendicular_Pa: float, layers: int) -> float:
@@ -111,9 +153,15 @@ MATERIALS: dict[str, Material] = {
             0.2,
             "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 "
             "(reinforced, 1 % steel)",
+            (0.05, 0.6),
         ),
         Material(
-            "steel", 210.0e9, 7850.0, 0.3, "EN 1993-1-1 §3.2.6 (E, ν); EN 1991-1-1 Table A.4 (ρ)"
+            "steel",
+            210.0e9,
+            7850.0,
+            0.3,
+            "EN 1993-1-1 §3.2.6 (E, ν); EN 1991-1-1 Table A.4 (ρ)",
+            (0.001, 0.1),
         ),
         Material(
             "osb",
@@ -121,6 +169,7 @@ MATERIALS: dict[str, Material] = {
             650.0,
             0.3,
             "OSB/3: √(E_major E_minor), EN 300 Table 3 minima; ρ EN ISO 10456 Table 3; ν assumed",
+            (0.006, 0.04),
         ),
         Material(
             "chipboard",
@@ -129,6 +178,7 @@ MATERIALS: dict[str, Material] = {
             0.3,
             "particleboard P4/P5 20–25 mm: E of the EN 312 bending-modulus requirement; ρ EN ISO "
             "10456 / declared; ν assumed",
+            (0.01, 0.05),
         ),
         Material(
             "timber-c24",
@@ -136,6 +186,7 @@ MATERIALS: dict[str, Material] = {
             420.0,
             0.3,
             "C24 along the grain: E_0,mean and ρ_mean, EN 338 Table 1; ν assumed",
+            (0.015, 0.3),
         ),
         Material(
             "clt",
@@ -144,6 +195,7 @@ MATERIALS: dict[str, Material] = {
             0.3,
             "CLT (EN 16351), 5 equal C24 layers: √(E_x E_y) by lamination theory from EN 338 "
             "E_0/E_90; ρ from ETAs; ν assumed",
+            (0.05, 0.5),
         ),
     )
 }

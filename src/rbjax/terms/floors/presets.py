@@ -76,8 +76,10 @@ _COMMON_KEYS = ("type", "name", "description")
 
 
 def plate(material_name: str, thickness_m: float) -> InfinitePlate:
-    """The infinite plate of the named material (``rbjax.terms.floors.materials``) and thickness."""
+    """The infinite plate of the named material (``rbjax.terms.floors.materials``) and thickness
+    (within the material's plausible range, ``Material.check_thickness``)."""
     m = material(material_name)
+    m.check_thickness(thickness_m)
     return InfinitePlate(
         plate_thickness_m=thickness_m,
         plate_youngs_Pa=m.youngs_Pa,
@@ -258,8 +260,11 @@ def _plate_from_mapping(table: Mapping) -> InfinitePlate:
             "type='infinite-plate' needs 'material' or the keys "
             f"{', '.join(repr(k) for k in missing)}"
         )
+    thickness = _number("thickness_m", table["thickness_m"], lower=0.0)
+    if "material" in table:
+        MATERIALS[table["material"]].check_thickness(thickness)
     return InfinitePlate(
-        plate_thickness_m=_number("thickness_m", table["thickness_m"], lower=0.0),
+        plate_thickness_m=thickness,
         plate_youngs_Pa=values["youngs_Pa"],
         plate_density_kg_per_m3=values["density_kg_per_m3"],
         plate_poisson=values["poisson"],
