@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from . import add_command, emit_json, format_table, progress, use_cpu_devices
 
 DESCRIPTION = """\
@@ -36,6 +38,18 @@ def _reverberation(text: str):
             f"--reverberation-s={text!r} is not a number or a comma-separated list of numbers"
         ) from None
     return values[0] if len(values) == 1 else values
+
+
+def _point(text: str):
+    import argparse  # argparse reports its type error with this message
+
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not two comma-separated numbers X,Y (m)"
+        ) from None
+    return x, y
 
 
 def register(subparsers) -> None:
@@ -108,6 +122,15 @@ def register(subparsers) -> None:
         help="where the ball strikes, from a corner along y, m (default: the centre)",
     )
     p.add_argument(
+        "--drive-point",
+        type=_point,
+        action="append",
+        default=None,
+        metavar="X,Y",
+        help="a drop position from a corner, m; repeat it for several: the band levels are "
+        "averaged in energy and the average rated (instead of --drive-x-m, --drive-y-m)",
+    )
+    p.add_argument(
         "--slab-edge",
         choices=("clamped", "simply-supported"),
         default="clamped",
@@ -149,7 +172,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     use_cpu_devices()  # one JAX CPU device per core: forward batches split over them
-    from ..room import Chain, ReceivingRoom, RoomChainError, Slab, impact_sound
+    from ..room import (
+        Chain,
+        ReceivingRoom,
+        RoomChainError,
+        Slab,
+        impact_sound,
+        position_average,
+    )
     from ..terms.floors.kinds import AbstractModalFloor, InfinitePlate
     from ..terms.floors.presets import load_named_floor
 
@@ -201,25 +231,39 @@ def run(args) -> int:
             )
     room = ReceivingRoom(args.room_volume_m3, args.reverberation_s)
     progress(f"room below {name}: ball from {args.height_m:g} m, V = {args.room_volume_m3:g} m³")
-    res = impact_sound(
-        slab,
-        room,
+    options = dict(
         floor=modal,
         height_m=args.height_m,
         fraction=args.fraction,
         name=name,
         chain=Chain(slab=args.slab_model),
     )
+    if args.drive_point:
+        if args.drive_x_m is not None or args.drive_y_m is not None:
+            raise RoomChainError(
+                "give the drop positions either by --drive-point (repeated) or by one "
+                "--drive-x-m, --drive-y-m, not both"
+            )
+        average = position_average(slab, room, args.drive_point, **options)
+        res: Any = average
+    else:
+        single = impact_sound(slab, room, **options)
+        res = single
     if args.plot:
         res.plot(args.plot)
     if args.json:
         emit_json(res.to_dict())
         return 0
-    rows = [
-        [b, f"{level:.1f}", f"{norm:.1f}", f"{t:.3f}"]
-        for b, level, norm, t in zip(res.bands, res.level_dB, res.normalised_dB, res.peak_time_s)
-    ]
-    print(format_table(["band Hz", "L_i,Fmax dB", "normalised dB", "t_max s"], rows))
+    if args.drive_point:
+        _print_positions(average)
+    else:
+        rows = [
+            [b, f"{level:.1f}", f"{norm:.1f}", f"{t:.3f}"]
+            for b, level, norm, t in zip(
+                single.bands, single.level_dB, single.normalised_dB, single.peak_time_s
+            )
+        ]
+        print(format_table(["band Hz", "L_i,Fmax dB", "normalised dB", "t_max s"], rows))
     print(
         f"L_iA,Fmax = {res.LiA_Fmax_dB} dB (normalised {res.LiA_Fmax_normalised_dB} dB; unrounded "
         f"{res.LiA_Fmax_unrounded_dB:.2f} dB)"
@@ -227,3 +271,14 @@ def run(args) -> int:
     for w in res.warnings:
         print(f"note: {w}")
     return 0
+
+
+def _print_positions(res) -> None:
+    """The band levels of each position and their energy average, then each position's rating."""
+    heads = ["band Hz", *(f"({x:g}, {y:g}) m" for x, y in res.positions_m), "average dB"]
+    rows = [
+        [b, *(f"{r.level_dB[k]:.1f}" for r in res.results), f"{res.level_dB[k]:.1f}"]
+        for k, b in enumerate(res.bands)
+    ]
+    rows.append(["L_iA,Fmax", *(f"{r.LiA_Fmax_unrounded_dB:.2f}" for r in res.results), ""])
+    print(format_table(heads, rows))

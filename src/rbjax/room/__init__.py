@@ -3,8 +3,9 @@ injected energy (:mod:`~rbjax.room.injection`), radiation (:mod:`~rbjax.room.rad
 slab's modes at low frequencies (:mod:`~rbjax.room.finite_slab`, :mod:`~rbjax.room.mode_radiation`),
 the receiving room and the Fast detector (:mod:`~rbjax.room.detector`), chained in
 :mod:`~rbjax.room.chain` (scene terms in :mod:`~rbjax.room.scene`), the standards' arithmetic
-(:mod:`~rbjax.room.standards`: ISO 16283-2 normalisation, ISO 717-2 Annex D rating) and
-``impact_sound`` (:mod:`~rbjax.room.result`).
+(:mod:`~rbjax.room.standards`: ISO 16283-2 normalisation, ISO 717-2 Annex D rating),
+``impact_sound`` (:mod:`~rbjax.room.result`) and its energy average over several drop
+positions, ``position_average`` (:mod:`~rbjax.room.positions`).
 
 Layer: above ``solve`` (it simulates the impact) and ``spectrum``; below ``data``."""
 
@@ -16,6 +17,7 @@ from .chain import (
     room_levels,
     slab_mode_orders,
 )
+from .positions import PositionAverage, energy_average_dB, position_average
 from .result import ImpactSound, impact_sound
 from .scene import Chain, ReceivingRoom, RoomChainError, Slab
 from .standards import (
@@ -39,6 +41,9 @@ __all__ = [
     "slab_mode_orders",
     "ImpactSound",
     "impact_sound",
+    "PositionAverage",
+    "energy_average_dB",
+    "position_average",
     "Chain",
     "ReceivingRoom",
     "RoomChainError",
