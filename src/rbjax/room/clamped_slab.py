@@ -26,7 +26,7 @@ true frequency: for a square plate 36.11 against 35.99 for λ² = ωa²√(m″/
 (``tests/room/test_clamped_slab.py``, against a finite-difference eigen-solve).
 
 **Radiation.** A baffled plate vibrating in the shape φ radiates, per unit ρ₀c₀S⟨v²⟩ (the
-far field of its wavenumber transform, Williams, *Fourier Acoustics*, 1999, §2.13, after the
+far field of its wavenumber transform, Williams, *Fourier Acoustics*, 1999, ch. 2, after the
 change of variables κ = k sin θ (cos ψ, sin ψ) that removes the 1/√(k² − κ²) singularity)
 
     σ = (k² l_x l_y/π²) ∫∫ |X̂_m(k l_x sin θ cos ψ)|² |X̂_n(k l_y sin θ sin ψ)|² sin θ dθ dψ,

@@ -45,7 +45,7 @@ passed on under a transformation.
 **Validity.** Thin plate (t ≤ min(l_x, l_y)/10, checked by ``Slab``), isotropic, edges simply
 supported or clamped (a slab cast into walls lies between the two; clamped edges raise the
 lowest modes, by 1.83× for a square plate, so the modal bands depend on the edge), one drive
-point (ISO 16283-2 averages over positions), the ball's force
+point (the standards average several: ``rbjax.room.position_average``), the ball's force
 that on the infinite plate of the section (the slab's drive-point impedance, ≈ 4.5e5 N·s/m for
 150 mm of concrete, is far above the ball's: the force is that on a rigid floor).
 """

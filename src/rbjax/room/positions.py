@@ -18,6 +18,7 @@ import dataclasses
 import numpy as np
 
 from .chain import rating_levels
+from .figure import plot_position_average
 from .result import ImpactSound, impact_sound
 from .scene import ReceivingRoom, Slab
 from .standards import a_weighted_sum_dB, round_rating
@@ -80,30 +81,7 @@ class PositionAverage:
     def plot(self, path=None):
         """The band levels of each position (thin) and their energy average (thick); saved to
         ``path`` when given; returns the figure."""
-        import matplotlib  # lazy: matplotlib costs 0.1–0.2 s at import
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt  # lazy: matplotlib.pyplot costs ~1 s at import
-
-        fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-        x = np.arange(len(self.bands))
-        for (px, py), res in zip(self.positions_m, self.results):
-            ax.plot(
-                x, res.level_dB, "-", lw=0.8, alpha=0.7,
-                label=f"({px:g}, {py:g}) m: {res.LiA_Fmax_dB} dB",
-            )  # fmt: skip
-        ax.plot(
-            x, self.level_dB, "ko-", lw=2.0,
-            label=f"energy average: L_iA,Fmax = {self.LiA_Fmax_dB} dB",
-        )  # fmt: skip
-        ax.set_xticks(x, self.bands)
-        ax.set_xlabel("band, Hz")
-        ax.set_ylabel("L_i,Fmax, dB re 20 µPa")
-        ax.legend(fontsize="small")
-        ax.grid(alpha=0.3)
-        if path is not None:
-            fig.savefig(path, dpi=120)
-        return fig
+        return plot_position_average(self, path)
 
 
 def _point(index: int, position) -> tuple[float, float]:
