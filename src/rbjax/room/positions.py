@@ -2,8 +2,12 @@
 L_i,Fmax of each position averaged in energy, L = 10 lg((1/n) Σ_j 10^{L_j/10}), and the rating
 of the average (ISO 717-2:2020 Annex D).
 
-JIS A 1418-2 and ISO 16283-2 drop the ball at several impact points spread over the floor and
-average the maximum levels in energy before rating; one drive point (the centre, the default
+JIS A 1418-2 and ISO 16283-2 drop the ball at several impact points spread over the floor
+(ISO 16283-2: four or more; on a joisted lightweight floor one of them over a joist and one at
+the centre) and average the maximum levels L_i,Fmax,j of the m points in energy before rating
+(as summarised by Sonora srl, "La palla in gomma per misurare il livello massimo standardizzato
+di pressione sonora da impatto", sonorasrl.com; the standard's text was not reachable here);
+one drive point (the centre, the default
 of ``Slab``) hears the slab's modes through their shapes there (a mode with a node at the
 centre is not driven), so a rating of a bare slab moves with the point. Which points, and how
 many, is the caller's choice: ``positions_m`` takes them as (x, y) from a corner of the slab.
