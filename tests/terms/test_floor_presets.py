@@ -103,9 +103,9 @@ def test_a_thickness_outside_the_materials_plausible_range_is_refused():
     with pytest.raises(ValueError, match=r"thickness_m=0.0015 is outside the plausible range "):
         MATERIALS["concrete"].check_thickness(0.0015)
     with pytest.raises(
-        ValueError, match=r"thickness_m=0.9 .*\[0.05, 0.6\] m of material 'concrete'"
+        ValueError, match=r"thickness_m=1.5 .*\[0.04, 1.2\] m of material 'concrete'"
     ):
-        MATERIALS["concrete"].check_thickness(np.array([0.15, 0.9]))
+        MATERIALS["concrete"].check_thickness(np.array([0.15, 1.5]))
     with pytest.raises(ValueError, match="thickness_m=150.0"):
         plate("concrete", 150.0)
     with pytest.raises(ValueError, match="thickness_range_m"):

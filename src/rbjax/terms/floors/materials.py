@@ -42,8 +42,8 @@ Poisson's ratio of the wood-based panels is taken as 0.3 (no code value; it ente
 1/√(1 − ν²), so ±0.1 changes Z by < 3 %).
 
 Each material also names the plate thicknesses a floor of it plausibly has
-(``Material.thickness_range_m``, generous on purpose): concrete 50–600 mm (a screed-like
-topping to the thickest flat slabs), steel 1–100 mm, OSB 6–40 mm and particleboard 10–50 mm
+(``Material.thickness_range_m``, generous on purpose): concrete 40–1200 mm (a screed-like
+topping to the thickest transfer slabs), steel 1–100 mm, OSB 6–40 mm and particleboard 10–50 mm
 (the thickness classes of EN 300 and EN 312), solid timber 15–300 mm, CLT 50–500 mm (three to
 eleven lamellas of EN 16351). A thickness outside is refused where a plate is built from a
 material name (``Material.check_thickness``): mostly a unit slip (millimetres given as metres).
@@ -153,7 +153,7 @@ MATERIALS: dict[str, Material] = {
             0.2,
             "C30/37: E_cm EN 1992-1-1 Table 3.1, ν EN 1992-1-1 §3.1.3; ρ EN ISO 10456 Table 3 "
             "(reinforced, 1 % steel)",
-            (0.05, 0.6),
+            (0.04, 1.2),
         ),
         Material(
             "steel",
