@@ -13,16 +13,13 @@ from __future__ import annotations
 
 import ast
 import inspect
-import warnings
 from pathlib import Path
 
 import pytest
 
 import rbjax
 from rbjax.fit import FitOptions, fit
-from rbjax.fit.options import options_from_keywords
-from rbjax.solve.options import SHORTCUTS, EvaluationSpec, ModelShortcuts, spec_from_keywords
-from rbjax.solve.simulate import make_model
+from rbjax.solve.options import SHORTCUTS, EvaluationSpec, ModelShortcuts
 from rbjax.studies.design import DesignSearch
 from rbjax.studies.sensitivity import (
     conformance_probability,
@@ -134,17 +131,9 @@ def test_simulate_refuses_a_model_and_shortcuts_naming_both():
     ],
     ids=["local_sensitivity", "global_sensitivity", "conformance_probability"],
 )
-def test_the_studies_refuse_a_model_and_model_keywords_never_dropping_one(call):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        with pytest.raises(ValueError, match="model= and the keyword options"):
-            call()
-
-
-def test_make_model_is_deprecated_for_model():
-    with pytest.warns(DeprecationWarning, match="rbjax.Model"):
-        model = make_model(gas="none", damping=rbjax.KelvinVoigt(3.0))
-    assert model == rbjax.Model(gas="none", damping=rbjax.KelvinVoigt(3.0))
+def test_the_studies_take_a_model_only_and_refuse_model_keywords(call):
+    with pytest.raises((TypeError, ValueError), match="gas|damping|stiffening"):
+        call()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -196,19 +185,6 @@ def test_settings_objects_are_frozen_and_replace_validates():
     assert FitOptions(max_steps=0).steps_budget(320) == 0
 
 
-def test_old_keywords_build_the_settings_object_with_a_deprecation_warning():
-    with pytest.warns(DeprecationWarning, match="evaluation=EvaluationSpec"):
-        spec = spec_from_keywords("evaluate", None, {"method": "ode", "chunk_size": 16})
-    assert spec == EvaluationSpec(path="ode", chunk_size=16)
-    with pytest.warns(DeprecationWarning, match="FitOptions"):
-        options = options_from_keywords("fit", None, {"method": "ode", "decimate": 2})
-    assert options == FitOptions(path="ode", decimate=2)
-
-
-def test_a_settings_object_and_old_keywords_together_are_refused_by_name():
-    with pytest.raises(ValueError, match=r"evaluation= and the keywords \['chunk_size'\]"):
-        spec_from_keywords("evaluate", EvaluationSpec(), {"chunk_size": 16})
-    with pytest.raises(ValueError, match=r"options= and the keywords \['decimate'\]"):
-        fit(None, "paper", options=FitOptions(), decimate=2)
+def test_an_unknown_keyword_is_a_type_error():
     with pytest.raises(TypeError, match="colour"):
-        fit(None, "paper", colour=2)
+        fit(None, "paper", colour=2)  # type: ignore[call-arg]

@@ -127,7 +127,7 @@ SCRIPT = textwrap.dedent(
     import test_devices as t
     from rbjax.solve.devices import cached_jit
     from rbjax.solve.engine import Rows, rows_program
-    from rbjax.solve.simulate import as_arrays
+    from rbjax.solve.inputs import as_arrays
     import rbjax
 
     assert jax.local_device_count() == int(sys.argv[3]), jax.devices()

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import rbjax
-from rbjax.solve.simulate import METHODS, quadrature_unsupported, resolve_method
+from rbjax.solve.method import quadrature_unsupported, resolve_method
+from rbjax.solve.options import PATHS
 
 from scipy_reference import HEIGHTS_M, reference_impact, reference_scalars
 
@@ -97,7 +98,7 @@ def test_a_given_solver_asks_for_the_ode():
 
 
 def test_method_is_validated():
-    assert METHODS == ("auto", "ode", "quadrature", "angle")
+    assert PATHS == ("auto", "ode", "quadrature", "angle")
     with pytest.raises(
         ValueError,
         match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'",

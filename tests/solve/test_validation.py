@@ -255,7 +255,7 @@ def test_bad_model_in_a_parameter_file(model, match):
 
 def test_sweep_samples_are_validated_jointly():
     # each value alone is a valid wall or radius; the pair (wall 40 mm, radius 30 mm) is not
-    from rbjax.studies.sweep import evaluate
+    from rbjax.solve.batch import evaluate
 
     with pytest.raises(ValueError, match="wall_m"):
         evaluate({"radius_m": np.array([0.09, 0.03]), "wall_m": np.array([0.03, 0.04])})

@@ -22,7 +22,7 @@ import math
 import numpy as np
 import pytest
 
-from rbjax.studies.selection import recommend
+from rbjax.studies.selection_rule import recommend
 
 BEST_FOLDS = (5.0, 6.0, 7.0)  # mean 6 %
 UNIT_SE = np.array([-1.0, -1.0, 2.0])  # excess pattern with SE = 1 (module docstring)

@@ -24,16 +24,11 @@ import pytest
 
 import rbjax
 from rbjax.cli import main
-from rbjax.solve.batch import evaluate_jacobian, evaluation_paths
+from rbjax.solve.batch import evaluate, evaluate_jacobian, evaluation_paths, parameter_names
+from rbjax.solve.devices import device_map
 from rbjax.spectrum.levels import lfe_octave_dB
 from rbjax.studies.executors import TaskError
-from rbjax.studies.sweep import (
-    evaluate,
-    load_config,
-    parameter_names,
-    run_sweep,
-    sharded_map,
-)
+from rbjax.studies.sweep import load_config, run_sweep
 from rbjax.studies.sweep_parts import part_rows
 
 import scipy_reference as ref
@@ -43,13 +38,13 @@ def _double_plus(batch, shared):
     return {"y": 2.0 * batch["a"] + shared, "n": batch["b"] * 0 + batch["a"].shape[0]}
 
 
-def test_sharded_map_pads_and_trims():
+def test_device_map_pads_and_trims():
     a = np.arange(10.0)
-    out = sharded_map(_double_plus, {"a": a, "b": a}, np.float64(0.5), chunk_size=4)
+    out = device_map(_double_plus, {"a": a, "b": a}, np.float64(0.5), chunk_size=4)
     np.testing.assert_array_equal(out["y"], 2.0 * a + 0.5)
     np.testing.assert_array_equal(out["n"], 4.0)  # every call sees the same chunk shape
     with pytest.raises(ValueError, match="leading axis"):
-        sharded_map(_double_plus, {"a": a, "b": a[:3]}, 0.0)
+        device_map(_double_plus, {"a": a, "b": a[:3]}, 0.0, chunk_size=4)
 
 
 RATE = 44_100.0
@@ -135,7 +130,7 @@ def test_flagged_rows_are_computed_again_in_place():
 
     out = {"y": np.zeros(10), "n": np.zeros(10)}
     batch = {"a": np.arange(10.0), "b": np.arange(10.0)}
-    _redo(out, np.array([1, 4, 7]), _double_plus, batch, np.float64(0.5), sharded_map)
+    _redo(out, np.array([1, 4, 7]), _double_plus, batch, np.float64(0.5), device_map)
     np.testing.assert_array_equal(out["y"], [0, 2.5, 0, 0, 8.5, 0, 0, 14.5, 0, 0])
     # padded to a power of two, at least FALLBACK_MIN_BATCH (one compiled shape for few rows)
     np.testing.assert_array_equal(out["n"][[1, 4, 7]], 64.0)
@@ -147,7 +142,7 @@ def test_flagged_rows_are_computed_again_in_place():
         _double_plus,
         {"a": np.arange(200.0), "b": np.arange(200.0)},
         np.float64(0.5),
-        sharded_map,
+        device_map,
     )
     np.testing.assert_array_equal(many["y"][rows], 2.0 * rows + 0.5)
     np.testing.assert_array_equal(many["n"][rows], 128.0)
@@ -168,7 +163,7 @@ SHARDED_SCRIPT = textwrap.dedent(
     import sys
     import jax, numpy as np
     from rbjax import EvaluationSpec
-    from rbjax.studies.sweep import evaluate
+    from rbjax.solve.batch import evaluate
     assert jax.device_count() == 4, jax.devices()
     samples = dict(np.load(sys.argv[1]))
     out = {}

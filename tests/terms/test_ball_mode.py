@@ -14,7 +14,7 @@ from rbjax import BallMode, HuntCrossley
 from rbjax.fit import all_model_names, model_from_name, parse_model_name, parse_model_terms
 from rbjax.fit.layout import fitted_parameter_names
 from rbjax.fit.problem import embed
-from rbjax.studies.selection import candidate_pairs, shared_structure
+from rbjax.studies.candidates import candidate_pairs, shared_structure
 from rbjax.terms.ball_mode import from_modal_mass
 from rbjax.terms.model import superset_model
 

@@ -22,7 +22,7 @@ from rbjax.fit.layout import (
     fitted_parameter_names,
 )
 from rbjax.fit.physical import series_structure
-from rbjax.studies.selection import shared_structure, shared_structures
+from rbjax.studies.candidates import shared_structure, shared_structures
 from rbjax.terms import model_from_dict, model_to_dict
 from rbjax.terms.damping import DAMPING_MODELS
 

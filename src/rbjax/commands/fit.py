@@ -213,7 +213,8 @@ def _check_model_and_fix(model, fix):
 
 
 def run(args) -> int:
-    from ..studies.executors import prestart, single_threaded_blas
+    from ..studies.executors import prestart
+    from ..studies.worker_pool import single_threaded_blas
 
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..fit import FitOptions, fit
@@ -231,9 +232,10 @@ def run(args) -> int:
     options = FitOptions(optimizer=args.optimizer, path=args.method)
     selection = None
     if args.model is None:
-        from ..studies.selection import BLOCKED_FORCES, select_model
+        from ..studies.selection import select_model
+        from ..terms.model import BLOCKED_FORCE_OPTIONS
 
-        forces = BLOCKED_FORCES if args.blocked_force is None else (args.blocked_force,)
+        forces = BLOCKED_FORCE_OPTIONS if args.blocked_force is None else (args.blocked_force,)
         progress(
             "no --model: choosing one by leave-one-height-out cross-validation (see `rbjax select`)"
         )

@@ -117,8 +117,8 @@ def run(args) -> int:
     import numpy as np
 
     from .._validate import check_range
+    from ..solve.batch import canonical_name, parameter_names
     from ..studies.sensitivity import local_sensitivity
-    from ..studies.sweep import canonical_name, parameter_names
     from .simulate import load_ball_and_model
 
     check_range("height_m", np.asarray(args.height_m), lower=0.0)

@@ -192,7 +192,7 @@ def _octave_lfe(result):
     failed)."""
     import numpy as np
 
-    from ..solve.simulate import PAPER_RATE_Hz
+    from ..solve.inputs import PAPER_RATE_Hz
     from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
     from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB, lfe_total_dB
 

@@ -16,12 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from ..spectrum.filters import butter_lowpass_sos
-from .crossings import estimate_noise_rms_N, quiet_level, rising_crossing
+from .crossings import quiet_level, rising_crossing
 from .errors import DataError, DataWarning, NoImpactError, RecordCutOffError
 from .recording import Recording
 from .shift import fractional_shift
 
-__all__ = ["Impact", "estimate_noise_rms_N", "find_impacts", "locate_onset", "condition"]
+__all__ = ["Impact", "find_impacts", "locate_onset", "condition"]
 
 
 class Impact(NamedTuple):

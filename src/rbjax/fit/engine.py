@@ -45,15 +45,13 @@ from ..terms.model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS, Model
 from ..terms.parameters import replace
 from .estimates import Estimates, estimates
 from .freedom import Freedom, free_parameters, prior_row
-from .options import FitOptions, options_from_keywords
+from .options import FitOptions, options_or_default
 from .physical import at_bounds, ball_mode_structure, series_structure
 from .problem import STEPS_PER_ROUND, per_height_rows, realign
 from .result import FitResult
 from .rounds import MAX_ROUNDS, Rounds, optimise, pick_best
 from .setup import FitSetup, set_up
 from .start import Starts, evaluate_starts, start_plan
-
-BLOCKED_FORCES = BLOCKED_FORCE_OPTIONS  # one definition: rbjax.terms.model
 
 
 def fit(
@@ -67,7 +65,6 @@ def fit(
     start: Mapping[str, float] | FitResult | None = None,
     options: FitOptions | None = None,
     progress: bool = True,
-    **deprecated,
 ) -> FitResult:
     """Fit E, ν and the parameters of ``model``'s terms to force histories of all records.
 
@@ -97,11 +94,6 @@ def fit(
             prediction's path and ``Solver``, ν held or given a prior, drop-height errors, the
             heights fitted, a shared superset program.
         progress: print one line per optimiser round to stderr.
-        deprecated: the keywords of the previous release that are now fields of ``FitOptions``
-            (``optimizer``, ``scale``, ``decimate``, ``extra_weights``, ``max_steps``,
-            ``method`` (its ``path``), ``solver``, ``hold_poisson``, ``poisson_prior``,
-            ``height_error``, ``fit_heights``, ``superset``), accepted for one release with a
-            ``DeprecationWarning``; with ``options=`` too, a ``ValueError`` naming them.
 
     Returns:
         The :class:`FitResult`: the fitted ball and model, each parameter's estimate and
@@ -115,15 +107,15 @@ def fit(
             lacks or holds a value outside its range; ν is both fixed and given a prior;
             ``start`` names a parameter the model lacks, or is a :class:`FitResult` of
             another model or number of records; ``options`` is not a
-            :class:`~rbjax.fit.options.FitOptions` or is given with deprecated keywords;
+            :class:`~rbjax.fit.options.FitOptions`;
             ``fit_heights`` names a height without records; the ``superset`` lacks a term
             of the model or has another gas.
-        TypeError: an unknown keyword; ``model`` neither a str nor an ``rbjax.Model``; data
+        TypeError: ``model`` neither a str nor an ``rbjax.Model``; data
             that are neither paths nor recordings.
         DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()
-    options = options_from_keywords("fit", options, deprecated)
+    options = options_or_default(options)
     _check_arguments(blocked_force=blocked_force, gas=gas, ball=ball)
     setup = set_up(
         data, model, blocked_force=blocked_force, gas=gas, ball=ball, fix=fix, options=options
@@ -147,7 +139,7 @@ def fit(
 def _check_arguments(*, blocked_force, gas, ball) -> None:
     """The arguments of :func:`fit` that qualify a model name, and the ball, checked (its
     options are checked by :class:`~rbjax.fit.options.FitOptions`)."""
-    check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
+    check_choice("blocked_force", blocked_force, BLOCKED_FORCE_OPTIONS)
     check_choice("gas", gas, GAS_OPTIONS)
     if not isinstance(ball, Ball):
         raise ValueError(f"ball={ball!r} must be an rbjax.Ball")

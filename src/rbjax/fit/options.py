@@ -11,11 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 
-from .._validate import check_choice, check_range, from_old_keywords
+from .._validate import check_choice, check_range, settings_or_default
 from ..terms.model import Model, Solver
 from .problem import FIT_METHODS
 from .program import OPTIMIZERS
@@ -135,14 +134,6 @@ class FitOptions:
         return default if self.max_steps is None else int(self.max_steps)
 
 
-#: The keywords of ``fit`` before ``FitOptions`` and the field each is (``method``: ``path``).
-OLD_KEYWORDS = {f.name: f.name for f in dataclasses.fields(FitOptions)} | {"method": "path"}
-
-
-def options_from_keywords(
-    function: str, options: FitOptions | None, keywords: Mapping[str, Any]
-) -> FitOptions:
-    """``options`` (default ``FitOptions()``), or one built from the keywords of the previous
-    release (deprecated: a ``DeprecationWarning``; one release). A mix of ``options=`` and
-    such keywords is a ``ValueError`` naming them; an unknown keyword a ``TypeError``."""
-    return from_old_keywords(function, "options", FitOptions, options, keywords, OLD_KEYWORDS)
+def options_or_default(options: FitOptions | None) -> FitOptions:
+    """``options``, or ``FitOptions()`` when it is ``None`` (anything else: a ``ValueError``)."""
+    return settings_or_default("options", FitOptions, options)

@@ -31,9 +31,8 @@ from .._validate import as_float, check_choice
 from ..solve.outcome import G_N_PER_KG
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import reissner_stiffness_N_per_m
-from ..terms.model import GAS_OPTIONS
+from ..terms.model import BLOCKED_FORCE_OPTIONS, GAS_OPTIONS
 from ..terms.parameters import replace
-from .engine import BLOCKED_FORCES
 from .layout import CONSTANT_PARAMETERS, fit_declaration, fitted_parameter_names
 from .problem import candidate_model
 from .result import ParameterEstimate
@@ -169,7 +168,7 @@ def fit_summary(
     """
     t0 = time.perf_counter()
     table = as_table(table)
-    check_choice("blocked_force", blocked_force, BLOCKED_FORCES)
+    check_choice("blocked_force", blocked_force, BLOCKED_FORCE_OPTIONS)
     check_choice("gas", gas, GAS_OPTIONS)
     if not -1.0 < hold_poisson <= 0.5:
         raise ValueError(f"hold_poisson={hold_poisson!r} is outside the valid range (-1, 0.5]")

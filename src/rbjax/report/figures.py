@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..solve.simulate import PAPER_RATE_Hz
+from ..solve.inputs import PAPER_RATE_Hz
 from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import force_spectrum_dB
 from ..spectrum.standards import RUBBER_BALL_TOLERANCES

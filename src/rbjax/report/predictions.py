@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import check_range
-from ..solve.simulate import PAPER_RATE_Hz, simulate
+from ..solve.inputs import PAPER_RATE_Hz
+from ..solve.simulate import simulate
 from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import (
     contact_resonance_Hz,

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from .. import __version__
 from .._progress import progress as say
-from ..solve.simulate import PAPER_RATE_Hz
+from ..solve.inputs import PAPER_RATE_Hz
 from ..spectrum.bands import OCTAVE_BANDS, THIRD_OCTAVE_BANDS
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.serialize import jsonable

@@ -9,16 +9,14 @@ sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
 running the path chosen (:mod:`~rbjax.solve.engine`), the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
 (:mod:`~rbjax.solve.batch`). Concrete batches of both are cut in chunks split over the local
-devices, each device running its own program (:mod:`~rbjax.solve.devices`; several hosts:
-:mod:`~rbjax.solve.sharded`)."""
+devices, each device running its own program (:mod:`~rbjax.solve.devices`)."""
 
 from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian
 from .energy import EnergyBalance, energy_balance
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
-from .method import METHODS
 from .ode import impact_batch, recontact_horizon_s, trajectory_batch
-from .options import EvaluationSpec, ModelShortcuts
+from .options import PATHS, EvaluationSpec, ModelShortcuts
 from .outcome import (
     STATUS_CODES,
     STATUS_NAMES,
@@ -29,8 +27,7 @@ from .outcome import (
 from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
 from .sampled import sampled_history
-from .sharded import sharded_map
-from .simulate import ImpactResult, force_history, make_model, simulate, trajectory
+from .simulate import ImpactResult, force_history, simulate, trajectory
 
 __all__ = [
     "impact_angle",
@@ -38,7 +35,6 @@ __all__ = [
     "evaluate_jacobian",
     "EvaluationSpec",
     "ModelShortcuts",
-    "sharded_map",
     "EnergyBalance",
     "energy_balance",
     "PAPER_DURATION_S",
@@ -56,10 +52,9 @@ __all__ = [
     "impact_quadrature_batch",
     "force_history_quadrature",
     "sampled_history",
-    "METHODS",
+    "PATHS",
     "ImpactResult",
     "force_history",
-    "make_model",
     "simulate",
     "trajectory",
 ]

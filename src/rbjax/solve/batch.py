@@ -5,9 +5,8 @@ A sweep evaluates the impact model (paper §2, Eq. 7) for N parameter samples: d
 ball parameters (§2.1–2.2) and damping/stiffening parameters; :func:`evaluate` gives the
 outputs, :func:`evaluate_jacobian` the outputs and their exact derivatives with respect to the
 varied parameters (``jax.jacfwd`` per sample, vmapped). The batches are split over the local
-devices by :func:`rbjax.solve.devices.device_map`, each device running its own program (several
-hosts: :func:`rbjax.solve.sharded.sharded_map`; the docstrings say how to run on several CPU
-devices, GPUs or hosts).
+devices by :func:`rbjax.solve.devices.device_map`, each device running its own program (its
+docstrings say how to run on several CPU devices, GPUs or hosts).
 
 Only the varied parameters travel as columns; the others are scalars shared by every row.
 
@@ -49,15 +48,14 @@ from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from .angle import impact_angle
-from .devices import default_chunk_size, local_devices
+from .devices import default_chunk_size, device_map, local_devices
 from .inputs import PAPER_RATE_Hz, padded_rows
 from .method import resolve_method
 from .ode import impact_ode, ode_trajectory
-from .options import EvaluationSpec, spec_from_keywords
+from .options import EvaluationSpec, spec_or_default
 from .outcome import STATUS_CODES, nan_where
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
-from .sharded import sharded_map
 
 BALL_PARAMETERS = tuple(Ball.PARAMETERS)
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m")
@@ -76,7 +74,6 @@ __all__ = [
     "evaluation_paths",
     "evaluate",
     "evaluate_jacobian",
-    "sharded_map",
 ]
 
 
@@ -244,7 +241,7 @@ def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec)
         if chunk is None:
             width = 1 + len(wrt)  # a forward Jacobian carries a tangent per parameter
             chunk = default_chunk_size(path, devices, width) if chunk_size is None else chunk_size
-        return sharded_map(
+        return device_map(
             fn,
             rows,
             shared,
@@ -308,7 +305,6 @@ def evaluate(
     model: Model | None = None,
     lfe: bool = False,
     evaluation: EvaluationSpec | None = None,
-    **deprecated,
 ) -> dict[str, np.ndarray]:
     """Impact outputs for N parameter samples, sharded over the devices.
 
@@ -327,12 +323,8 @@ def evaluate(
     the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices`` for
     how to give JAX one CPU device per core), each device running its own program: the results
     are those of a one-device run, bit for bit.
-
-    ``deprecated``: the keywords ``method``, ``solver``, ``rate_Hz``, ``duration_s``,
-    ``chunk_size``, ``devices`` and ``progress`` of the previous release, accepted for one
-    release (a ``DeprecationWarning``): they build the ``EvaluationSpec``.
     """
-    spec = spec_from_keywords("evaluate", evaluation, deprecated)
+    spec = spec_or_default(evaluation)
     return _evaluate(samples, (), height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec)
 
 
@@ -345,7 +337,6 @@ def evaluate_jacobian(
     model: Model | None = None,
     lfe: bool = False,
     evaluation: EvaluationSpec | None = None,
-    **deprecated,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """``evaluate`` and the exact derivatives of every float output with respect to ``wrt``
     (default: the parameters of ``samples``), by ``jax.jacfwd`` per sample, vmapped and sharded.
@@ -353,9 +344,9 @@ def evaluate_jacobian(
     Returns ``(values, jacobian)``: ``values`` as ``evaluate``; ``jacobian`` maps each output to
     an (N, len(wrt)) array of ∂output/∂parameter in output units per parameter unit (NaN where
     the solve was flagged). The ODE path runs with ``Solver(adjoint="forward")``. ``evaluation``
-    and ``deprecated`` as in ``evaluate``.
+    as in ``evaluate``.
     """
-    spec = spec_from_keywords("evaluate_jacobian", evaluation, deprecated)
+    spec = spec_or_default(evaluation)
     wrt = tuple(samples) if wrt is None else tuple(wrt)
     if not wrt:
         raise ValueError("wrt=() names no parameter; give the parameters to differentiate against")

@@ -149,7 +149,19 @@ def device_map(
     same object again to reuse its compiled programs). Chunks of at most ``chunk_size`` rows
     (``plan``) go round-robin to the devices. Returns ``fn``'s output pytree as NumPy arrays of
     length N.
+
+    Raises:
+        RuntimeError: in a multi-process JAX runtime (``jax.distributed``): hosts share a study
+            as independent tasks (``rbjax sweep --scheduler ADDRESS``, a Dask cluster, or
+            ``--shard I/P`` and ``--merge``, a job array; :mod:`rbjax.studies.executors`), never
+            as one program stepping in lockstep across them.
     """
+    if jax.process_count() > 1:
+        raise RuntimeError(
+            f"this JAX runtime spans {jax.process_count()} processes (jax.distributed): rbjax "
+            "runs a batch on one process's devices; share a study between hosts with "
+            "`rbjax sweep --scheduler ADDRESS` (a Dask cluster) or `--shard I/P` and `--merge`"
+        )
     devices = local_devices(devices)
     check_range("chunk_size", chunk_size, lower=0.0)
     leaves, treedef, n = _host_leaves(inputs)

@@ -29,10 +29,10 @@ from jaxtyping import ArrayLike
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
 from ..terms.model import Model, Solver
+from .inputs import broadcast_inputs, check_inputs
 from .ode import final_state, impact_status, solve_phases
 from .options import model_from_shortcuts
 from .outcome import nan_where
-from .simulate import broadcast_inputs, check_inputs
 from .vector_field import body_velocity_m_per_s, split_energy
 
 

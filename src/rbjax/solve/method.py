@@ -13,11 +13,6 @@ from ..terms.model import Model, Solver
 from .angle import angle_unsupported
 from .options import PATHS
 
-#: The paths of ``simulate``: ``auto`` picks ``quadrature`` where the model allows it (see
-#: ``quadrature_unsupported``), else ``angle`` where that allows it (``angle_unsupported``: the
-#: rigid floor without a ball mode), when no ``Solver`` was given; ``ode`` otherwise.
-METHODS = PATHS
-
 
 def quadrature_unsupported(model: Model) -> str | None:
     """Why the quadrature path (``rbjax.solve.quadrature``) cannot solve ``model``; None if it can.
@@ -45,7 +40,7 @@ def resolve_method(method: str, model: Model, solver: Solver | None = None) -> s
     ``angle_unsupported(model)`` is None, else the ODE. Asking for a path that cannot solve the
     model raises ``ValueError`` saying why.
     """
-    check_choice("method", method, METHODS)
+    check_choice("method", method, PATHS)
     reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
     if method in reasons:
         if reasons[method] is not None:

@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any, TypedDict
 
-from .._validate import check_choice, check_range, from_old_keywords
+from .._validate import check_choice, check_range, settings_or_default
 from ..terms.ball_mode import BallMode
 from ..terms.damping import AbstractDamping
 from ..terms.floors.kinds import AbstractFloor
@@ -80,28 +79,10 @@ class EvaluationSpec:
         return dataclasses.replace(self, **changes)
 
 
-#: The keywords of ``evaluate`` before ``EvaluationSpec`` (``method`` is its ``path``).
-_SPEC_KEYWORDS = {
-    "method": "path",
-    "path": "path",
-    "solver": "solver",
-    "rate_Hz": "rate_Hz",
-    "duration_s": "duration_s",
-    "chunk_size": "chunk_size",
-    "devices": "devices",
-    "progress": "progress",
-}
-
-
-def spec_from_keywords(
-    function: str, evaluation: EvaluationSpec | None, keywords: Mapping[str, Any]
-) -> EvaluationSpec:
-    """``evaluation`` (default ``EvaluationSpec()``), or one built from the keywords of the old
-    signature of ``function`` (deprecated: a ``DeprecationWarning``; one release). A mix, or an
-    unknown keyword, is a named error."""
-    return from_old_keywords(
-        function, "evaluation", EvaluationSpec, evaluation, keywords, _SPEC_KEYWORDS
-    )
+def spec_or_default(evaluation: EvaluationSpec | None) -> EvaluationSpec:
+    """``evaluation``, or ``EvaluationSpec()`` when it is ``None`` (anything else: a
+    ``ValueError``)."""
+    return settings_or_default("evaluation", EvaluationSpec, evaluation)
 
 
 class ModelShortcuts(TypedDict, total=False):
@@ -126,15 +107,11 @@ MODEL_KEYWORDS = tuple(p for p in inspect.signature(Model.__init__).parameters i
 OPTIONAL_TERMS = ("damping", "stiffening", "ball_mode", "floor", "series")
 
 
-def model_from_shortcuts(
-    function: str, model: Model | None, shortcuts: Mapping[str, Any], *, deprecated: bool = False
-) -> Model:
+def model_from_shortcuts(function: str, model: Model | None, shortcuts: Mapping[str, Any]) -> Model:
     """The ``Model`` of a call of ``function``: ``model``, or one built from the keyword
     ``shortcuts`` (``Model(**shortcuts)``; ``Model()`` with neither). A mix of ``model=`` and
     shortcuts is a ``ValueError`` naming both (a term's ``None`` is no shortcut: it is the
-    default); an unknown keyword a ``TypeError``. With
-    ``deprecated``, shortcuts warn (``DeprecationWarning``: functions other than ``simulate``
-    take a ``Model`` only, the shortcuts accepted for one release)."""
+    default); an unknown keyword a ``TypeError``."""
     unknown = sorted(set(shortcuts) - set(MODEL_KEYWORDS))
     if unknown:
         raise TypeError(f"{function}() got unexpected keyword arguments {unknown}")
@@ -151,11 +128,4 @@ def model_from_shortcuts(
         )
     if model is not None:
         return model
-    if shortcuts and deprecated:
-        warnings.warn(
-            f"{function}({', '.join(f'{k}=' for k in sorted(shortcuts))}...) is deprecated: "
-            "pass model=rbjax.Model(...)",
-            DeprecationWarning,
-            stacklevel=3,
-        )
     return Model(**shortcuts)

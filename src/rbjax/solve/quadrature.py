@@ -81,7 +81,6 @@ from .quadrature_rules import (
     row_norms,
     time_nodes,
 )
-from .quadrature_rules import gauss_legendre_01 as gauss_legendre_01  # its former home
 
 # --- scalar outputs (impact_quadrature) ---------------------------------------------------------
 #: Chebyshev–Lobatto points of the interpolant on [0, δ_max] and Gauss–Legendre points of the

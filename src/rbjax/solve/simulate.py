@@ -8,7 +8,6 @@ and computes the force histories (:func:`force_history`) and their band levels o
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Unpack
 
 import equinox as eqx
@@ -23,24 +22,11 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
 from .engine import scalar_outputs
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inputs
-from .inputs import as_arrays as as_arrays
-from .method import METHODS as METHODS
-from .method import quadrature_unsupported as quadrature_unsupported
 from .method import resolve_method
 from .ode import trajectory_batch
 from .options import ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
-
-
-def make_model(**shortcuts: Unpack[ModelShortcuts]) -> Model:
-    """Deprecated (one release): ``rbjax.Model(**shortcuts)``, field for field."""
-    warnings.warn(
-        "make_model(...) is deprecated: use rbjax.Model(...) (the same fields)",
-        DeprecationWarning,
-        stacklevel=2,
-    )
-    return Model(**shortcuts)
 
 
 class ImpactResult(eqx.Module):

@@ -43,22 +43,11 @@ from .._x64 import require_x64
 from .band_kernel import SHORT_FFT_OVERSAMPLING, SHORT_PATH_MIN_RATIO, band_kernel, fast_length
 from .bands import (
     OCTAVE_BANDS,
-    OCTAVE_RATIO_G,
     THIRD_OCTAVE_BANDS,
-    REFERENCE_FREQUENCY_Hz,
-    band_centres_Hz,
     band_edges_Hz,
-    nominal_centres_Hz,
 )
 
 __all__ = [
-    "OCTAVE_BANDS",
-    "THIRD_OCTAVE_BANDS",
-    "OCTAVE_RATIO_G",
-    "REFERENCE_FREQUENCY_Hz",
-    "band_centres_Hz",
-    "band_edges_Hz",
-    "nominal_centres_Hz",
     "energy_spectrum",
     "band_energies_N2s",
     "lfe_dB",

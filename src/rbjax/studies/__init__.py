@@ -4,6 +4,7 @@
 sweeps (:mod:`~rbjax.studies.sweep`), their independent tasks run where
 :class:`~rbjax.studies.executors.Parallel` says (in process, worker processes, a Dask cluster)."""
 
+from .cross_validation import cross_validate
 from .executors import Parallel, Task, TaskError, run_tasks
 from .growth import (
     Growth,
@@ -13,14 +14,10 @@ from .growth import (
     model_growth,
     recording_growth,
 )
-from .selection import (
-    Candidate,
-    Selection,
-    cross_validate,
-    held_out_comparison,
-    recommend,
-    select_model,
-)
+from .hold_out_comparison import held_out_comparison
+from .selection import select_model
+from .selection_results import Candidate, Selection
+from .selection_rule import recommend
 from .sweep import load_config, run_sweep, write_outputs
 from .sweep_parts import merge_parts, run_part
 

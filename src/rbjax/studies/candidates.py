@@ -14,14 +14,11 @@ from ..fit import parse_model_name, parse_model_terms
 from ..terms.model import BLOCKED_FORCE_OPTIONS, Model, superset_model
 
 __all__ = [
-    "BLOCKED_FORCES",
     "candidate_pairs",
     "shared_structure",
     "shared_structures",
     "structure_cost",
 ]
-
-BLOCKED_FORCES = BLOCKED_FORCE_OPTIONS  # one definition: rbjax.terms.model
 
 
 def candidate_pairs(
@@ -33,13 +30,13 @@ def candidate_pairs(
     if not candidates or not blocked_forces:
         raise ValueError("give at least one candidate model and one blocked-force definition")
     for bf in blocked_forces:
-        check_choice("blocked_force", bf, BLOCKED_FORCES)
+        check_choice("blocked_force", bf, BLOCKED_FORCE_OPTIONS)
     pairs = []
     for c in candidates:
         name, sep, bf = str(c).partition("/")
         parse_model_name(name)
         if sep:
-            check_choice("blocked_force", bf, BLOCKED_FORCES)
+            check_choice("blocked_force", bf, BLOCKED_FORCE_OPTIONS)
             pairs.append((name, bf))
         else:
             pairs += [(name, b) for b in blocked_forces]

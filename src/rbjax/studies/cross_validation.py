@@ -17,7 +17,7 @@ import numpy as np
 
 from .._progress import progress as say
 from ..fit import FitResult, fit, prepare_data
-from ..fit.options import OLD_KEYWORDS, options_from_keywords
+from ..fit.options import options_or_default
 from .executors import Parallel, Task, run_tasks
 
 __all__ = [
@@ -73,8 +73,7 @@ def fit_task(data, model, blocked_force, fit_heights, start, fit_kwargs) -> FitR
     ``options`` (in ``fit_kwargs``) with ``fit_heights`` and the ``superset`` of ``fit_kwargs``."""
     kwargs = dict(fit_kwargs)
     superset = kwargs.pop("superset", None)
-    old = {k: kwargs.pop(k) for k in list(kwargs) if k in OLD_KEYWORDS}  # deprecated keywords
-    options = options_from_keywords("select_model", kwargs.pop("options", None), old)
+    options = options_or_default(kwargs.pop("options", None))
     options = options.replace(fit_heights=fit_heights, superset=superset)
     return fit(
         data,

@@ -34,7 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._progress import progress as say
-from .._validate import as_float, check_choice, check_range, from_old_keywords
+from .._validate import as_float, check_choice, check_range, settings_or_default
 from ..fit.layout import FIT_RANGES, fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
 from ..solve.inputs import as_arrays
@@ -284,7 +284,6 @@ def design(
     gas: str = "adiabatic",
     blocked_force: str = "paper",
     progress: bool = False,
-    **deprecated,
 ) -> DesignResult:
     """Maximise the smallest margin to the rubber-ball table at 1 m (see the module docstring).
 
@@ -296,16 +295,11 @@ def design(
             step size, seed.
         vary_wall: also vary the wall thickness (``WALL_RANGE_M``), the mass following it.
         gas, blocked_force: the model name's options (as :func:`rbjax.fit.fit`).
-        deprecated: ``n_starts``, ``steps``, ``learning_rate``, ``seed`` of the previous
-            release, accepted for one release (a ``DeprecationWarning``): they build the
-            ``DesignSearch``.
     """
     # lazy: optax costs 0.2 s at import
     import optax  # type: ignore[import-untyped]
 
-    search = from_old_keywords(
-        "design", "search", DesignSearch, search, deprecated, {k: k for k in SEARCH_FIELDS}
-    )
+    search = settings_or_default("search", DesignSearch, search)
     n_starts, steps, learning_rate, seed = (getattr(search, k) for k in SEARCH_FIELDS)
     check_choice("geometry", geometry, tuple(GEOMETRIES))
     t0 = time.perf_counter()

@@ -49,8 +49,6 @@ from .worker_pool import (
     HostAndPool,
     drop_pool,
     local_pool,
-    shutdown_pools,
-    single_threaded_blas,
     warm,
     worker_start,
 )
@@ -63,8 +61,6 @@ __all__ = [
     "run_tasks",
     "open_executor",
     "prestart",
-    "shutdown_pools",
-    "single_threaded_blas",
 ]
 
 #: Seconds to wait for a Dask scheduler to answer before the run fails.

@@ -30,7 +30,9 @@ import numpy as np
 
 from ..data import load_examples
 from ..fit import prepare_data
-from ..solve.simulate import PAPER_RATE_Hz, check_inputs, resolve_method, simulate, simulate_model
+from ..solve.inputs import PAPER_RATE_Hz, check_inputs
+from ..solve.method import resolve_method
+from ..solve.simulate import simulate, simulate_model
 from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import lfe_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball

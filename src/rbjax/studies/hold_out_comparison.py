@@ -11,8 +11,9 @@ from collections.abc import Sequence
 from .._progress import progress as say
 from ..fit import MODEL_NAMES, FitResult, predict, prepare_data
 from ..spectrum.bands import OCTAVE_BANDS
+from ..terms.model import BLOCKED_FORCE_OPTIONS
 from ..text import fmt, format_table
-from .candidates import BLOCKED_FORCES, candidate_pairs, shared_structures, structure_cost
+from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import fit_task, held_out_rows
 from .executors import Parallel, Task, run_tasks
 
@@ -64,7 +65,7 @@ def held_out_comparison(
     fit_heights: Sequence[float],
     candidates: Sequence[str] = MODEL_NAMES,
     *,
-    blocked_forces: Sequence[str] = BLOCKED_FORCES,
+    blocked_forces: Sequence[str] = BLOCKED_FORCE_OPTIONS,
     starts: dict | None = None,
     workers: int | Parallel | None = None,
     progress: bool = True,

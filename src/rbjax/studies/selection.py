@@ -23,35 +23,20 @@ from collections.abc import Sequence
 from .._progress import progress as say
 from .._x64 import require_x64
 from ..fit import MODEL_NAMES, predict, prepare_data
-from ..terms.model import Model
-from .candidates import BLOCKED_FORCES, candidate_pairs, shared_structures, structure_cost
-from .candidates import shared_structure as shared_structure
+from ..terms.model import BLOCKED_FORCE_OPTIONS, Model
+from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import (
-    HeldOut,
     check_folds,
-    cross_validate,
     fit_task,
     fold_row,
     fold_tasks,
     held_out_rows,
 )
 from .executors import Parallel, Task, run_tasks
-from .hold_out_comparison import HoldOutComparison, held_out_comparison
 from .selection_results import Candidate, Selection
 from .selection_rule import RULE, blocked_force_note, recommend
 
-__all__ = [
-    "HeldOut",
-    "Candidate",
-    "Selection",
-    "HoldOutComparison",
-    "cross_validate",
-    "select_model",
-    "held_out_comparison",
-    "BLOCKED_FORCES",
-    "candidate_pairs",
-    "recommend",
-]
+__all__ = ["select_model"]
 
 
 def _baseline_task(data, superset: Model):
@@ -63,7 +48,7 @@ def select_model(
     data,
     candidates: Sequence[str] = MODEL_NAMES,
     *,
-    blocked_forces: Sequence[str] = BLOCKED_FORCES,
+    blocked_forces: Sequence[str] = BLOCKED_FORCE_OPTIONS,
     workers: int | Parallel | None = None,
     scheduler: str | None = None,
     progress: bool = True,

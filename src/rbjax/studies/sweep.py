@@ -109,16 +109,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..solve.batch import (  # noqa: F401  (re-exported: the sweep's public names)
+from ..solve.batch import (
     BALL_PARAMETERS,
-    SCALAR_OUTPUTS,
-    assemble,
-    canonical_name,
-    evaluate,
-    lfe_output_names,
-    nominal_parameters,
-    parameter_names,
-    sharded_map,
 )
 from ..solve.options import EvaluationSpec
 from ..terms.ball import JIS_RUBBER_BALL

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ...solve.batch import evaluate, evaluate_jacobian
-from ...solve.options import EvaluationSpec, model_from_shortcuts, spec_from_keywords
+from ...solve.options import EvaluationSpec, model_from_shortcuts, spec_or_default
 from ...terms.model import Model
 
 
@@ -32,25 +32,12 @@ def batch_evaluator(samples: Mapping, gradients: bool = False, **settings):
     return evaluate(samples, **settings)
 
 
-def old_keywords(
-    function: str, model: Model | None, evaluation: EvaluationSpec | None, options: Mapping
-) -> tuple[Model, EvaluationSpec, dict]:
-    """The ``Model`` and ``EvaluationSpec`` of a study, and its other keyword ``options``: the
-    keywords of the previous release taken out of ``options`` (deprecated, one release: a
-    ``DeprecationWarning``): the model's shortcuts (``gas``, ``blocked_force``, ``damping``,
-    ``stiffening``; with ``model=`` a ``ValueError`` naming both, never dropped) and the
-    evaluation's keywords (``solver``, ``path``, ``chunk_size``, ``devices``, ``progress``)."""
-    options = dict(options)
-    shortcuts = {k: options.pop(k) for k in STUDY_SHORTCUTS if k in options}
-    spec = {k: options.pop(k) for k in STUDY_SPEC_KEYWORDS if k in options}
-    model = model_from_shortcuts(function, model, shortcuts, deprecated=True)
-    return model, spec_from_keywords(function, evaluation, spec), options
-
-
-#: The model's keywords of the studies before ``model=`` was the one way to give it.
-STUDY_SHORTCUTS = ("gas", "blocked_force", "damping", "stiffening")
-#: The evaluation's keywords of the studies before ``EvaluationSpec``.
-STUDY_SPEC_KEYWORDS = ("solver", "path", "chunk_size", "devices", "progress")
+def study_settings(
+    function: str, model: Model | None, evaluation: EvaluationSpec | None
+) -> tuple[Model, EvaluationSpec]:
+    """The ``Model`` (default ``Model()``) and ``EvaluationSpec`` (default ``EvaluationSpec()``)
+    of a study, each checked to be one."""
+    return model_from_shortcuts(function, model, {}), spec_or_default(evaluation)
 
 
 def is_lfe(name: str) -> bool:

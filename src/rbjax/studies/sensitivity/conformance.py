@@ -23,7 +23,7 @@ from ...solve.options import EvaluationSpec
 from ...spectrum.standards import CLAUSE, RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model
-from ._common import batch_evaluator, old_keywords
+from ._common import batch_evaluator, study_settings
 
 DISTRIBUTION_KINDS = {
     "uniform": ("low", "high"),
@@ -192,7 +192,6 @@ def conformance_probability(
     confidence: float = 0.95,
     evaluation: EvaluationSpec | None = None,
     evaluator: Callable | None = None,
-    **deprecated,
 ) -> ConformanceProbability:
     """Probability that the ball meets the rubber-ball tolerances when its parameters vary.
 
@@ -210,16 +209,9 @@ def conformance_probability(
     Draws whose solve is flagged (status ≠ 0) are left out and counted (``n_valid``).
     ``evaluation`` (an ``rbjax.EvaluationSpec``: solve path, ``Solver``, chunks, devices,
     progress) and ``evaluator``: as in :func:`~rbjax.studies.sensitivity.global_sensitivity`
-    (default: ``rbjax.solve.batch.evaluate`` in this process). ``deprecated``: the keywords of
-    the previous release (``gas``, ``blocked_force``, ``damping``, ``stiffening``, ``solver``,
-    ``chunk_size``, ``devices``, ``progress``), accepted for one release with a
-    ``DeprecationWarning`` (the model's with ``model=`` too: a ``ValueError``).
+    (default: ``rbjax.solve.batch.evaluate`` in this process).
     """
-    model, evaluation, unknown = old_keywords(
-        "conformance_probability", model, evaluation, deprecated
-    )
-    if unknown:
-        raise TypeError(f"conformance_probability() got unexpected keyword arguments {unknown}")
+    model, evaluation = study_settings("conformance_probability", model, evaluation)
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
     check_range("confidence", confidence, lower=0.0, upper=1.0)
     if not isinstance(distributions, Mapping) or not distributions:

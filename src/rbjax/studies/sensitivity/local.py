@@ -23,15 +23,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from ...solve.batch import assemble, canonical_name, lfe_output_names, parameter_names
+from ...solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
 from ...solve.options import model_from_shortcuts
 from ...solve.outcome import STATUS_NAMES
-from ...solve.simulate import (
-    PAPER_DURATION_S,
-    PAPER_RATE_Hz,
-    check_inputs,
-    simulate_model,
-    trajectory,
-)
+from ...solve.simulate import simulate_model, trajectory
 from ...spectrum.levels import lfe_octave_dB
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
@@ -211,7 +206,6 @@ def local_sensitivity(
     solver: Solver | None = None,
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
-    **deprecated,
 ) -> Sensitivity:
     """Jacobian of the impact outputs w.r.t. the parameters, by forward-mode AD (paper §2).
 
@@ -226,9 +220,6 @@ def local_sensitivity(
         lfe: also differentiate L_FE in the octave bands 31.5 Hz–1 kHz (Eq. 11, §2.4).
         solver: integration settings (its adjoint is set to ``"forward"``).
         rate_Hz, duration_s: the force record for L_FE (default the paper's 44.1 kHz × 1 s).
-        deprecated: ``gas``, ``blocked_force``, ``damping``, ``stiffening`` of the previous
-            release, accepted for one release (a ``DeprecationWarning``): they build the
-            ``Model``; with ``model=`` too they are a ``ValueError`` naming both.
 
     Returns:
         A ``Sensitivity``; heights whose solve is flagged (status ≠ 0) have NaN values and
@@ -238,7 +229,7 @@ def local_sensitivity(
     heights = np.atleast_1d(np.asarray(height_m, dtype=np.float64))
     if heights.ndim != 1:
         raise ValueError(f"height_m has shape {np.shape(height_m)}; expected a scalar or 1-D array")
-    model = model_from_shortcuts("local_sensitivity", model, deprecated, deprecated=True)
+    model = model_from_shortcuts("local_sensitivity", model, {})
     valid = parameter_names(model)
     wrt = (
         valid

@@ -22,7 +22,7 @@ from ...solve.batch import (
 from ...solve.options import EvaluationSpec
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model
-from ._common import batch_evaluator, check_ranges, is_lfe, old_keywords
+from ._common import batch_evaluator, check_ranges, is_lfe, study_settings
 from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
@@ -116,18 +116,15 @@ def global_sensitivity(
         options: ``seed`` (default 0: of the design and of SALib's bootstrap; every method has
             it) and the method's keyword options (``method_options(method)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
-            ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``. The
-            keywords of the previous release are accepted for one release (a
-            ``DeprecationWarning``): ``gas``, ``blocked_force``, ``damping``, ``stiffening``
-            build the ``Model`` (with ``model=`` too: a ``ValueError``), ``solver``, ``path``,
-            ``chunk_size``, ``devices``, ``progress`` the ``EvaluationSpec``.
+            ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``.
 
     Returns:
         the method's result object (``rbjax.studies.sensitivity.results``, ``DGSMResult``):
         ``.driver(output)`` names the parameter that drives an output's spread, ``.table()``,
         ``.plot()``, ``.to_dict()``, ``.salib`` (SALib's own results).
     """
-    model, evaluation, options = old_keywords("global_sensitivity", model, evaluation, options)
+    model, evaluation = study_settings("global_sensitivity", model, evaluation)
+    options = dict(options)
     seed = options.pop("seed", 0)
     valid = method_options(method)
     unknown = sorted(set(options) - set(valid))
