@@ -17,6 +17,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -24,13 +25,16 @@ import rbjax  # noqa: F401  (float64 on before anything else touches JAX)
 
 # isort: split
 import diffrax as dfx
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from rbjax.terms.model import FIXED_STEP_METHODS, Solver
+from rbjax import Solver
+
+FIXED_STEP_METHODS = ("euler", "heun", "midpoint")  # diffrax's fixed-step methods (Solver.step_s)
 
 HERE = Path(__file__).resolve().parent
-RESULTS_DIR = HERE / "results"
+RESULTS_DIR = Path(os.environ.get("RBJAX_BENCH_RESULTS") or HERE / "results")
 REPO = HERE.parent
 sys.path.insert(0, str(REPO / "tests"))  # the independent scipy reference lives with the tests
 
@@ -223,6 +227,38 @@ def scipy_impact_lean(
 
 
 # ------------------------------------------------------------------------------------------------
+# batch inputs of the solve cores (``rbjax.solve.impact_batch``, ``impact_quadrature_batch``)
+
+
+def broadcast_inputs(height_m, ball, model):
+    """Flatten height, ball and model parameters to one batch axis, as ``rbjax.simulate`` does
+    before it calls a solve core (returns the shape, the heights, the ball and the model)."""
+    height = jnp.asarray(height_m, dtype=jnp.float64)
+    ball = ball.as_arrays()
+    arrays, static = eqx.partition(model, eqx.is_array_like)
+    arrays = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=jnp.float64), arrays)
+    leaves = [height, *jax.tree_util.tree_leaves(ball), *jax.tree_util.tree_leaves(arrays)]
+    shape = jnp.broadcast_shapes(*(x.shape for x in leaves))
+
+    def flat(x):
+        return jnp.broadcast_to(x, shape).reshape(-1)
+
+    height = flat(height)
+    ball = jax.tree_util.tree_map(flat, ball)
+    model = eqx.combine(jax.tree_util.tree_map(flat, arrays), static)
+    return shape, height, ball, model
+
+
+def impact_one(height_m, ball, model, solver):
+    """One impact on the ODE path (``rbjax.solve.impact_batch`` on a batch of one), traceable
+    under ``jax.vmap`` and ``jax.jacfwd``."""
+    from rbjax.solve import impact_batch
+
+    _, h, b, m = broadcast_inputs(height_m, ball, model)
+    return jax.tree_util.tree_map(lambda x: x[0], impact_batch(h, b, m, solver))
+
+
+# ------------------------------------------------------------------------------------------------
 # references for the elastic JIS ball
 
 
@@ -231,7 +267,6 @@ def quadrature_reference(heights_m, ball=None, *, gas="adiabatic", n_nodes: int 
     independent integration of Eq. 7 in δ, exponentially convergent; see rbjax.solve.quadrature)."""
     from rbjax import Model
     from rbjax.solve import impact_quadrature_batch
-    from rbjax.solve.simulate import broadcast_inputs
 
     ball = rbjax.JIS_RUBBER_BALL if ball is None else ball
     _, h, b, m = broadcast_inputs(np.asarray(heights_m, dtype=float), ball, Model(gas=gas))
@@ -240,6 +275,53 @@ def quadrature_reference(heights_m, ball=None, *, gas="adiabatic", n_nodes: int 
         k: np.asarray(getattr(out, k))
         for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m", "status")
     }
+
+
+# ------------------------------------------------------------------------------------------------
+# fit helpers, from public names only
+
+
+def held_out_rows(result, heights) -> list[SimpleNamespace]:
+    """Held-out errors at ``heights`` of a ``FitResult`` or a ``Prediction``: the history's rms
+    error in % of the mean peak, and the per-height errors the result reports."""
+    rows = []
+    for h in heights:
+        k = np.isclose(result.heights_m, h, atol=5e-4)
+        row = next(r for r in result.per_height if abs(r["height_m"] - h) < 5e-4)
+        rms = float(np.sqrt(np.mean((result.predicted_N[k] - result.measured_N[k]) ** 2)))
+        peak = float(np.mean(np.max(result.measured_N[k], axis=1)))
+        rows.append(
+            SimpleNamespace(
+                height_m=float(h),
+                history_error_pct=100.0 * rms / peak,
+                contact_time_pct=row["error"]["contact_time_pct"],
+                peak_force_pct=row["error"]["peak_force_pct"],
+                lfe_octave_dB=tuple(float(x) for x in row["error"]["lfe_octave_dB"]),
+                converged=result.converged,
+            )
+        )
+    return rows
+
+
+def shared_structure(names, gas: str = "adiabatic"):
+    """One model holding the terms of every candidate named (``rbjax.terms.superset_model``):
+    the structure of the one compiled fit program all candidates run through."""
+    from rbjax import Model
+    from rbjax.fit import parse_model_terms
+    from rbjax.terms import superset_model
+
+    laws, stiff, mode, series = [], False, False, False
+    for name in names:
+        terms = parse_model_terms(name)
+        laws += [t for t in terms.laws if t not in laws]
+        stiff = stiff or terms.stiffening
+        mode = mode or terms.ball_mode
+        series = series or terms.series
+    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
+
+
+def usable_cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 # ------------------------------------------------------------------------------------------------

@@ -108,7 +108,7 @@ def worker_forward(
     import numpy as np
 
     import rbjax
-    from rbjax.solve.batch import evaluate
+    from rbjax.solve import evaluate
 
     devices = jax.local_devices()
     _emit(

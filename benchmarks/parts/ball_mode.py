@@ -32,9 +32,15 @@ import rbjax
 from rbjax.data import examples_dir
 from rbjax.fit import FitOptions, fit, prepare_data
 from rbjax.spectrum import OCTAVE_BANDS
-from rbjax.studies.selection import held_out_rows, shared_structure
 
-from _common import finish_machine_info, machine_info, time_call, write_json
+from _common import (
+    finish_machine_info,
+    held_out_rows,
+    machine_info,
+    shared_structure,
+    time_call,
+    write_json,
+)
 
 FIT_HEIGHTS = (0.1, 0.4, 1.0, 1.6)
 MODELS = ("hunt-crossley", "zener", "hunt-crossley+ball-mode", "zener+ball-mode")
@@ -225,7 +231,7 @@ def select_times(data_dir: str) -> dict:
     return out
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     quick = "--quick" in sys.argv
     info = machine_info()
     data = prepare_data(str(examples_dir()))
@@ -271,7 +277,3 @@ def main() -> None:
         out["select"] = select_times(str(examples_dir()))
     out["machine"] = finish_machine_info(info)
     print(f"wrote {write_json('ball_mode_quick' if quick else 'ball_mode', out)}")
-
-
-if __name__ == "__main__":
-    main()

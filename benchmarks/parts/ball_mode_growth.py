@@ -19,7 +19,7 @@ from _common import read_json, write_json
 HEIGHTS_M = np.array([0.1, 0.2, 0.4, 0.8, 1.0, 1.6])
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     fitted = read_json("ball_mode")["held_out"]
     out = {}
     data = recording_growth()
@@ -73,7 +73,3 @@ def main() -> None:
     for row in at_1m:
         print("recording at 1 m:", check_conformance(row))
     print(f"wrote {write_json('ball_mode_growth', out)}")
-
-
-if __name__ == "__main__":
-    main()

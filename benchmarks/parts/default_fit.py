@@ -20,16 +20,16 @@ import numpy as np
 from rbjax.data import examples_dir
 from rbjax.fit import FitOptions, fit, prepare_data
 from rbjax.spectrum import OCTAVE_BANDS
-from rbjax.studies.selection import held_out_rows, select_model
+from rbjax.studies import select_model
 
-from _common import finish_machine_info, machine_info, write_json
+from _common import finish_machine_info, held_out_rows, machine_info, write_json
 
 FIT_HEIGHTS = (0.1, 0.4, 1.0, 1.6)
 PREDICT_HEIGHTS = (0.2, 0.8)
 BARS = {"contact_time_pct": 1.0, "peak_force_pct": 1.5, "lfe_31.5-250_dB": 0.5}
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     info = machine_info()
     data = prepare_data(examples_dir())
     t0 = time.perf_counter()
@@ -110,7 +110,3 @@ def main() -> None:
             },
         },
     )
-
-
-if __name__ == "__main__":
-    main()

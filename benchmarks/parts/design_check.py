@@ -19,7 +19,7 @@ CASES = (("paper", "jis"), ("kelvin-voigt", "jis"), ("kelvin-voigt", "iso"))
 CHECK = 0.05
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     info = machine_info()
     rows = []
     print(
@@ -62,7 +62,3 @@ def main() -> None:
         {"machine": finish_machine_info(info), "check_half_widths": CHECK, "cases": rows},
     )
     print(f"wrote {path}")
-
-
-if __name__ == "__main__":
-    main()

@@ -30,13 +30,12 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 import rbjax  # noqa: E402
-from rbjax.solve.batch import evaluate  # noqa: E402
+from rbjax.solve import evaluate  # noqa: E402
 
 from _common import (  # noqa: E402
     finish_machine_info,
     fmt,
     machine_info,
-    parse_args,
     table,
     write_json,
 )
@@ -73,14 +72,13 @@ def _best(fns: dict) -> dict:
     }
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
+def main(quick: bool = False) -> None:
     info = machine_info()
     assert jax.local_device_count() == 1, jax.devices()
     t0 = time.perf_counter()
     rows = []
     for name, (model, n) in MODELS.items():
-        n = n // 10 if args.quick else n
+        n = n // 10 if quick else n
         heights = np.linspace(0.1, 1.6, n)
         youngs = np.linspace(1.3e6, 1.9e6, n)
         ball = rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=youngs)
@@ -139,7 +137,7 @@ def main():
         )
     )
     write_json(
-        "evaluate_speed" + ("_quick" if args.quick else ""),
+        "evaluate_speed" + ("_quick" if quick else ""),
         {
             "machine": finish_machine_info(info),
             "devices": [str(d) for d in jax.devices()],
@@ -147,7 +145,3 @@ def main():
             "wall_s": time.perf_counter() - t0,
         },
     )
-
-
-if __name__ == "__main__":
-    main()

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from rbjax.data import examples_dir
 
-from _common import finish_machine_info, machine_info
+from _common import RESULTS_DIR, finish_machine_info, machine_info
 
 HERE = Path(__file__).parent
 
@@ -170,9 +170,8 @@ def lm_evaluation_ratio(model: str) -> dict:
 
 def scipy_anchor(model: str, rbjax_out: dict) -> dict:
     """The scipy user's fit of ``model`` (momentum) and rbjax's optimum under its residuals."""
+    from parts.scipy_fit import MODELS, cost_at, fit
     from rbjax.fit import prepare_data
-
-    from scipy_fit import MODELS, cost_at, fit
 
     data = prepare_data(examples_dir())
     ref = fit(model, data)
@@ -182,7 +181,7 @@ def scipy_anchor(model: str, rbjax_out: dict) -> dict:
     return {**ref, "rbjax_cost_under_scipy_residuals": rbjax_cost, "rbjax_parameters": params}
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     quick = "--quick" in sys.argv
     data = str(examples_dir())
     settings = {
@@ -268,8 +267,4 @@ def main() -> None:
         "lm_evaluation": ratios,
     }
     name = "fit_time_quick.json" if quick else "fit_time.json"
-    (HERE / "results" / name).write_text(json.dumps(out, indent=2))
-
-
-if __name__ == "__main__":
-    main()
+    (RESULTS_DIR / name).write_text(json.dumps(out, indent=2))

@@ -22,7 +22,7 @@ import numpy as np
 import rbjax
 from rbjax.terms import simply_supported_plate_modes
 
-from _common import finish_machine_info, fmt, machine_info, parse_args, table, time_call, write_json
+from _common import finish_machine_info, fmt, machine_info, table, time_call, write_json
 from scipy_floor_reference import reference_floor_impact
 from scipy_reference import reference_impact
 
@@ -100,9 +100,8 @@ def throughput(floor, batch: int, method: str) -> dict:
     }
 
 
-def main() -> None:
-    args = parse_args(__doc__)
-    batch = 100 if args.quick else 1000
+def main(quick: bool = False) -> None:
+    batch = 100 if quick else 1000
     info = machine_info()
     rows = []
     for name, floor in floors():
@@ -158,7 +157,3 @@ def main() -> None:
         },
     )
     print(f"wrote {path}")
-
-
-if __name__ == "__main__":
-    main()

@@ -44,7 +44,6 @@ from _common import (
     finish_machine_info,
     fmt,
     machine_info,
-    parse_args,
     scipy_impact_lean,
     table,
     time_call,
@@ -462,9 +461,7 @@ def render(data) -> str:
     return "\n".join(lines)
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
-    quick = args.quick
+def main(quick: bool = False) -> None:
     info = machine_info()
     t_start = time.perf_counter()
     rows: list[dict] = []
@@ -490,7 +487,3 @@ def main():
     write_json("forward_speed" + ("_quick" if quick else ""), data)
     print()
     print(render(data))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -24,7 +24,7 @@ from rbjax import Model
 from rbjax.solve import force_history, trajectory
 from rbjax.solve.sampled import sampled_solve, substeps_for_contact
 
-from _common import finish_machine_info, machine_info, parse_args, table, time_call, write_json
+from _common import finish_machine_info, machine_info, table, time_call, write_json
 from scipy_reference import reference_impact
 
 # (the scipy reference lives in tests/, which _common puts on sys.path)
@@ -94,10 +94,9 @@ def _paths(heights, model, contact):
     )
 
 
-def main() -> None:
-    args = parse_args(__doc__.splitlines()[0])
+def main(quick: bool = False) -> None:
     info = machine_info()
-    batches = (100,) if args.quick else (100, 1000)
+    batches = (100,) if quick else (100, 1000)
     out: dict = {"rate_Hz": RATE_Hz, "error_heights_m": ERROR_HEIGHTS, "models": {}}
     rows = []
     for name, options in MODELS.items():
@@ -145,8 +144,4 @@ def main() -> None:
         )
     )
     out["machine"] = finish_machine_info(info)
-    print(f"wrote {write_json('history_speed' + ('_quick' if args.quick else ''), out)}")
-
-
-if __name__ == "__main__":
-    main()
+    print(f"wrote {write_json('history_speed' + ('_quick' if quick else ''), out)}")

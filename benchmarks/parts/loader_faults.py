@@ -35,7 +35,7 @@ from synthetic_records import CUTOFF_HZ, FAULT_DAMPING_NS_PER_M, RATE_HZ, long_r
 from test_fit_faults import MODEL, recordings, write_faulty_set  # noqa: E402
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     info = machine_info()
     sets = {"clean 44.1 kHz": prepare_data(recordings(long_records()[1], RATE_HZ))}
     with tempfile.TemporaryDirectory() as folder, warnings.catch_warnings():
@@ -96,7 +96,3 @@ def main() -> None:
         )
     )
     write_json("loader_faults", {"machine": finish_machine_info(info), "fits": out})
-
-
-if __name__ == "__main__":
-    main()

@@ -34,14 +34,16 @@ from jax.sharding import PartitionSpec as P  # noqa: E402
 
 import rbjax  # noqa: E402
 from rbjax import Model  # noqa: E402
-from rbjax.solve import impact_quadrature  # noqa: E402
-from rbjax.solve.ode import impact_batch, impact_ode  # noqa: E402
-from rbjax.solve.simulate import broadcast_inputs  # noqa: E402
+from rbjax.solve import (
+    impact_batch,  # noqa: E402
+    impact_quadrature,  # noqa: E402
+)
 
-from _common import (  # noqa: E402
+from _common import (
+    broadcast_inputs,  # noqa: E402
     finish_machine_info,
+    impact_one,
     machine_info,
-    parse_args,
     quadrature_reference,
     time_call,
     write_json,
@@ -65,11 +67,10 @@ def timing_row(variant: str, devices: str, n: int, t: dict, err: float) -> dict:
     }
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
+def main(quick: bool = False) -> None:
     info = machine_info()
     t0 = time.perf_counter()
-    n = 1000 if args.quick else 10_000
+    n = 1000 if quick else 10_000
     model = Model()
     heights = np.linspace(0.1, 1.6, n)
     _, h, b, _ = broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
@@ -80,7 +81,7 @@ def main():
     for name, one in (
         (
             "ode, recommended tsit5 1e-7/1e-10",
-            lambda hh, bb: impact_ode(hh, bb, model, RECOMMENDED).contact_time_s,
+            lambda hh, bb: impact_one(hh, bb, model, RECOMMENDED).contact_time_s,
         ),
         (
             "quadrature, n_nodes=10",
@@ -111,9 +112,9 @@ def main():
                 f"{n / t['min_s']:.0f}/s)  first {t['first_s']:.1f} s  err {err:.1e}",
                 flush=True,
             )
-    rows += engine_rows(args.quick, devices[:2])
+    rows += engine_rows(quick, devices[:2])
     write_json(
-        "multicore" + ("_quick" if args.quick else ""),
+        "multicore" + ("_quick" if quick else ""),
         {
             "machine": finish_machine_info(info),
             "devices": [str(d) for d in devices],
@@ -130,8 +131,7 @@ ZENER = Model(
 
 def engine_rows(quick: bool, devices) -> list[dict]:
     """``simulate``'s engine: one call of the whole batch, chunks on one device, on two."""
-    from rbjax.solve.engine import Rows, fast_program, run_rows
-    from rbjax.solve.inputs import as_arrays
+    from rbjax.solve import EvaluationSpec, evaluate, impact_angle, impact_quadrature_batch
 
     rows = []
     for name, path, model, n in (
@@ -141,19 +141,23 @@ def engine_rows(quick: bool, devices) -> list[dict]:
     ):
         n = n // (4 if path == "ode" else 10) if quick else n
         heights = np.linspace(0.1, 1.6, n)
-        inputs = as_arrays((heights, rbjax.JIS_RUBBER_BALL, model))
-        batch = Rows.of(*inputs)
+        _, h, b, m = broadcast_inputs(heights, rbjax.JIS_RUBBER_BALL, model)
         if path == "ode":
-            _, h, b, m = broadcast_inputs(*inputs)
             whole = lambda: impact_batch(h, b, m, rbjax.Solver()).contact_time_s  # noqa: E731
+        elif path == "quadrature":
+            whole = lambda: impact_quadrature_batch(h, b, m).contact_time_s  # noqa: E731
         else:
-            whole = lambda: fast_program(path, *inputs)[1].contact_time_s  # noqa: E731
+            one_call = jax.jit(jax.vmap(impact_angle))
+            whole = lambda: one_call(h, b, m).contact_time_s  # noqa: E731
+
+        def chunks(devs, path=path, heights=heights, model=model):
+            spec = EvaluationSpec(path=path, devices=devs)
+            return evaluate({"height_m": heights}, model=model, evaluation=spec)["contact_time_s"]
+
         variants = {
             "1 device, one call (before)": whole,
-            "1 device, chunks": lambda: run_rows(path, batch, rbjax.Solver(), devices[:1]),
-            f"{len(devices)} devices, chunks": lambda: run_rows(
-                path, batch, rbjax.Solver(), devices
-            ),
+            "1 device, chunks": lambda: chunks(devices[:1]),
+            f"{len(devices)} devices, chunks": lambda: chunks(devices),
         }
         results = {}
         for label, fn in variants.items():
@@ -179,7 +183,3 @@ def engine_rows(quick: bool, devices) -> list[dict]:
                 flush=True,
             )
     return rows
-
-
-if __name__ == "__main__":
-    main()

@@ -14,7 +14,6 @@ the bundled recordings (its parameters).
 
 from __future__ import annotations
 
-import json
 import os
 import subprocess
 import sys
@@ -22,10 +21,12 @@ import tempfile
 
 import numpy as np
 
+from _common import write_json
+
 HEIGHTS_M = [0.05, 0.2, 0.5, 1.0, 1.6]
 
 
-def compute() -> dict[str, np.ndarray]:
+def compute(quick: bool = False) -> dict[str, np.ndarray]:
     import jax
     import jax.numpy as jnp
 
@@ -67,6 +68,8 @@ def compute() -> dict[str, np.ndarray]:
     out["ode|grad (jacfwd)"] = np.asarray(
         jax.jacfwd(lambda E: tc(E, solver=fwd, **zener))(jnp.asarray(1.6e6))
     )
+    if quick:
+        return out
     res = fit(examples_dir(), "hunt-crossley", blocked_force="momentum", progress=False)
     for name, p in res.parameters.items():
         if not p.fixed:
@@ -75,20 +78,22 @@ def compute() -> dict[str, np.ndarray]:
     return out
 
 
-def _run(level: str, path: str) -> None:
+def _run(level: str, path: str, quick: bool) -> None:
     env = dict(os.environ, JAX_DISABLE_MOST_OPTIMIZATIONS=level, RBJAX_CACHE_DIR="")
     env.pop("JAX_COMPILATION_CACHE_DIR", None)
-    subprocess.run([sys.executable, __file__, "--compute", path], env=env, check=True)
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    code = (
+        f"import sys; sys.path[:0] = [{here!r}]; import numpy as np; "
+        f"from parts.opt_levels import compute; np.savez({path!r}, **compute({quick!r}))"
+    )
+    subprocess.run([sys.executable, "-c", code], env=env, check=True)
 
 
-def main() -> None:
-    if sys.argv[1:2] == ["--compute"]:
-        np.savez(sys.argv[2], **compute())
-        return
+def main(quick: bool = False) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         paths = {lv: os.path.join(tmp, f"level{lv}.npz") for lv in ("0", "1")}
         for level, path in paths.items():
-            _run(level, path)
+            _run(level, path, quick)
         opt, low = (np.load(paths[lv]) for lv in ("0", "1"))
         rows = {}
         print(
@@ -107,8 +112,5 @@ def main() -> None:
             path, output = key.split("|")
             rows[key] = (float(np.max(diff)), rel)
             print(f"| {path} | {output} | {rows[key][0]:.2g} | {rel:.2g} |")
-        print(json.dumps(rows))
-
-
-if __name__ == "__main__":
-    main()
+        name = "opt_levels" + ("_quick" if quick else "")
+        print(f"wrote {write_json(name, {'max_abs_rel': rows})}")

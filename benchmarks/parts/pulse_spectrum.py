@@ -35,7 +35,7 @@ def pulses(n: int, t_min_s: float, t_max_s: float, batch: int) -> np.ndarray:
     )
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     info = machine_info()
     padded_fn = jax.jit(
         lambda x: lfe_octave_dB(jnp.pad(x, ((0, 0), (0, N_RECORD - x.shape[-1]))), RATE_HZ)
@@ -90,7 +90,3 @@ def main() -> None:
         f"{m['loadavg_start']} → {m['loadavg_end']}"
     )
     print(f"wrote {write_json('pulse_spectrum', out)}")
-
-
-if __name__ == "__main__":
-    main()

@@ -12,19 +12,12 @@ and of the 44.1 kHz force history (max |ΔF| over the peak force).
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
-from pathlib import Path
-
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
+import rbjax
 
-import rbjax  # noqa: E402
-
-from scipy_reference import reference_impact  # noqa: E402
+from _common import write_json
+from scipy_reference import reference_impact  # tests/ is on sys.path via _common
 
 HEIGHTS_M = np.round(np.arange(1, 17) * 0.1, 1)
 RATE_Hz = 44_100.0
@@ -68,12 +61,7 @@ def measure() -> list[dict]:
     return rows
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    ap.add_argument("--out", default=str(HERE / "results" / "reference_agreement.json"))
-    args = ap.parse_args()
+def main(quick: bool = False) -> None:
     rows = measure()
     print(
         "| model | gas | blocked force | contact time | peak force | restitution | history (of "
@@ -85,8 +73,5 @@ def main() -> None:
             f"| {r['model']} | {r['gas']} | {r['blocked_force']} | {r['contact_time_s']:.1e} | "
             f"{r['peak_force_N']:.1e} | {r['restitution']:.1e} | {r['history']:.1e} |"
         )
-    Path(args.out).write_text(json.dumps({"heights_m": HEIGHTS_M.tolist(), "rows": rows}, indent=1))
-
-
-if __name__ == "__main__":
-    main()
+    name = "reference_agreement" + ("_quick" if quick else "")
+    print(f"wrote {write_json(name, {'heights_m': HEIGHTS_M.tolist(), 'rows': rows})}")

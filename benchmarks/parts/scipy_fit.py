@@ -27,7 +27,7 @@ import scipy.signal
 
 from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from scipy_ball_mode_reference import reference_ball_mode_impact  # noqa: E402
 from scipy_reference import reference_impact  # noqa: E402
 
@@ -126,16 +126,3 @@ def cost_at(residuals, names, params: dict, shifts) -> float:
 
 
 MODELS_BY_NAMES = {m[0]: m for m in MODELS.values()}
-
-
-if __name__ == "__main__":
-    from rbjax.data import examples_dir
-    from rbjax.fit import prepare_data
-
-    data = prepare_data(examples_dir())
-    for name in sys.argv[1:] or ["kelvin-voigt"]:
-        out = fit(name, data)
-        print(
-            f"{name}: {out['time_s']:.1f} s, {out['evaluations']} evaluations, rms "
-            f"{out['rms_N']:.2f} N, cost {out['cost']:.6g}, {out['parameters']}"
-        )

@@ -35,7 +35,7 @@ from rbjax.fit.problem import STEPS_PER_ROUND
 from rbjax.fit.program import run_lanes
 from rbjax.studies import Parallel, select_model
 
-from _common import finish_machine_info, machine_info, parse_args, table, write_json
+from _common import finish_machine_info, machine_info, table, write_json
 
 QUICK = ["hunt-crossley", "hunt-crossley+ball-mode"]
 #: The per-step cost of the fit program on an H100 (issue measurements of `fc0325d`: ~110 ms a
@@ -74,12 +74,11 @@ def depth(calls) -> int:
     return sum(max(1, *c["steps"][: c["asked"]]) for c in calls)
 
 
-def main() -> None:
-    args = parse_args(__doc__.splitlines()[0])
+def main(quick: bool = False) -> None:
     info = machine_info()
     data = prepare_data(examples_dir())
     kwargs = {"progress": False}
-    if args.quick:
+    if quick:
         kwargs["candidates"] = QUICK
         kwargs["blocked_forces"] = ("momentum",)
 
@@ -165,7 +164,3 @@ def main() -> None:
         "(an estimate, not a measurement)"
     )
     write_json("selection_lanes", {"machine": finish_machine_info(info), **report})
-
-
-if __name__ == "__main__":
-    main()

@@ -24,9 +24,8 @@ import tempfile
 import time
 
 from rbjax.data import examples_dir
-from rbjax.studies.executors import usable_cores
 
-from _common import RESULTS_DIR, finish_machine_info, machine_info
+from _common import RESULTS_DIR, finish_machine_info, machine_info, usable_cores
 
 QUICK = ["--candidates", "hunt-crossley,hunt-crossley+ball-mode", "--blocked-force", "momentum"]
 
@@ -64,7 +63,7 @@ def largest_relative_difference(a: dict, b: dict) -> float:
     return worst
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     quick = "--quick" in sys.argv
     data = str(examples_dir())
     extra = QUICK if quick else []
@@ -133,7 +132,3 @@ def main() -> None:
         json.dumps({"machine": finish_machine_info(info), "quick": quick, "rows": rows}, indent=2)
     )
     print(f"wrote {path}")
-
-
-if __name__ == "__main__":
-    main()

@@ -32,7 +32,6 @@ Prints tables, writes ``results/sensitivity_study.json`` and
 
 from __future__ import annotations
 
-import argparse
 import copy
 import json
 import math
@@ -106,7 +105,7 @@ def _split_run() -> dict:
     """The bundled study in this process: time in SALib's analysis and in the rest."""
     from SALib.analyze import sobol as salib_sobol
 
-    from rbjax.studies.sweep import run_sweep
+    from rbjax.studies import run_sweep
 
     original, spent = salib_sobol.analyze, [0.0]
 
@@ -420,33 +419,20 @@ def _toml(config: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="a smoke run: small designs (minutes)")
-    p.add_argument(
-        "--part",
-        action="append",
-        choices=("timing", "convergence", "dgsm", "million"),
-        help="run only this part (repeatable)",
-    )
-    args = p.parse_args()
-    parts = args.part or ["timing", "convergence", "dgsm"]
+def main(quick: bool = False, parts: tuple[str, ...] = ("timing", "convergence", "dgsm")) -> None:
+    """``parts``: any of timing, convergence, dgsm and million (the last only when asked)."""
     info = machine_info()
-    name = "sensitivity_study" + ("_quick" if args.quick else "")
+    name = "sensitivity_study" + ("_quick" if quick else "")
     out = read_json(name) or {}
     if "timing" in parts:
         part_timing(out)
     if "convergence" in parts:
-        part_convergence(out, args.quick)
+        part_convergence(out, quick)
     if "dgsm" in parts:
-        part_dgsm(out, args.quick)
+        part_dgsm(out, quick)
     if "million" in parts:
         part_million(out)
     out.setdefault("machine", {})
     for part in parts:
         out["machine"][part] = finish_machine_info(dict(info))
     print(f"wrote {write_json(name, out)}")
-
-
-if __name__ == "__main__":
-    main()

@@ -12,14 +12,13 @@ Writes ``results/summary_fit.json``.
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
 import numpy as np
 
 import rbjax
-from rbjax.fit.layout import model_from_name
+from rbjax.fit import model_from_name
 from rbjax.fit.summary import fit_summary
 from rbjax.fit.summary_table import summary_table
 
@@ -60,10 +59,8 @@ def truth_rows(name, truth, rng):
     return rows
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--draws", type=int, default=10)
-    args = ap.parse_args()
+def main(quick: bool = False) -> None:
+    draws = 2 if quick else 10
     info = machine_info()
     out = {}
     print(
@@ -73,7 +70,7 @@ def main() -> None:
     for name, truth in CASES.items():
         z = {k: [] for k in truth}
         times = []
-        for seed in range(args.draws):
+        for seed in range(draws):
             rng = np.random.default_rng(seed)
             table = summary_table(truth_rows(name, truth, rng), source=f"{name} truth, seed {seed}")
             t0 = time.perf_counter()
@@ -99,10 +96,6 @@ def main() -> None:
                 f"{np.median(np.abs(z[k])):>10.2f}  {times[0]:8.1f} s  {warm:8.2f} s"
             )
     path = write_json(
-        "summary_fit", {"machine": finish_machine_info(info), "draws": args.draws, "cases": out}
+        "summary_fit", {"machine": finish_machine_info(info), "draws": draws, "cases": out}
     )
     print(f"wrote {path}")
-
-
-if __name__ == "__main__":
-    main()

@@ -24,7 +24,7 @@ import time
 import tomllib
 from pathlib import Path
 
-from _common import REPO, finish_machine_info, machine_info, parse_args, table, write_json
+from _common import REPO, finish_machine_info, machine_info, table, write_json
 
 SOBOL_TOML = REPO / "src" / "rbjax" / "examples" / "sweeps" / "sobol.toml"
 WORKERS = (1, 2)
@@ -72,14 +72,13 @@ def _largest_difference(a: dict, b: dict) -> float:
     return worst
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
+def main(quick: bool = False) -> None:
     info = machine_info()
     t0 = time.perf_counter()
     config = tomllib.loads(SOBOL_TOML.read_text())
     with tempfile.TemporaryDirectory(prefix="rbjax-sweep-parallel-") as tmp:
         path = SOBOL_TOML
-        if args.quick:
+        if quick:
             path = Path(tmp) / "sobol-quick.toml"
             path.write_text(SOBOL_TOML.read_text().replace("n_base = 16384", "n_base = 1024"))
             config["sobol"]["n_base"] = 1024
@@ -128,7 +127,7 @@ def main():
     for run in runs:
         run.pop("summary")
     path = write_json(
-        "sweep_parallel" + ("_quick" if args.quick else ""),
+        "sweep_parallel" + ("_quick" if quick else ""),
         {
             "machine": finish_machine_info(info),
             "config": str(SOBOL_TOML.relative_to(REPO)),
@@ -138,7 +137,3 @@ def main():
         },
     )
     print(f"wrote {path}")
-
-
-if __name__ == "__main__":
-    main()

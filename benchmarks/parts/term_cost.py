@@ -32,7 +32,7 @@ CASES = {
 }
 
 
-def main() -> None:
+def main(quick: bool = False) -> None:
     info = machine_info()
     rows, out = [], {}
     for name, options in CASES.items():
@@ -78,7 +78,3 @@ def main() -> None:
     )
     out["machine"] = finish_machine_info(info)
     print(f"wrote {write_json('term_cost', out)}")
-
-
-if __name__ == "__main__":
-    main()

@@ -40,18 +40,16 @@ import numpy as np
 
 import rbjax
 from rbjax import Model
-from rbjax.solve import impact_quadrature, impact_quadrature_batch
-from rbjax.solve.ode import impact_batch, impact_ode
-from rbjax.solve.simulate import broadcast_inputs
-from rbjax.solve.vector_field import COMPRESSION_FIELD
+from rbjax.solve import impact_batch, impact_quadrature, impact_quadrature_batch
 from rbjax.spectrum import OCTAVE_BANDS, band_edges_Hz, lfe_dB, lfe_octave_dB
 
 from _common import (
     RESULTS_DIR,
+    broadcast_inputs,
     finish_machine_info,
     fmt,
+    impact_one,
     machine_info,
-    parse_args,
     quadrature_reference,
     scipy_impact_lean,
     time_call,
@@ -364,7 +362,7 @@ def jacobian_workload(rows, sizes):
     def one_ode(theta, h, solver):
         ball = BALL.replace(youngs_Pa=theta[0], poisson=theta[1])
         model = eqx.tree_at(lambda m: m.damping[0].damping_Ns_per_m, model0, theta[2])
-        out = impact_ode(h, ball, model, solver)
+        out = impact_one(h, ball, model, solver)
         return jnp.stack([out.contact_time_s, out.peak_force_N, out.restitution])
 
     def one_quad(theta, h):
@@ -419,7 +417,7 @@ def compile_breakdown(n=1000, quick=False):
     h, b, m = flat(n)
     variants = (("default Solver()", DEFAULT), ("recommended, adjoint=forward", RECOMMENDED_FWD))
     for name, solver in variants[:1] if quick else variants:
-        fn = jax.jit(jax.vmap(lambda hh, bb: impact_ode(hh, bb, Model(), solver)))
+        fn = jax.jit(jax.vmap(lambda hh, bb: impact_one(hh, bb, Model(), solver)))
         t0 = time.perf_counter()
         lowered = fn.lower(h, b)
         t1 = time.perf_counter()
@@ -474,7 +472,7 @@ def persistent_cache_probe(quick):
                 [sys.executable, "-c", code, d],
                 capture_output=True,
                 text=True,
-                cwd=os.path.dirname(__file__),
+                cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
             )
             try:
                 out[label] = float(res.stdout.strip().splitlines()[-1])
@@ -485,35 +483,10 @@ def persistent_cache_probe(quick):
     return out
 
 
-def vector_field_floor(n=10_000):
-    """Seconds per vector-field evaluation per impact (vmapped, 200 evaluations in a fori_loop),
-    with and without the gas force (its (V0/V)^γ is a float64 pow): the arithmetic a Runge–Kutta
-    stage cannot avoid (tsit5: 6 evaluations per step; the quadrature: one force per node)."""
-    out = {}
-    y = jnp.stack([jnp.full(n, 0.01), jnp.full(n, 1.0)], axis=-1)
-    for gas in ("adiabatic", "none"):
-        h, b, m = flat(n, Model(gas=gas))
-
-        @jax.jit
-        def f(y, b, m):
-            def body(_, yy):
-                return yy + 1e-9 * jax.vmap(
-                    lambda yi, bi, mi: COMPRESSION_FIELD(0.0, yi, (bi, mi))
-                )(yy, b, m)
-
-            return jax.lax.fori_loop(0, 200, body, y)
-
-        t = time_call(lambda: f(y, b, m), min_repeats=5)
-        out[gas] = t["min_s"] / (200 * n)
-    return out
-
-
 # ------------------------------------------------------------------------------------------------
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
-    quick = args.quick
+def main(quick: bool = False) -> None:
     info = machine_info()
     t_start = time.perf_counter()
     rows: list[dict] = []
@@ -527,11 +500,6 @@ def main():
     bucketing_workload(rows, quick)
     history_workload(rows, sizes_b)
     jacobian_workload(rows, sizes_c)
-    floor_s = vector_field_floor(1000 if quick else 10_000)
-    print(
-        "one vector-field evaluation (ns per impact, min of repeats):",
-        {k: round(v * 1e9, 1) for k, v in floor_s.items()},
-    )
     cache = {} if quick else persistent_cache_probe(quick)
 
     for r in rows:
@@ -542,7 +510,6 @@ def main():
         "quick": quick,
         "rows": rows,
         "compile_breakdown": breakdown,
-        "vector_field_eval_s_per_impact": floor_s,
         "persistent_cache_first_call_s": cache,
         "scipy_per_impact_s": scipy_row["per_impact_s"],
         "recommended_solver": repr(RECOMMENDED),
@@ -593,7 +560,3 @@ def plot(rows, scipy_row, quick):
     RESULTS_DIR.mkdir(exist_ok=True)
     fig.savefig(RESULTS_DIR / ("throughput" + ("_quick" if quick else "") + ".png"), dpi=110)
     plt.close(fig)
-
-
-if __name__ == "__main__":
-    main()

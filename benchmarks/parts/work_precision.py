@@ -38,16 +38,15 @@ from rbjax.solve import (
     impact_quadrature_batch,
     trajectory_batch,
 )
-from rbjax.solve.simulate import broadcast_inputs
 from rbjax.spectrum import lfe_octave_dB
 
 from _common import (
     RESULTS_DIR,
     block,
+    broadcast_inputs,
     finish_machine_info,
     fmt,
     machine_info,
-    parse_args,
     quadrature_reference,
     sweep_solver,
     table,
@@ -78,7 +77,7 @@ def configs(quick: bool):
 
 
 def status_counts(status):
-    from rbjax.solve.outcome import STATUS_NAMES
+    from rbjax import STATUS_NAMES
 
     names, counts = np.unique(np.asarray(status), return_counts=True)
     return {STATUS_NAMES[int(k)]: int(c) for k, c in zip(names, counts)}
@@ -97,9 +96,7 @@ def lfe_of(force_window):
     return np.asarray(lfe_octave_dB(padded, RATE_HZ))
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0])
-    quick = args.quick
+def main(quick: bool = False) -> None:
     info = machine_info()
     t_start = time.perf_counter()
     ball = rbjax.JIS_RUBBER_BALL
@@ -444,7 +441,3 @@ def plot(rows, floor, quick):
     RESULTS_DIR.mkdir(exist_ok=True)
     fig.savefig(RESULTS_DIR / ("work_precision" + ("_quick" if quick else "") + ".png"), dpi=110)
     plt.close(fig)
-
-
-if __name__ == "__main__":
-    main()

@@ -1,0 +1,31 @@
+"""Accuracy: how close rbjax's outputs are to independent references, where each solver fails,
+and what XLA's optimisation level changes.
+
+    .venv/bin/python benchmarks/accuracy.py [--quick] [--only SECTION] [--list]
+
+Sections (each writes ``results/<section>.json``; the figures are in RESULTS.md, "Accuracy"):
+
+* ``reference_agreement``: the default settings against the scipy reference, every model;
+* ``work_precision``: error against cost per diffrax method and tolerance, and the quadrature;
+* ``stability_map``: where each method fails over the parameter space;
+* ``opt_levels``: the difference XLA's optimisation level makes, per path.
+"""
+
+from __future__ import annotations
+
+from _suite import Section, run_suite
+
+SECTIONS = [
+    Section("reference_agreement", "defaults against the scipy reference"),
+    Section("work_precision", "error against cost per method"),
+    Section("stability_map", "where each method fails"),
+    Section("opt_levels", "XLA optimisation level: output differences"),
+]
+
+
+def main(argv=None) -> dict:
+    return run_suite("accuracy", __doc__, SECTIONS, argv)
+
+
+if __name__ == "__main__":
+    main()
