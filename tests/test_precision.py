@@ -39,7 +39,7 @@ SCRIPT = textwrap.dedent(
     jax.config.update("jax_enable_x64", False)
     calls = {
         "simulate": lambda: rbjax.simulate(1.0),
-        "simulate(method='ode')": lambda: rbjax.simulate(1.0, method="ode"),
+        "simulate(method='ode')": lambda: rbjax.simulate(1.0, path="ode"),
         "trajectory": lambda: rbjax.trajectory(1.0, np.array([0.0, 1e-3])),
         "energy_balance": lambda: rbjax.energy_balance(1.0),
         "ImpactResult.history": lambda: result.history(),

@@ -149,12 +149,12 @@ def test_json_has_the_documented_keys(json_rows):
         "lfe_third_octave_dB",
         "conformance",
         "status",
-        "method",
+        "path",
     }
     for row, h in zip(json_rows, HEIGHTS_M):
         assert set(row) == keys
         assert row["height_m"] == h and row["status"] == "ok"
-        assert row["method"] == "quadrature"  # the default --method auto, elastic model
+        assert row["path"] == "quadrature"  # the default --path auto, elastic model
         assert tuple(row["lfe_octave_dB"]) == OCTAVES
         assert tuple(row["lfe_third_octave_dB"]) == THIRDS
         assert {"passed", "clause", "items"} <= set(row["conformance"])
@@ -181,14 +181,14 @@ def test_json_agrees_with_simulate(json_rows, direct):
 
 
 def test_method_option_runs_the_ode_and_agrees(json_rows):
-    code, out, err = run_cli([*ARGS, "--json", "--method", "ode"])
+    code, out, err = run_cli([*ARGS, "--json", "--path", "ode"])
     assert code == 0, err
     rows = json.loads(out)
-    assert [r["method"] for r in rows] == ["ode"] * len(HEIGHTS_M)
+    assert [r["path"] for r in rows] == ["ode"] * len(HEIGHTS_M)
     for name in ("contact_time_s", "peak_force_N", "restitution"):
         np.testing.assert_allclose([r[name] for r in rows], [r[name] for r in json_rows], rtol=1e-8)
     code, out, err = run_cli(["simulate", "--help"])
-    assert code == 0 and "--method {auto,ode,quadrature,angle}" in out
+    assert code == 0 and "--path {auto,ode,quadrature,angle}" in out
 
 
 def test_json_agrees_with_the_scipy_reference(json_rows):

@@ -21,7 +21,7 @@ import pytest
 
 from rbjax.data import examples_dir
 from rbjax.fit import load_data
-from rbjax.studies.hold_out_comparison import held_out_comparison
+from rbjax.studies.selection.hold_out_comparison import held_out_comparison
 
 FIT_HEIGHTS_M = (0.1, 0.4, 1.0, 1.6)
 #: Octave bands 31.5–500 Hz: those the standard's tolerance table covers.

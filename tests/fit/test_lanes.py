@@ -19,7 +19,7 @@ import pytest
 
 from rbjax.fit import lanes as lanes_module
 from rbjax.fit.lanes import BATCH_SIZES, LaneExecutor, current_batcher, padded_size
-from rbjax.studies.executors import Parallel, Task, TaskError, run_tasks
+from rbjax.studies.parallel.executors import Parallel, Task, TaskError, run_tasks
 
 
 def test_a_batch_runs_at_the_next_of_a_few_sizes():

@@ -145,7 +145,7 @@ def test_sampled_and_ode_paths_of_the_fit_agree():
     """The fit's force on both paths (docs/guides/fitting.md, the sampled
     path: "and with the fit's diffrax path to the same", ~2e-9 of the peak force with the ball
     mode, asserted at 10×): the sampled path and the diffrax ODE with its events
-    (``rbjax.fit.program.sample_force``, the ``method="ode"`` prediction) at the records'
+    (``rbjax.fit.program.sample_force``, the ``path="ode"`` prediction) at the records'
     samples, onsets off the grid."""
     model, _ = CASES["hunt-crossley+ball-mode/momentum"]
     t = np.arange(N) / RATE_HZ
@@ -242,9 +242,9 @@ def test_path_choice_and_its_reason():
     assert fit_path("ode", elastic, None) == ("ode", None)
     path, why = fit_path("auto", floor, None)
     assert path == "ode" and "floor" in why and "moves" in why
-    with pytest.raises(ValueError, match="method='samples' cannot fit this model: the floor"):
+    with pytest.raises(ValueError, match="path='samples' cannot fit this model: the floor"):
         fit_path("samples", floor, None)
-    with pytest.raises(ValueError, match="method='rk4'"):
+    with pytest.raises(ValueError, match="path='rk4'"):
         fit_path("rk4", elastic, None)
 
 

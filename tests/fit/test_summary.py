@@ -8,7 +8,7 @@ import rbjax
 from rbjax.fit.layout import model_from_name
 from rbjax.fit.summary import fit_summary
 from rbjax.fit.summary_table import SummaryTableError, read_summary, summary_table
-from rbjax.studies.summary_selection import select_summary
+from rbjax.studies.selection.summary import select_summary
 
 EXAMPLE = "src/rbjax/examples/paper-measured-ball/summary.csv"
 HEIGHTS = np.array([0.1, 0.2, 0.4, 0.8, 1.6])

@@ -45,8 +45,8 @@ def _rel(a, b):
 @pytest.mark.parametrize("name", list(MODELS))
 def test_agrees_with_scipy_reference(name):
     kw = MODELS[name]
-    res = rbjax.simulate(HEIGHTS, BALL, method="angle", **kw)
-    assert res.method == "angle"
+    res = rbjax.simulate(HEIGHTS, BALL, path="angle", **kw)
+    assert res.path == "angle"
     assert list(res.status_name) == ["ok"] * HEIGHTS.size
     for i, h in enumerate(HEIGHTS):
         ref = reference_impact(h, BALL, **kw)
@@ -63,11 +63,11 @@ def test_error_estimate_flags_what_fixed_steps_cannot_resolve_and_simulate_falls
         HEIGHTS
     )
     assert np.all(np.asarray(estimate) > ERROR_TOLERANCE)
-    only = rbjax.simulate(HEIGHTS, BALL, method="angle", **kw)
+    only = rbjax.simulate(HEIGHTS, BALL, path="angle", **kw)
     assert list(only.status_name) == ["solver_failed"] * HEIGHTS.size
     assert np.all(np.isnan(np.asarray(only.contact_time_s)))
     auto = rbjax.simulate(HEIGHTS, BALL, **kw)
-    assert auto.method == "angle+ode" and list(auto.status_name) == ["ok"] * HEIGHTS.size
+    assert auto.path == "angle+ode" and list(auto.status_name) == ["ok"] * HEIGHTS.size
     for i, h in enumerate(HEIGHTS):
         ref = reference_impact(h, BALL, **kw)
         assert _rel(auto.contact_time_s[i], ref.contact_time_s) <= 1e-6
@@ -75,8 +75,8 @@ def test_error_estimate_flags_what_fixed_steps_cannot_resolve_and_simulate_falls
 
 def test_limits_are_reported_like_the_ode():
     kw = {"damping": rbjax.HuntCrossley(alpha_s_per_m=0.05), "max_deflection_ratio": 0.5}
-    angle = rbjax.simulate(HEIGHTS, BALL, method="angle", **kw)
-    ode = rbjax.simulate(HEIGHTS, BALL, method="ode", **kw)
+    angle = rbjax.simulate(HEIGHTS, BALL, path="angle", **kw)
+    ode = rbjax.simulate(HEIGHTS, BALL, path="ode", **kw)
     assert list(angle.status_name) == list(ode.status_name)
     assert "deflection_limit" in list(angle.status_name)
     assert np.all(np.isnan(np.asarray(angle.contact_time_s)[np.asarray(angle.status) != 0]))
@@ -84,11 +84,11 @@ def test_limits_are_reported_like_the_ode():
 
 def test_models_it_cannot_solve_are_refused_by_name():
     with pytest.raises(
-        ValueError, match=r"method='angle' cannot solve this model: the floor \(dashpot\) moves"
+        ValueError, match=r"path='angle' cannot solve this model: the floor \(dashpot\) moves"
     ):
-        rbjax.simulate(1.0, floor=rbjax.Dashpot(1e5), method="angle")
-    with pytest.raises(ValueError, match="method='angle' cannot solve this model: the ball mode"):
-        rbjax.simulate(1.0, ball_mode=rbjax.BallMode(0.5, 300.0, 0.1), method="angle")
+        rbjax.simulate(1.0, floor=rbjax.Dashpot(1e5), path="angle")
+    with pytest.raises(ValueError, match="path='angle' cannot solve this model: the ball mode"):
+        rbjax.simulate(1.0, ball_mode=rbjax.BallMode(0.5, 300.0, 0.1), path="angle")
 
 
 def test_jacobian_matches_finite_differences_of_the_reference():
@@ -100,7 +100,7 @@ def test_jacobian_matches_finite_differences_of_the_reference():
             1.0,
             BALL.replace(youngs_Pa=th[0]),
             damping=rbjax.Zener(law.stiffness_ratio, th[1]),
-            method="angle",
+            path="angle",
         )
         return jax.numpy.stack([res.contact_time_s, res.peak_force_N, res.restitution])
 

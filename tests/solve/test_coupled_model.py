@@ -89,10 +89,10 @@ def test_energy_balance_refuses_a_ball_mode():
 
 def test_quadrature_refuses_coupled_models_with_the_reason():
     with pytest.raises(ValueError, match="floor"):
-        rbjax.simulate(1.0, floor=rbjax.Dashpot(1e4), method="quadrature")
+        rbjax.simulate(1.0, floor=rbjax.Dashpot(1e4), path="quadrature")
     with pytest.raises(ValueError, match="ball mode"):
-        rbjax.simulate(1.0, ball_mode=rbjax.BallMode(5.0, 400.0, 0.1), method="quadrature")
-    assert rbjax.simulate(1.0, floor=rbjax.Dashpot(1e4)).method == "ode"
+        rbjax.simulate(1.0, ball_mode=rbjax.BallMode(5.0, 400.0, 0.1), path="quadrature")
+    assert rbjax.simulate(1.0, floor=rbjax.Dashpot(1e4)).path == "ode"
 
 
 def test_parameter_layer_sees_the_new_terms():

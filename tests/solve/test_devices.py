@@ -58,12 +58,12 @@ def test_device_map_pads_the_last_chunk_and_trims_the_padding():
 def test_a_large_batch_in_chunks_agrees_with_one_call():
     # 20 000 impacts: three chunks of 6784 (the last one padded) against one call of them all
     # (XLA may round a row differently in a loop of another length: ~1e-16, not bit for bit)
-    from rbjax.solve.engine import fast_program
     from rbjax.solve.inputs import as_arrays
+    from rbjax.solve.path_runner import fast_program
 
     heights = np.linspace(0.05, 12.0, 20_000)
     chunked = rbjax.simulate(heights)
-    assert chunked.method == "quadrature"
+    assert chunked.path == "quadrature"
     _, whole = fast_program(
         "quadrature", *as_arrays((heights, rbjax.JIS_RUBBER_BALL, rbjax.Model()))
     )
@@ -109,10 +109,10 @@ def _cases():
 def _run(name):
     kind, heights, model, option, _ = _cases()[name]
     if kind == "simulate":
-        r = rbjax.simulate(heights, model=model, method=option)
+        r = rbjax.simulate(heights, model=model, path=option)
         fields = ("contact_time_s", "peak_force_N", "peak_time_s", "restitution")
         fields += ("max_deflection_m", "status", "num_steps")
-        out = {f: np.asarray(getattr(r, f)) for f in fields} | {"method": np.array(r.method)}
+        out = {f: np.asarray(getattr(r, f)) for f in fields} | {"path": np.array(r.path)}
     else:
         youngs = np.linspace(1.3e6, 1.9e6, heights.size)
         out = evaluate({"height_m": heights, "youngs_Pa": youngs}, model=model, lfe=option)
@@ -126,7 +126,7 @@ SCRIPT = textwrap.dedent(
     sys.path.insert(0, sys.argv[2])
     import test_devices as t
     from rbjax.solve.devices import cached_jit
-    from rbjax.solve.engine import Rows, rows_program
+    from rbjax.solve.path_runner import Rows, rows_program
     from rbjax.solve.inputs import as_arrays
     import rbjax
 
@@ -179,7 +179,7 @@ def test_two_cpu_devices_equal_one_device_bit_for_bit(tmp_path):
     assert sorted(one) == sorted(two)
     for key in one:
         np.testing.assert_array_equal(two[key], one[key], err_msg=key)  # NaN where NaN
-    assert str(one["angle+ode.method"]) == "angle+ode"
+    assert str(one["angle+ode.path"]) == "angle+ode"
     status = one["angle+ode.status"]
     assert np.any(status == rbjax.STATUS_CODES["deflection_limit"]) and np.any(status == 0)
     assert np.all(np.isnan(one["angle+ode.contact_time_s"][status != 0]))

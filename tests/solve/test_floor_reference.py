@@ -121,7 +121,7 @@ def dashpot_results() -> dict:
     floor = rbjax.Dashpot(np.array([r[2] for r in rows]))
     weights = np.array([r[3] for r in rows])
     model = rbjax.Model(momentum_flux_weight=weights, floor=floor)
-    out = simulate_model(heights, ball, model, rbjax.Solver(), method="ode")
+    out = simulate_model(heights, ball, model, rbjax.Solver(), path="ode")
     assert np.all(np.asarray(out.status) == 0)
     return {
         r[0]: {q: float(getattr(out, q)[i]) for q in (*QUANTITIES, "max_deflection_m")}
@@ -158,7 +158,7 @@ def test_dashpot_matches_reference(z, bf):
 @functools.cache
 def stiff_results():
     model = rbjax.Model(momentum_flux_weight=np.array([0.0, 0.0, 1.0, 1.0]), floor=STIFF)
-    out = simulate_model(np.array([*HEIGHTS, *HEIGHTS]), BALL, model, rbjax.Solver(), method="ode")
+    out = simulate_model(np.array([*HEIGHTS, *HEIGHTS]), BALL, model, rbjax.Solver(), path="ode")
     energy = rbjax.energy_balance(np.array([*HEIGHTS, *HEIGHTS]), BALL, model)
     return out, energy
 
@@ -286,7 +286,7 @@ def test_many_mode_plate_approaches_infinite_plate():
         6.0, 6.6, loss_factor=0.02, drive_x_m=2.793, drive_y_m=3.541, max_frequency_Hz=1000.0, **OSB
     )
     assert plate.num_modes == 1482  # docs/guides/floors.md: "an OSB plate with 1482 modes"
-    out = rbjax.simulate(np.array(HEIGHTS), BALL, floor=plate, method="ode")
+    out = rbjax.simulate(np.array(HEIGHTS), BALL, floor=plate, path="ode")
     got = dashpot_results()
     for i, h in enumerate(HEIGHTS):
         ref = reference(h, ("dashpot", PLATE_Z))
@@ -342,7 +342,7 @@ def test_contact_time_gradients():
 
     def contact_time(z, e):
         return rbjax.simulate(
-            1.0, BALL.replace(youngs_Pa=e), floor=rbjax.Dashpot(z), method="ode"
+            1.0, BALL.replace(youngs_Pa=e), floor=rbjax.Dashpot(z), path="ode"
         ).contact_time_s
 
     def reference_fd(z_scale, e_scale):

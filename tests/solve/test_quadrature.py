@@ -315,6 +315,6 @@ def test_too_coarse_a_rule_near_the_mass_singularity_is_flagged():
     # the ODE path needs no such care: adaptive steps resolve the fast passage near 2R, and
     # rbjax.simulate falls back to it for the impacts the quadrature flags
     for method in ("ode", "auto"):
-        res = rbjax.simulate(height, ball, gas="none", max_deflection_ratio=100.0, method=method)
+        res = rbjax.simulate(height, ball, gas="none", max_deflection_ratio=100.0, path=method)
         assert float(res.contact_time_s) == pytest.approx(ref["contact_time_s"], rel=1e-8)
-    assert res.method == "quadrature+ode"
+    assert res.path == "quadrature+ode"

@@ -172,8 +172,8 @@ def test_bad_input_gives_a_named_error(kwargs, name):
 
 
 def test_unknown_history_method_is_a_named_error():
-    with pytest.raises(ValueError, match="method='sampled' is not a known option"):
-        force_history(1.0, BALL, rbjax.Model(), rbjax.Solver(), method="sampled")
+    with pytest.raises(ValueError, match="path='sampled' is not a known option"):
+        force_history(1.0, BALL, rbjax.Model(), rbjax.Solver(), path="sampled")
 
 
 class _Ran(Exception):
@@ -205,5 +205,5 @@ def test_force_history_path(monkeypatch, model, solver, method, expected):
     monkeypatch.setattr(sim, "sampled_solve", ran("sampled"))  # the name simulate calls
     monkeypatch.setattr(sim, "trajectory", ran("ode"))
     with pytest.raises(_Ran) as info:
-        force_history(1.0, BALL, model, solver, contact_time_s=0.02, method=method)
+        force_history(1.0, BALL, model, solver, contact_time_s=0.02, path=method)
     assert info.value.args == (expected,)

@@ -1,9 +1,9 @@
-"""``rbjax.simulate(method=...)``: the path it picks, and the default path against independent
+"""``rbjax.simulate(path=...)``: the path it picks, and the default path against independent
 references.
 
 References: the scipy solution of Eq. 7 (tests/scipy_reference.py, DOP853 at rtol 1e-12, written
 from the paper and calling nothing of rbjax) and central finite differences of it. The default
-``method="auto"`` runs the quadrature (``rbjax.solve.quadrature``) for undamped models, the
+``path="auto"`` runs the quadrature (``rbjax.solve.quadrature``) for undamped models, the
 phase-angle integration (``rbjax.solve.angle``; its own tests: tests/test_angle.py) for damped ones
 on the rigid floor and the diffrax ODE otherwise; all must agree with the reference, and so must
 the histories.
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 import rbjax
-from rbjax.solve.method import quadrature_unsupported, resolve_method
 from rbjax.solve.options import PATHS
+from rbjax.solve.path import quadrature_unsupported, resolve_path
 
 from scipy_reference import HEIGHTS_M, reference_impact, reference_scalars
 
@@ -71,11 +71,9 @@ def test_auto_picks_the_quadrature_for_undamped_models():
     for gas, blocked in ELASTIC:
         model = rbjax.Model(gas=gas, blocked_force=blocked)
         assert quadrature_unsupported(model) is None
-        assert resolve_method("auto", model) == "quadrature"
-    assert (
-        resolve_method("auto", rbjax.Model(stiffening=rbjax.CubicStiffening(0.2))) == "quadrature"
-    )
-    assert rbjax.simulate(1.0).method == "quadrature"
+        assert resolve_path("auto", model) == "quadrature"
+    assert resolve_path("auto", rbjax.Model(stiffening=rbjax.CubicStiffening(0.2))) == "quadrature"
+    assert rbjax.simulate(1.0).path == "quadrature"
 
 
 @pytest.mark.parametrize("name", list(DAMPED))
@@ -83,31 +81,31 @@ def test_auto_picks_the_phase_angle_path_for_damped_models_on_the_rigid_floor(na
     model = rbjax.Model(damping=DAMPED[name])
     reason = quadrature_unsupported(model)
     assert reason is not None and name in reason
-    assert resolve_method("auto", model) == "angle"
+    assert resolve_path("auto", model) == "angle"
     assert (
-        resolve_method("auto", rbjax.Model(damping=DAMPED[name], floor=rbjax.Dashpot(1e5))) == "ode"
+        resolve_path("auto", rbjax.Model(damping=DAMPED[name], floor=rbjax.Dashpot(1e5))) == "ode"
     )
-    with pytest.raises(ValueError, match="method='quadrature' cannot solve this model.*damping"):
-        resolve_method("quadrature", model)
+    with pytest.raises(ValueError, match="path='quadrature' cannot solve this model.*damping"):
+        resolve_path("quadrature", model)
 
 
 def test_a_given_solver_asks_for_the_ode():
-    assert resolve_method("auto", rbjax.Model(), rbjax.Solver()) == "ode"
-    assert resolve_method("quadrature", rbjax.Model(), rbjax.Solver()) == "quadrature"
-    assert rbjax.simulate(1.0, solver=rbjax.Solver()).method == "ode"
+    assert resolve_path("auto", rbjax.Model(), rbjax.Solver()) == "ode"
+    assert resolve_path("quadrature", rbjax.Model(), rbjax.Solver()) == "quadrature"
+    assert rbjax.simulate(1.0, solver=rbjax.Solver()).path == "ode"
 
 
 def test_method_is_validated():
     assert PATHS == ("auto", "ode", "quadrature", "angle")
     with pytest.raises(
         ValueError,
-        match=r"method='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'",
+        match=r"path='rk4' is not a known option; valid: 'auto', 'ode', 'quadrature', 'angle'",
     ):
-        rbjax.simulate(1.0, method="rk4")
+        rbjax.simulate(1.0, path="rk4")
     with pytest.raises(
-        ValueError, match="method='quadrature' cannot solve this model: the damping \\(zener\\)"
+        ValueError, match="path='quadrature' cannot solve this model: the damping \\(zener\\)"
     ):
-        rbjax.simulate(1.0, damping=DAMPED["zener"], method="quadrature")
+        rbjax.simulate(1.0, damping=DAMPED["zener"], path="quadrature")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -117,7 +115,7 @@ def test_method_is_validated():
 @pytest.mark.parametrize("gas, blocked", ELASTIC, ids=["-".join(c) for c in ELASTIC])
 def test_default_elastic_agrees_with_scipy_reference(gas, blocked):
     res = rbjax.simulate(HEIGHTS, BALL, gas=gas, blocked_force=blocked)
-    assert res.method == "quadrature"
+    assert res.path == "quadrature"
     assert list(res.status_name) == ["ok"] * HEIGHTS.size
     ref = reference_scalars(HEIGHTS, BALL, gas=gas, blocked_force=blocked)
     # the bar is 1e-6 in the contact time; the quadrature holds 1e-9 in every output
@@ -131,7 +129,7 @@ def test_default_elastic_agrees_with_scipy_reference(gas, blocked):
 def test_default_damped_runs_the_phase_angle_path_and_agrees_with_scipy_reference(name):
     blocked = "momentum" if name == "zener" else "paper"
     res = rbjax.simulate(HEIGHTS_M, BALL, damping=DAMPED[name], blocked_force=blocked)
-    assert res.method == "angle"
+    assert res.path == "angle"
     ref = reference_scalars(HEIGHTS_M, BALL, damping=DAMPED[name], blocked_force=blocked)
     for field in ("contact_time_s", "peak_force_N", "restitution"):
         assert np.max(_rel(getattr(res, field), ref[field])) <= 1e-6, field
@@ -139,9 +137,9 @@ def test_default_damped_runs_the_phase_angle_path_and_agrees_with_scipy_referenc
 
 
 def test_quadrature_and_ode_agree():
-    quad = rbjax.simulate(HEIGHTS, method="quadrature")
-    ode = rbjax.simulate(HEIGHTS, method="ode")
-    assert (quad.method, ode.method) == ("quadrature", "ode")
+    quad = rbjax.simulate(HEIGHTS, path="quadrature")
+    ode = rbjax.simulate(HEIGHTS, path="ode")
+    assert (quad.path, ode.path) == ("quadrature", "ode")
     for name in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m"):
         assert np.max(_rel(getattr(quad, name), getattr(ode, name))) <= 1e-8, name
 
@@ -151,7 +149,7 @@ def test_history_after_quadrature_scalars_matches_reference():
     times. Compared with the scipy dense solution on the 44.1 kHz grid of a 50 ms record."""
     heights = np.array([0.1, 1.6])
     res = rbjax.simulate(heights, duration_s=0.05)
-    assert res.method == "quadrature"
+    assert res.path == "quadrature"
     force = np.asarray(res.force_N)
     assert force.shape == (2, 2205)
     times = res.time_s

@@ -31,7 +31,7 @@ distributed = pytest.importorskip("distributed")
 psutil = pytest.importorskip("psutil")
 
 from rbjax.cli import main  # noqa: E402
-from rbjax.studies.sweep import run_sweep  # noqa: E402
+from rbjax.studies.sweeps.sweep import run_sweep  # noqa: E402
 
 # A smoke test (tests/conftest.py: compiled with most optimisations off): one program on a cluster
 # against the same program in this process.
@@ -206,7 +206,7 @@ def test_an_address_that_does_not_answer_is_a_named_error_within_seconds(tmp_pat
 def test_a_sweep_on_the_cluster_equals_the_in_process_sweep(cluster, reference):
     result = run_sweep(CONFIG, scheduler=cluster.address)
     _assert_same(result, reference)
-    ran = cluster.client.run(lambda: "rbjax.studies.sweep" in sys.modules)
+    ran = cluster.client.run(lambda: "rbjax.studies.sweeps.sweep" in sys.modules)
     assert any(ran.values()), "no chunk ran on a Dask worker"
 
 
@@ -262,5 +262,5 @@ def test_a_two_candidate_selection_on_the_cluster_equals_the_in_process_one(clus
         assert b.label == a.label
         np.testing.assert_allclose(b.fold_errors_pct, a.fold_errors_pct, rtol=1e-12, atol=0)
         np.testing.assert_allclose(b.fit.theta, a.fit.theta, rtol=1e-12, atol=0)
-    ran = cluster.client.run(lambda: "rbjax.studies.selection" in sys.modules)
+    ran = cluster.client.run(lambda: "rbjax.studies.selection.select" in sys.modules)
     assert any(ran.values()), "no fit ran on a Dask worker"

@@ -18,7 +18,7 @@ import pytest
 from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
-from rbjax.studies.executors import Parallel, Task, TaskError, run_tasks
+from rbjax.studies.parallel.executors import Parallel, Task, TaskError, run_tasks
 
 CANDIDATES = ["paper", "kelvin-voigt"]
 

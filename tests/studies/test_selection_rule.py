@@ -1,7 +1,8 @@
-"""The model-selection rule of rbjax.studies.selection.recommend, on hand-made candidates.
+"""The model-selection rule of rbjax.studies.selection.rule.recommend, on hand-made candidates.
 
-The rule (the paired one-standard-error rule of the rbjax.studies.selection module docstring): let B
-be the candidate with the smallest mean held-out error; a candidate is within the noise of B
+The rule (the paired one-standard-error rule of the rbjax.studies.selection.select module
+docstring): let B be the candidate with the smallest mean held-out error; a candidate is
+within the noise of B
 when the mean of its fold-by-fold excess d = (its fold errors) − (B's fold errors) is at most
 the standard error of that excess, SE = std(d, ddof=1)/√folds; the recommendation is the
 candidate within the noise of B with the fewest fitted physical parameters (ties: the smaller
@@ -22,7 +23,7 @@ import math
 import numpy as np
 import pytest
 
-from rbjax.studies.selection_rule import recommend
+from rbjax.studies.selection.rule import recommend
 
 BEST_FOLDS = (5.0, 6.0, 7.0)  # mean 6 %
 UNIT_SE = np.array([-1.0, -1.0, 2.0])  # excess pattern with SE = 1 (module docstring)
@@ -37,7 +38,7 @@ class Stand:
         self.fold_errors_pct = np.asarray(folds, dtype=float)
         self.cv_error_pct = float(
             np.mean(self.fold_errors_pct)
-        )  # as rbjax.studies.selection.Candidate
+        )  # as rbjax.studies.selection.results.Candidate
 
     def __repr__(self):
         return f"Stand({self.label!r}, p={self.n_physical}, cv={self.cv_error_pct:.3g} %)"

@@ -27,9 +27,9 @@ from rbjax.cli import main
 from rbjax.solve.batch import evaluate, evaluate_jacobian, evaluation_paths, parameter_names
 from rbjax.solve.devices import device_map
 from rbjax.spectrum.levels import lfe_octave_dB
-from rbjax.studies.executors import TaskError
-from rbjax.studies.sweep import load_config, run_sweep
-from rbjax.studies.sweep_parts import part_rows
+from rbjax.studies.parallel.executors import TaskError
+from rbjax.studies.sweeps.parts import part_rows
+from rbjax.studies.sweeps.sweep import load_config, run_sweep
 
 import scipy_reference as ref
 
@@ -449,7 +449,7 @@ def test_a_sweep_in_parts_merges_to_the_single_run(tmp_path, capsys, in_process)
 
 
 def test_a_dgsm_sweep_in_parts_merges_to_the_single_run(tmp_path):
-    from rbjax.studies.sweep_parts import merge_parts, run_part
+    from rbjax.studies.sweeps.parts import merge_parts, run_part
 
     config = {  # as test_dgsm_sweep_of_the_impact_model... (the same compiled programs)
         "kind": "dgsm",
@@ -482,7 +482,7 @@ def _toml(config: dict) -> str:
 
 
 def test_a_planned_call_without_rows_or_parts_with_other_outputs_are_named(tmp_path, monkeypatch):
-    from rbjax.studies import sweep_parts
+    from rbjax.studies.sweeps import parts as sweep_parts
 
     config = {"kind": "sobol"}  # the plan is given below: nothing is evaluated
 

@@ -14,7 +14,7 @@ from rbjax import BallMode, HuntCrossley
 from rbjax.fit import all_model_names, model_from_name, parse_model_name, parse_model_terms
 from rbjax.fit.layout import fitted_parameter_names
 from rbjax.fit.problem import embed
-from rbjax.studies.candidates import candidate_pairs, shared_structure
+from rbjax.studies.selection.candidates import candidate_pairs, shared_structure
 from rbjax.terms.ball_mode import from_modal_mass
 from rbjax.terms.model import superset_model
 
@@ -35,7 +35,7 @@ def _mode(mu, f, eta):
 
 
 def _simulate(h, mode, **kw):
-    return rbjax.simulate(h, BALL, ball_mode=mode, method="ode", **kw)
+    return rbjax.simulate(h, BALL, ball_mode=mode, path="ode", **kw)
 
 
 #: Every history is evaluated on this many times (the asked-for ones, then the last repeated):
@@ -148,7 +148,7 @@ def _grad_outputs(theta, solver=None):
     h = GRAD[0]
     mode = BallMode(theta[0], theta[1], theta[2])
     tc = rbjax.simulate(
-        h, BALL, ball_mode=mode, solver=solver or rbjax.Solver(), method="ode"
+        h, BALL, ball_mode=mode, solver=solver or rbjax.Solver(), path="ode"
     ).contact_time_s
     return tc
 

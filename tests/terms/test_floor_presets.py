@@ -452,10 +452,10 @@ def test_cli_floor_json_keys(concrete_rows):
         "lfe_third_octave_dB",
         "conformance",
         "status",
-        "method",
+        "path",
     }
     assert set(row) == base | {"floor", "floor_energy_J", "lfe_ratio_dB"}
-    assert row["floor"] == "concrete-150mm" and row["status"] == "ok" and row["method"] == "ode"
+    assert row["floor"] == "concrete-150mm" and row["status"] == "ok" and row["path"] == "ode"
     assert tuple(row["lfe_ratio_dB"]) == OCTAVES
     assert (
         0.0 < row["floor_energy_J"] < 0.01 * 0.5 * 2.5 * 2 * 9.80665
@@ -496,7 +496,7 @@ def test_cli_rigid_floor_keeps_the_blocked_force_keys():
     assert code == 0, err
     (row,) = json.loads(out)
     assert not {"floor", "floor_energy_J", "lfe_ratio_dB"} & set(row)
-    assert row["method"] == "quadrature"
+    assert row["path"] == "quadrature"
 
 
 @pytest.mark.parametrize(

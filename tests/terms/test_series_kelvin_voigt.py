@@ -22,7 +22,7 @@ from rbjax.fit.layout import (
     fitted_parameter_names,
 )
 from rbjax.fit.physical import series_structure
-from rbjax.studies.candidates import shared_structure, shared_structures
+from rbjax.studies.selection.candidates import shared_structure, shared_structures
 from rbjax.terms import model_from_dict, model_to_dict
 from rbjax.terms.damping import DAMPING_MODELS
 
@@ -51,7 +51,7 @@ def test_impact_matches_the_scipy_reference(case):
     ref = reference_series_impact(h, BALL, compliance, tau, damping=damping, blocked_force=bf)
     model = _model(damping, bf, compliance, tau)
     res = rbjax.simulate(h, BALL, model)
-    assert res.method == "ode" and int(res.status) == 0
+    assert res.path == "ode" and int(res.status) == 0
     assert float(res.contact_time_s) == pytest.approx(ref.contact_time_s, rel=1e-8)
     assert float(res.restitution) == pytest.approx(ref.restitution, rel=1e-8)
     assert float(res.peak_force_N) == pytest.approx(ref.max_force_N, rel=1e-6)
@@ -102,7 +102,7 @@ def test_zero_compliance_is_the_model_without_it():
         h, BALL, rbjax.Model(blocked_force=bf, damping=damping, series=SeriesKelvinVoigt.off())
     )
     plain = rbjax.simulate(h, BALL, rbjax.Model(blocked_force=bf, damping=damping))
-    assert off.method == "ode" and plain.method != "ode"
+    assert off.path == "ode" and plain.path != "ode"
     assert float(off.contact_time_s) == pytest.approx(float(plain.contact_time_s), rel=1e-7)
     assert float(off.restitution) == pytest.approx(float(plain.restitution), rel=1e-7)
 

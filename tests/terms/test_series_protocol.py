@@ -152,7 +152,7 @@ def test_it_simulates_as_the_scipy_reference(height_m):
     """Contact time and restitution to 1e-8, the floor force at 200 times to 1e-7 of its peak."""
     ref = reference_toy_impact(height_m, BALL, FLUIDITY)
     res = rbjax.simulate(height_m, BALL, _model())
-    assert res.method == "ode" and int(res.status) == 0
+    assert res.path == "ode" and int(res.status) == 0
     assert float(res.contact_time_s) == pytest.approx(ref.contact_time_s, rel=1e-8)
     assert float(res.restitution) == pytest.approx(ref.restitution, rel=1e-8)
     times = np.linspace(0.0, 0.999 * ref.contact_time_s, 200)

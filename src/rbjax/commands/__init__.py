@@ -81,7 +81,7 @@ def add_parallel_options(
     lanes: bool = False,
 ) -> None:
     """``--workers N`` or ``--scheduler ADDRESS``: where independent tasks run
-    (:mod:`rbjax.studies.executors`); ``default``: the worker count without ``--workers``
+    (:mod:`rbjax.studies.parallel.executors`); ``default``: the worker count without ``--workers``
     (``None``: the usable cores); ``lanes``: also ``--lanes`` (fits as lanes of batched
     programs)."""
     where = parser.add_mutually_exclusive_group()
@@ -113,9 +113,9 @@ def add_parallel_options(
 
 
 def parallel_of(args):
-    """The :class:`~rbjax.studies.executors.Parallel` of ``--workers`` and ``--scheduler``
+    """The :class:`~rbjax.studies.parallel.executors.Parallel` of ``--workers`` and ``--scheduler``
     (a worker count above the usable cores is clamped, and said so)."""
-    from ..studies.executors import Parallel, usable_cores
+    from ..studies.parallel.executors import Parallel, usable_cores
 
     if args.workers is not None and args.workers < 1:
         raise ValueError(f"--workers={args.workers!r} is outside the valid range: an integer ≥ 1")
@@ -138,7 +138,7 @@ def use_cpu_devices(count: int | None = None) -> None:
     (a second command in one process): its devices are used as they are."""
     import jax
 
-    from ..studies.executors import usable_cores
+    from ..studies.parallel.executors import usable_cores
 
     if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
         raise ValueError(f"--cpu-devices={count!r} must be an integer ≥ 1")

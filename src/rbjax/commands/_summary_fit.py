@@ -23,7 +23,7 @@ def run_summary(args, fix: dict) -> int:
         progress(f"note: {note}")
     selection = None
     if args.model is None:
-        from ..studies.summary_selection import select_summary
+        from ..studies.selection.summary import select_summary
 
         progress("no --model: comparing models by leave-one-figure-out prediction")
         selection = select_summary(

@@ -175,7 +175,7 @@ def register(subparsers) -> None:
         help="default lm (optimistix Levenberg–Marquardt)",
     )
     p.add_argument(
-        "--method",
+        "--path",
         choices=("auto", "samples", "ode"),
         default="auto",
         help=(
@@ -213,8 +213,8 @@ def _check_model_and_fix(model, fix):
 
 
 def run(args) -> int:
-    from ..studies.executors import prestart
-    from ..studies.worker_pool import single_threaded_blas
+    from ..studies.parallel.executors import prestart
+    from ..studies.parallel.worker_pool import single_threaded_blas
 
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
     from ..fit import FitOptions, fit
@@ -229,10 +229,10 @@ def run(args) -> int:
     if parallel is not None:
         prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
-    options = FitOptions(optimizer=args.optimizer, path=args.method)
+    options = FitOptions(optimizer=args.optimizer, path=args.path)
     selection = None
     if args.model is None:
-        from ..studies.selection import select_model
+        from ..studies.selection.select import select_model
         from ..terms.model import BLOCKED_FORCE_OPTIONS
 
         forces = BLOCKED_FORCE_OPTIONS if args.blocked_force is None else (args.blocked_force,)

@@ -68,7 +68,7 @@ def register(subparsers) -> None:
 
 def _parse_candidates(text, forces):
     from ..fit import MODEL_NAMES
-    from ..studies.candidates import candidate_pairs
+    from ..studies.selection.candidates import candidate_pairs
 
     if text is None:
         return MODEL_NAMES
@@ -97,12 +97,12 @@ def _parse_heights(text):
 
 
 def run(args) -> int:
-    from ..studies.executors import prestart
-    from ..studies.worker_pool import single_threaded_blas
+    from ..studies.parallel.executors import prestart
+    from ..studies.parallel.worker_pool import single_threaded_blas
 
     single_threaded_blas()  # the fit's host-side linear algebra: small matrices
-    from ..studies.hold_out_comparison import held_out_comparison
-    from ..studies.selection import select_model
+    from ..studies.selection.hold_out_comparison import held_out_comparison
+    from ..studies.selection.select import select_model
     from ..terms.model import BLOCKED_FORCE_OPTIONS
 
     forces = BLOCKED_FORCE_OPTIONS if args.blocked_force == "both" else (args.blocked_force,)

@@ -47,7 +47,7 @@ examples:
   rbjax simulate --height-m 1.0
   rbjax simulate --height-m 0.1 1.0 1.6 --gas none --json
   rbjax simulate --height-m 1.0 --params fit.json --youngs-pa 1.8e6
-  rbjax simulate --height-m 1.0 --method ode
+  rbjax simulate --height-m 1.0 --path ode
   rbjax simulate --height-m 1.0 --floor osb-15mm --json
   rbjax simulate --height-m 1.0 --floor my-floor.toml
 """
@@ -105,13 +105,13 @@ def register(subparsers) -> None:
         help="ball and model from a params/fit JSON file (options above override it)",
     )
     p.add_argument(
-        "--method",
+        "--path",
         choices=(
             "auto",
             "ode",
             "quadrature",
             "angle",
-        ),  # rbjax.solve.simulate.METHODS (not imported: --help stays fast)
+        ),  # rbjax.solve.options.PATHS (not imported: --help stays fast)
         default="auto",
         help=(
             "path of the scalar outputs: 'quadrature' integrates Eq. 7 in δ (undamped models on "
@@ -178,12 +178,12 @@ def _rebuilt(model, **changes):
     return Model(**(options | changes))
 
 
-def _simulate(heights, ball, model, method: str, floor=None):
+def _simulate(heights, ball, model, path: str, floor=None):
     """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
     from ..solve import simulate
 
     return simulate(
-        heights, ball, model if floor is None else _rebuilt(model, floor=floor), method=method
+        heights, ball, model if floor is None else _rebuilt(model, floor=floor), path=path
     )
 
 
@@ -213,7 +213,7 @@ def _octave_lfe(result):
 
 
 def floor_outputs(
-    heights_m, ball, model, octave_dB, method: str = "auto"
+    heights_m, ball, model, octave_dB, path: str = "auto"
 ) -> tuple[np.ndarray, np.ndarray]:
     """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
     the rigid floor, per height and band) for a model on a moving floor."""
@@ -223,7 +223,7 @@ def floor_outputs(
     from ..terms.floors.kinds import Rigid
 
     heights = np.asarray(heights_m, dtype=float)
-    blocked = _simulate(heights, ball, model, method, floor=Rigid())
+    blocked = _simulate(heights, ball, model, path, floor=Rigid())
     energy = np.asarray(energy_balance(heights, ball, model).floor_energy_J, dtype=float).reshape(
         -1
     )
@@ -231,10 +231,10 @@ def floor_outputs(
 
 
 def simulate_rows(
-    heights_m, ball, model, method: str = "auto", floor_name: str | None = None
+    heights_m, ball, model, path: str = "auto", floor_name: str | None = None
 ) -> list[dict]:
     """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
-    ``method`` is ``simulate``'s, and each row's ``"method"`` the path that ran. On a floor
+    ``path`` is ``simulate``'s, and each row's ``"path"`` the path that ran. On a floor
     that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
     floor's type), ``floor_energy_J`` and ``lfe_ratio_dB`` (``floor_outputs``)."""
     import numpy as np
@@ -243,11 +243,11 @@ def simulate_rows(
     from ..spectrum.standards import check_conformance
 
     heights = np.asarray(heights_m, dtype=float)
-    result = _simulate(heights, ball, model, method)
+    result = _simulate(heights, ball, model, path)
     total, octave, third = _octave_lfe(result)
     moving = not model.floor.rigid
     if moving:
-        floor_energy, ratio = floor_outputs(heights, ball, model, octave, method)
+        floor_energy, ratio = floor_outputs(heights, ball, model, octave, path)
     names = np.atleast_1d(result.status_name)
     rows = []
     for i, h in enumerate(heights):
@@ -267,7 +267,7 @@ def simulate_rows(
             },
             "conformance": None,
             "status": str(names[i]),
-            "method": result.method,
+            "path": result.path,
         }
         if moving:
             row["floor"] = floor_name or model.floor.name
@@ -389,7 +389,7 @@ def run(args) -> int:
     progress(
         f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}{on}"
     )
-    rows = simulate_rows(args.height_m, ball, model, method=args.method, floor_name=floor_name)
+    rows = simulate_rows(args.height_m, ball, model, path=args.path, floor_name=floor_name)
     if args.json:
         emit_json(rows)
     else:

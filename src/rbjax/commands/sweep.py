@@ -22,7 +22,7 @@ evaluated on the fastest exact path the model allows, analysed by SALib:
   kind = "conformance"  Monte Carlo probability of meeting the rubber-ball tolerances
                         (ISO 16283-2 Table A.1 = ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2)
 
-The format is described in the rbjax.studies.sweep module docstring; examples are shipped in
+The format is described in the rbjax.studies.sweeps.sweep module docstring; examples are shipped in
 rbjax/examples/sweeps/. A progress bar goes to stderr. With --out FILE.json the summary is
 written as JSON (plain text, readable anywhere) and every evaluated sample beside it as
 FILE.samples.npz (compact float64 arrays with their names, numpy.load).
@@ -97,9 +97,9 @@ def run(args) -> int:
     import time
     from pathlib import Path
 
-    from ..studies.executors import TaskError
-    from ..studies.sweep import load_config, run_sweep, write_outputs
-    from ..studies.sweep_parts import merge_parts, parse_part, run_part
+    from ..studies.parallel.executors import TaskError
+    from ..studies.sweeps.parts import merge_parts, parse_part, run_part
+    from ..studies.sweeps.sweep import load_config, run_sweep, write_outputs
 
     use_cpu_devices(args.cpu_devices)
     parallel = parallel_of(args)

@@ -6,13 +6,13 @@ from the terms' parameter declarations) → :mod:`~rbjax.fit.program` (predictio
 measuring chain, residuals and optimistix Levenberg–Marquardt as one compiled program) →
 :mod:`~rbjax.fit.uncertainty` (covariance, identifiability) → :mod:`~rbjax.fit.result`
 (the frozen result); :mod:`~rbjax.fit.problem` holds one problem (records, layout, program,
-onset alignment), :mod:`~rbjax.fit.engine` drives it (:func:`fit`, one step each:
+onset alignment), :mod:`~rbjax.fit.driver` drives it (:func:`fit`, one step each:
 :mod:`~rbjax.fit.setup` → :mod:`~rbjax.fit.start` → :mod:`~rbjax.fit.freedom` →
 :mod:`~rbjax.fit.rounds` → :mod:`~rbjax.fit.estimates` → the result) and
 :mod:`~rbjax.fit.prediction` compares given models (:func:`predict`, :func:`model_histories`).
 """
 
-from .engine import fit
+from .driver import fit
 from .layout import (
     BALL_MODE_SUFFIX,
     MODEL_NAMES,

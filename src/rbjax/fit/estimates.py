@@ -1,4 +1,4 @@
-"""The uncertainties of a fit at its optimum (a step of :func:`rbjax.fit.engine.fit`): the
+"""The uncertainties of a fit at its optimum (a step of :func:`rbjax.fit.driver.fit`): the
 covariance of the free parameters from the history rows (:mod:`rbjax.fit.uncertainty`), the
 ν prior folded in where ν was held at its mean, and from it every parameter's
 :class:`~rbjax.fit.result.ParameterEstimate`, the effective modulus E/√(1−ν²) and the

@@ -1,4 +1,4 @@
-"""Which parameters a fit frees (a step of :func:`rbjax.fit.engine.fit`): E and ν checked for
+"""Which parameters a fit frees (a step of :func:`rbjax.fit.driver.fit`): E and ν checked for
 identifiability from the Jacobian at the first start (ν held, fitted, or determined by its
 prior), then the free physical parameters, the fitted records' onset shifts and height errors;
 and the ν prior's residual row."""

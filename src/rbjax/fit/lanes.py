@@ -17,8 +17,8 @@ Each lane's arithmetic is that lane's alone (the program is ``vmap``-ped over th
 fit run as lanes gives the results it gives alone, to rounding.
 
 :class:`LaneExecutor` is the :class:`concurrent.futures.Executor` that runs tasks this way (one
-thread a task, all in one batcher); :class:`rbjax.studies.executors.Parallel` chooses it with
-``lanes=True``, and by default where JAX's default device is not a CPU.
+thread a task, all in one batcher); :class:`rbjax.studies.parallel.executors.Parallel` chooses
+it with ``lanes=True``, and by default where JAX's default device is not a CPU.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._validate import check_choice, check_range, settings_or_default
 from ..terms.model import Model, Solver
-from .problem import FIT_METHODS
+from .problem import FIT_PATHS
 from .program import OPTIMIZERS
 
 SCALES = ("noise", "peak")
@@ -79,7 +79,7 @@ class FitOptions:
     def __post_init__(self):
         check_choice("optimizer", self.optimizer, OPTIMIZERS)
         check_choice("scale", self.scale, SCALES)
-        check_choice("path", self.path, FIT_METHODS)
+        check_choice("path", self.path, FIT_PATHS)
         if not (isinstance(self.decimate, int) and self.decimate >= 1):
             raise ValueError(f"decimate={self.decimate!r} must be an integer >= 1")
         if not (

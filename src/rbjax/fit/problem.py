@@ -34,7 +34,7 @@ STEPS_PER_ROUND = 40
 #: The paths of the fit's prediction: ``auto`` (``samples`` where the model allows it, else
 #: ``ode`` with the reason shown), ``samples`` (the force at the record's samples by fixed steps,
 #: :mod:`rbjax.fit.record_forces`), ``ode`` (the diffrax ODE with its events, the reference).
-FIT_METHODS = ("auto", "samples", "ode")
+FIT_PATHS = ("auto", "samples", "ode")
 
 
 def fit_solver(solver):
@@ -45,16 +45,16 @@ def fit_solver(solver):
     return solver if solver.adjoint == "forward" else dataclasses.replace(solver, adjoint="forward")
 
 
-def fit_path(method: str, model: Model, solver) -> tuple[str, str | None]:
+def fit_path(path: str, model: Model, solver) -> tuple[str, str | None]:
     """(path, why the ODE) of a fit of ``model``: the sampled path unless the model needs the
-    ODE's events (a moving floor), a ``Solver`` is given, or ``method="ode"``."""
-    check_choice("method", method, FIT_METHODS)
+    ODE's events (a moving floor), a ``Solver`` is given, or ``path="ode"``."""
+    check_choice("path", path, FIT_PATHS)
     reason = record_samples_unsupported(model)
-    if method == "samples" and reason is not None:
-        raise ValueError(f"method='samples' cannot fit this model: {reason}")
-    if method == "ode":
+    if path == "samples" and reason is not None:
+        raise ValueError(f"path='samples' cannot fit this model: {reason}")
+    if path == "ode":
         return "ode", None
-    if method == "auto" and solver is not None:
+    if path == "auto" and solver is not None:
         return "ode", "a Solver was given"
     return ("samples", None) if reason is None else ("ode", reason)
 

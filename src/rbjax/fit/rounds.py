@@ -1,4 +1,4 @@
-"""The rounds of the optimiser of a fit, one driver step (see :func:`rbjax.fit.engine.fit`;
+"""The rounds of the optimiser of a fit, one driver step (see :func:`rbjax.fit.driver.fit`;
 its starts come from :mod:`rbjax.fit.start`):
 
 - :func:`optimise`: rounds of the compiled optimiser for every start at once, each in the

@@ -1,4 +1,4 @@
-"""The set-up of one fit (the first step of :func:`rbjax.fit.engine.fit`): the model, the
+"""The set-up of one fit (the first step of :func:`rbjax.fit.driver.fit`): the model, the
 parameters held, the conditioned records, the :class:`~rbjax.fit.problem.Problem` with its
 layout and constants, and which records enter the fit, in one frozen :class:`FitSetup` that the
 later steps (:mod:`~rbjax.fit.start`, :mod:`~rbjax.fit.estimates`) read."""
@@ -106,7 +106,7 @@ def set_up(
     data, model, *, blocked_force: str, gas: str, ball: Ball, fix, options: FitOptions
 ) -> FitSetup:
     """The model and the parameters it holds (checked), the records, and the problem built on
-    them (see :func:`rbjax.fit.engine.fit` for the arguments, ``options`` its
+    them (see :func:`rbjax.fit.driver.fit` for the arguments, ``options`` its
     :class:`~rbjax.fit.options.FitOptions`)."""
     model_name, candidate = candidate_model(model, blocked_force, gas)
     fittable = fitted_parameter_names(candidate)

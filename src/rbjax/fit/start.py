@@ -1,4 +1,4 @@
-"""Where a fit starts (the second step of :func:`rbjax.fit.engine.fit`):
+"""Where a fit starts (the second step of :func:`rbjax.fit.driver.fit`):
 
 - :func:`start_values`: physically motivated start values from the records;
 - :func:`alternative_starts`: the other starts of parameters whose fit has several minima;
@@ -86,7 +86,7 @@ class StartPlan:
 def start_plan(setup: FitSetup, model, start) -> StartPlan:
     """The start θ: start values from the records (or a given ``Model``'s values), then the
     caller's ``start`` map, then the held values; or a previous :class:`FitResult`'s θ (a warm
-    start, the held values kept). ``model``, ``start``: as given to :func:`rbjax.fit.engine.fit`."""
+    start, the held values kept). ``model``, ``start``: as given to :func:`rbjax.fit.driver.fit`."""
     problem, lay, data, fixed, poisson_prior = (
         setup.problem,
         setup.layout,

@@ -5,7 +5,7 @@ The bundled table ``examples/paper-measured-ball/summary.csv`` quotes the paper:
 500 N at 10 cm and about 1800 N at 160 cm (§4.1, Fig. 5). The elastic model, the elastic model
 with cubic stiffening and a damped model (Kelvin–Voigt) are fitted to the three contact times
 and the 10 cm peak (:func:`rbjax.fit.summary.fit_summary`), compared by leave-one-figure-out
-prediction (:func:`rbjax.studies.summary_selection.select_summary`), and each predicts the
+prediction (:func:`rbjax.studies.selection.summary.select_summary`), and each predicts the
 160 cm peak, held out of every fit. The issue's bar: the recommended model within 5 % of 1800 N.
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .._progress import progress as say
 from ..data.examples import examples_dir
-from ..studies.summary_selection import select_summary
+from ..studies.selection.summary import select_summary
 
 #: The paper's measured ball as a summary table (bundled).
 EXAMPLE_TABLE = examples_dir().parent / "paper-measured-ball" / "summary.csv"

@@ -5,8 +5,8 @@ general path and the reference), the quadrature of the undamped rigid-floor impa
 (:mod:`~rbjax.solve.quadrature`, histories in :mod:`~rbjax.solve.quadrature_history`), the
 phase-angle integration of damped rigid-floor impacts (:mod:`~rbjax.solve.angle`) and histories
 sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
-:func:`~rbjax.solve.simulate.simulate` choosing among them (:mod:`~rbjax.solve.method`) and
-running the path chosen (:mod:`~rbjax.solve.engine`), the energy balance
+:func:`~rbjax.solve.simulate.simulate` choosing among them (:mod:`~rbjax.solve.path`) and
+running the path chosen (:mod:`~rbjax.solve.path_runner`), the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
 (:mod:`~rbjax.solve.batch`). Concrete batches of both are cut in chunks split over the local
 devices, each device running its own program (:mod:`~rbjax.solve.devices`)."""

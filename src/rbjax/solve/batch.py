@@ -10,7 +10,7 @@ docstrings say how to run on several CPU devices, GPUs or hosts).
 
 Only the varied parameters travel as columns; the others are scalars shared by every row.
 
-Paths, as ``rbjax.simulate`` chooses them (``method="auto"``, no ``solver`` given):
+Paths, as ``rbjax.simulate`` chooses them (``path="auto"``, no ``solver`` given):
 
 * scalar outputs (contact time, peak force, restitution, maximum deflection, status): the
   quadrature in δ (``rbjax.solve.quadrature``) for models without damping on the rigid floor,
@@ -24,7 +24,7 @@ Paths, as ``rbjax.simulate`` chooses them (``method="auto"``, no ``solver`` give
   ``rbjax.spectrum.levels.lfe_octave_dB`` turns the contact samples into bands (``n_record``:
   the zeros after contact add nothing).
 
-``method="ode"`` or a ``Solver`` asks for the diffrax ODE throughout (as ``simulate``). Flagged
+``path="ode"`` or a ``Solver`` asks for the diffrax ODE throughout (as ``simulate``). Flagged
 solves (status ≠ 0) give NaN outputs.
 """
 
@@ -50,10 +50,10 @@ from ..terms.model import Model, Solver
 from .angle import impact_angle
 from .devices import default_chunk_size, device_map, local_devices
 from .inputs import PAPER_RATE_Hz, padded_rows
-from .method import resolve_method
 from .ode import impact_ode, ode_trajectory
 from .options import EvaluationSpec, spec_or_default
 from .outcome import STATUS_CODES, nan_where
+from .path import resolve_path
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
 
@@ -109,11 +109,11 @@ def lfe_output_names() -> tuple[str, ...]:
 
 
 def evaluation_paths(
-    model: Model, solver: Solver | None = None, method: str = "auto"
+    model: Model, solver: Solver | None = None, path: str = "auto"
 ) -> tuple[str, str]:
     """(scalar path, history path) of ``evaluate``: ``"quadrature"``, ``"angle"`` or ``"ode"``
-    (``rbjax.solve.method.resolve_method``), and ``"sampled"`` or ``"ode"``."""
-    scalar = resolve_method(method, model, solver)
+    (``rbjax.solve.path.resolve_path``), and ``"sampled"`` or ``"ode"``."""
+    scalar = resolve_path(path, model, solver)
     history = "sampled" if scalar != "ode" and sampled_history_unsupported(model) is None else "ode"
     return scalar, history
 
@@ -203,7 +203,7 @@ def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, shared, run: C
 
 def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec) -> dict:
     require_x64()
-    solver, method, rate_Hz, duration_s = spec.solver, spec.path, spec.rate_Hz, spec.duration_s
+    solver, path, rate_Hz, duration_s = spec.solver, spec.path, spec.rate_Hz, spec.duration_s
     chunk_size, devices, progress = spec.chunk_size, spec.devices, spec.progress
     model = Model() if model is None else model
     if not samples:
@@ -222,7 +222,7 @@ def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec)
     assemble(named, height_m, ball, model)
     check_range("height_m", named.get("height_m", height_m), lower=0.0)
     wrt = tuple(canonical_name(k, model) for k in wrt)
-    scalar_path, history_path = evaluation_paths(model, solver, method)
+    scalar_path, history_path = evaluation_paths(model, solver, path)
     ode_solver = Solver() if solver is None else solver
     if wrt and ode_solver.adjoint != "forward":  # jax.jacfwd through diffrax needs it
         ode_solver = dataclasses.replace(ode_solver, adjoint="forward")
@@ -317,7 +317,7 @@ def evaluate(
 
     ``evaluation`` (an ``rbjax.EvaluationSpec``, default ``EvaluationSpec()``) says how: its
     ``path`` (``"auto"``, ``"ode"``, ``"quadrature"``, ``"angle"``) and ``solver`` choose the
-    path as ``method`` and ``solver`` of ``rbjax.simulate`` (see the module docstring). The
+    path as ``path`` and ``solver`` of ``rbjax.simulate`` (see the module docstring). The
     samples are cut into chunks of ``chunk_size`` impacts (default: sized for the path and the
     platform, ``rbjax.solve.devices.default_chunk_size``; 8192 for the fast paths on a CPU) and
     the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices`` for

@@ -153,8 +153,9 @@ def device_map(
     Raises:
         RuntimeError: in a multi-process JAX runtime (``jax.distributed``): hosts share a study
             as independent tasks (``rbjax sweep --scheduler ADDRESS``, a Dask cluster, or
-            ``--shard I/P`` and ``--merge``, a job array; :mod:`rbjax.studies.executors`), never
-            as one program stepping in lockstep across them.
+            ``--shard I/P`` and ``--merge``, a job array;
+            :mod:`rbjax.studies.parallel.executors`), never as one program stepping in lockstep
+            across them.
     """
     if jax.process_count() > 1:
         raise RuntimeError(

@@ -27,7 +27,7 @@ from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz
 
 #: The solve paths (``"auto"``: the fastest exact path the model allows; see
-#: ``rbjax.solve.method.resolve_method``).
+#: ``rbjax.solve.path.resolve_path``).
 PATHS = ("auto", "ode", "quadrature", "angle")
 
 
@@ -37,7 +37,7 @@ class EvaluationSpec:
 
     Attributes:
         path: the solve path of the scalar outputs, ``"auto"`` (default: the fastest exact path
-            the model allows), ``"ode"``, ``"quadrature"`` or ``"angle"`` (as ``method`` of
+            the model allows), ``"ode"``, ``"quadrature"`` or ``"angle"`` (as ``path`` of
             ``rbjax.simulate``).
         solver: an ``rbjax.Solver``: asks for the diffrax ODE with it (default: none given).
         rate_Hz, duration_s: the force record of the L_FE (default the paper's 44.1 kHz × 1 s).

@@ -1,9 +1,9 @@
-"""Which path solves a model: the choice ``simulate(method=...)`` makes among the solve paths.
+"""Which path solves a model: the choice ``simulate(path=...)`` makes among the solve paths.
 
-:func:`resolve_method` picks the fastest exact path the model allows (``method="auto"``), or
+:func:`resolve_path` picks the fastest exact path the model allows (``path="auto"``), or
 checks that the path asked for can solve it; :func:`quadrature_unsupported` (here) and
 :func:`~rbjax.solve.angle.angle_unsupported` say why a fast path cannot. Running the path chosen,
-with the ODE as the fallback of the impacts it flags, is :mod:`rbjax.solve.engine`'s.
+with the ODE as the fallback of the impacts it flags, is :mod:`rbjax.solve.path_runner`'s.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ def quadrature_unsupported(model: Model) -> str | None:
     return model.coupling
 
 
-def resolve_method(method: str, model: Model, solver: Solver | None = None) -> str:
-    """The path ``simulate(method=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or
+def resolve_path(path: str, model: Model, solver: Solver | None = None) -> str:
+    """The path ``simulate(path=...)`` runs for ``model``: ``"quadrature"``, ``"angle"`` or
     ``"ode"``.
 
     ``auto`` is the fastest exact path the model allows when no ``solver`` is given (a ``Solver``
@@ -40,15 +40,15 @@ def resolve_method(method: str, model: Model, solver: Solver | None = None) -> s
     ``angle_unsupported(model)`` is None, else the ODE. Asking for a path that cannot solve the
     model raises ``ValueError`` saying why.
     """
-    check_choice("method", method, PATHS)
+    check_choice("path", path, PATHS)
     reasons = {"quadrature": quadrature_unsupported(model), "angle": angle_unsupported(model)}
-    if method in reasons:
-        if reasons[method] is not None:
+    if path in reasons:
+        if reasons[path] is not None:
             raise ValueError(
-                f"method={method!r} cannot solve this model: {reasons[method]}; valid: "
-                "method='ode' or method='auto'"
+                f"path={path!r} cannot solve this model: {reasons[path]}; valid: "
+                "path='ode' or path='auto'"
             )
-        return method
-    if method == "ode" or solver is not None:
+        return path
+    if path == "ode" or solver is not None:
         return "ode"
-    return next((path for path, reason in reasons.items() if reason is None), "ode")
+    return next((p for p, reason in reasons.items() if reason is None), "ode")

@@ -1,7 +1,7 @@
 """``simulate``'s engine: the scalar outputs of a batch of impacts on the path chosen for it.
 
 :func:`scalar_outputs` runs one path (``"quadrature"``, ``"angle"`` or ``"ode"``, as
-:func:`~rbjax.solve.method.resolve_method` chose it) over the broadcast inputs. Traced inputs,
+:func:`~rbjax.solve.path.resolve_path` chose it) over the broadcast inputs. Traced inputs,
 or a call inside ``jax.jit``, are staged as one program like any JAX function. Concrete inputs
 are solved on the host as one batch of rows (:class:`Rows`), cut in chunks split over the local
 devices (``rbjax.solve.devices``: every row as on one device, bit for bit); there, with the

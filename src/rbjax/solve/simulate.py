@@ -1,8 +1,8 @@
 """The public forward model: ``simulate``, ``trajectory`` and the frozen result of ``simulate``.
 
-:func:`simulate` checks its inputs, takes the path :func:`~rbjax.solve.method.resolve_method`
-chooses and has :mod:`rbjax.solve.engine` run it; :class:`ImpactResult` holds the scalar outputs
-and computes the force histories (:func:`force_history`) and their band levels on request.
+:func:`simulate` checks its inputs, takes the path :func:`~rbjax.solve.path.resolve_path`
+chooses and has :mod:`rbjax.solve.path_runner` run it; :class:`ImpactResult` holds the scalar
+outputs and computes the force histories (:func:`force_history`) and their band levels on request.
 """
 
 from __future__ import annotations
@@ -20,12 +20,12 @@ from .._validate import check_choice, check_range, is_traced
 from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model, Solver
-from .engine import scalar_outputs
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inputs
-from .method import resolve_method
 from .ode import trajectory_batch
 from .options import ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
+from .path import resolve_path
+from .path_runner import scalar_outputs
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
 
 
@@ -44,13 +44,13 @@ class ImpactResult(eqx.Module):
         restitution: coefficient of restitution, rebound momentum over impact momentum.
         max_deflection_m: largest deflection δ of the shell (m).
         status: status code per impact (int32; ``rbjax.STATUS_NAMES``, 0: ok).
-        num_steps: the path's count of steps per impact (see ``method``).
+        num_steps: the path's count of steps per impact (see ``path``).
         ball: the :class:`~rbjax.terms.ball.Ball` simulated.
         model: the :class:`~rbjax.terms.model.Model` simulated.
         solver: the :class:`~rbjax.terms.model.Solver` of the ODE (and of ``history()``).
         rate_Hz: sample rate of the force record (Hz) of ``force_N``, ``history()`` and the L_FE.
         duration_s: length of that record (s).
-        method: the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` = solver
+        path: the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` = solver
             steps), ``"quadrature"`` (``rbjax.solve.quadrature``, ``num_steps`` = force
             evaluations), ``"angle"`` (``rbjax.solve.angle``, ``num_steps`` = fixed steps in the
             phase angle), or ``"quadrature+ode"`` / ``"angle+ode"`` (that path, with the ODE for
@@ -70,7 +70,7 @@ class ImpactResult(eqx.Module):
     solver: Solver = eqx.field(static=True)
     rate_Hz: float = eqx.field(static=True, default=PAPER_RATE_Hz)
     duration_s: float = eqx.field(static=True, default=PAPER_DURATION_S)
-    method: str = eqx.field(static=True, default="ode")
+    path: str = eqx.field(static=True, default="ode")
 
     @property
     def ok(self):
@@ -164,7 +164,7 @@ def simulate(
     model: Model | None = None,
     *,
     solver: Solver | None = None,
-    method: str = "auto",
+    path: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
     **shortcuts: Unpack[ModelShortcuts],
@@ -186,7 +186,7 @@ def simulate(
     ``jax.grad``; ``jax.jacfwd`` works on the quadrature path, and on the ODE path with
     ``Solver(adjoint="forward")``.
 
-    ``method`` picks the path of the scalar outputs (``result.method`` records it):
+    ``path`` picks the path of the scalar outputs (``result.path`` records it):
 
     * ``"auto"`` (default), when no ``solver`` is given: the quadrature (``rbjax.solve.quadrature``:
       Eq. 7 integrated in δ, ~1e-12, no time stepping) for models without damping on the rigid
@@ -214,7 +214,7 @@ def simulate(
             ``Model()``).
         solver: a :class:`~rbjax.terms.model.Solver`: asks for the diffrax ODE with it (default:
             none, ``Solver()`` where the ODE runs).
-        method: the path of the scalar outputs, ``"auto"``, ``"ode"``, ``"quadrature"`` or
+        path: the path of the scalar outputs, ``"auto"``, ``"ode"``, ``"quadrature"`` or
             ``"angle"`` (see above).
         rate_Hz: sample rate (Hz) of the force record of ``force_N``, ``history()`` and the L_FE
             (default the paper's 44.1 kHz).
@@ -231,14 +231,14 @@ def simulate(
     Raises:
         ValueError: ``height_m``, ``rate_Hz`` or ``duration_s`` not finite and > 0, or a record
             of no sample; ``ball`` not a ``Ball`` or ``model`` not a ``Model``; ``model`` and
-            shortcuts both given; an unknown ``method``, or a path that cannot solve the model;
+            shortcuts both given; an unknown ``path``, or a path that cannot solve the model;
             an invalid shortcut value (as ``Model`` raises). The message names the argument.
         TypeError: a keyword that is neither an argument nor a field of ``Model``.
         RuntimeError: float64 (``jax_enable_x64``) switched off after importing rbjax.
     """
     check_inputs(height_m, ball, rate_Hz, duration_s)
     model = model_from_shortcuts("simulate", model, shortcuts)
-    path = resolve_method(method, model, solver)
+    chosen = resolve_path(path, model, solver)
     solver = Solver() if solver is None else solver
     return simulate_model(
         height_m,
@@ -247,8 +247,8 @@ def simulate(
         solver,
         rate_Hz=rate_Hz,
         duration_s=duration_s,
-        method=path,
-        fallback=method == "auto",
+        path=chosen,
+        fallback=path == "auto",
     )
 
 
@@ -260,10 +260,10 @@ def simulate_model(
     *,
     rate_Hz=PAPER_RATE_Hz,
     duration_s=PAPER_DURATION_S,
-    method="ode",
+    path="ode",
     fallback=False,
 ) -> ImpactResult:
-    height, out, method = scalar_outputs(method, height_m, ball, model, solver, fallback)
+    height, out, path = scalar_outputs(path, height_m, ball, model, solver, fallback)
     return ImpactResult(
         height_m=height,
         contact_time_s=out.contact_time_s,
@@ -278,7 +278,7 @@ def simulate_model(
         solver=solver,
         rate_Hz=float(rate_Hz),
         duration_s=float(duration_s),
-        method=method,
+        path=path,
     )
 
 
@@ -334,7 +334,7 @@ def force_history(
     rate_Hz=PAPER_RATE_Hz,
     duration_s=PAPER_DURATION_S,
     contact_time_s=None,
-    method="auto",
+    path="auto",
     pad=True,
 ) -> Trajectory:
     """Histories on a ``rate_Hz`` grid over ``duration_s``, zero-padded after the contact.
@@ -344,20 +344,19 @@ def force_history(
     computed samples are returned as they are (every non-zero sample of the record: pass
     ``n_record=round(rate_Hz·duration_s)`` to the ``rbjax.spectrum`` functions).
 
-    ``method``: ``"auto"`` integrates the rigid-floor models (no ball mode, no moving floor) by
+    ``path``: ``"auto"`` integrates the rigid-floor models (no ball mode, no moving floor) by
     fixed Runge–Kutta steps sampled inside the solve (``rbjax.solve.sampled``; sub-steps where
     the shortest contact spans few samples) when no ``solver`` other than the default
     ``Solver()`` is given and the contact times are concrete and shorter than the record; it
     solves the diffrax ODE with ``solver`` otherwise, as ``"ode"`` always does.
     """
 
-    check_choice("method", method, ("auto", "ode"))
+    check_choice("path", path, ("auto", "ode"))
     check_inputs(height_m, ball, rate_Hz, duration_s)
     n_total = int(round(rate_Hz * duration_s))
     if contact_time_s is None:
-        path = resolve_method("auto", model)
         contact_time_s = simulate_model(
-            height_m, ball, model, solver, method=path, fallback=True
+            height_m, ball, model, solver, path=resolve_path("auto", model), fallback=True
         ).contact_time_s
     tc = None if is_traced(contact_time_s) else np.asarray(contact_time_s, dtype=float)
     if tc is None:
@@ -367,7 +366,7 @@ def force_history(
         n_contact = min(n_total, int(math.ceil(longest * rate_Hz)) + 2)
     default_solver = solver is None or solver == Solver()
     sampled = (
-        method == "auto"
+        path == "auto"
         and n_contact < n_total
         and default_solver
         and sampled_history_unsupported(model) is None

@@ -1,11 +1,10 @@
 """Studies built on the solve and the fit: model selection by held-out error
-(:mod:`~rbjax.studies.selection`), the growth of L_FE per doubling of drop height
+(:mod:`~rbjax.studies.selection.select`), the growth of L_FE per doubling of drop height
 (:mod:`~rbjax.studies.growth`), sensitivities (:mod:`rbjax.studies.sensitivity`) and TOML
-sweeps (:mod:`~rbjax.studies.sweep`), their independent tasks run where
-:class:`~rbjax.studies.executors.Parallel` says (in process, worker processes, a Dask cluster)."""
+sweeps (:mod:`~rbjax.studies.sweeps.sweep`), their independent tasks run where
+:class:`~rbjax.studies.parallel.executors.Parallel` says (in process, worker processes, a Dask
+cluster)."""
 
-from .cross_validation import cross_validate
-from .executors import Parallel, Task, TaskError, run_tasks
 from .growth import (
     Growth,
     GrowthError,
@@ -14,12 +13,14 @@ from .growth import (
     model_growth,
     recording_growth,
 )
-from .hold_out_comparison import held_out_comparison
-from .selection import select_model
-from .selection_results import Candidate, Selection
-from .selection_rule import recommend
-from .sweep import load_config, run_sweep, write_outputs
-from .sweep_parts import merge_parts, run_part
+from .parallel.executors import Parallel, Task, TaskError, run_tasks
+from .selection.cross_validation import cross_validate
+from .selection.hold_out_comparison import held_out_comparison
+from .selection.results import Candidate, Selection
+from .selection.rule import recommend
+from .selection.select import select_model
+from .sweeps.parts import merge_parts, run_part
+from .sweeps.sweep import load_config, run_sweep, write_outputs
 
 __all__ = [
     "Parallel",

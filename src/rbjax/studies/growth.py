@@ -31,7 +31,7 @@ import numpy as np
 from ..data import load_examples
 from ..fit import prepare_data
 from ..solve.inputs import PAPER_RATE_Hz, check_inputs
-from ..solve.method import resolve_method
+from ..solve.path import resolve_path
 from ..solve.simulate import simulate, simulate_model
 from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import lfe_octave_dB
@@ -304,7 +304,7 @@ def model_lfe_dB(
         h = np.asarray(heights_m, dtype=float)
         check_inputs(h, ball, PAPER_RATE_Hz, 1.0)
         res = simulate_model(
-            h, ball, model, Solver(), method=resolve_method("auto", model, None), fallback=True
+            h, ball, model, Solver(), path=resolve_path("auto", model, None), fallback=True
         )
     force = np.asarray(res.history().force_N)
     lfe = np.array(lfe_octave_dB(force, PAPER_RATE_Hz))

@@ -44,7 +44,7 @@ from typing import Any
 
 import jax
 
-from .._progress import progress as say
+from ..._progress import progress as say
 from .worker_pool import (
     HostAndPool,
     drop_pool,
@@ -245,7 +245,7 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
         yield parallel.executor
     elif parallel.use_lanes:
         # lazy: the fit package only where its fits run as lanes (sweeps use this module too)
-        from ..fit.lanes import LaneExecutor
+        from ...fit.lanes import LaneExecutor
 
         lanes = LaneExecutor()
         try:

@@ -5,7 +5,7 @@ the process that starts it (the compilation cache's folder among them, so a prog
 once per machine), and BLAS on one thread. ``local_pool(n)`` makes a pool on first use and keeps
 it until the process ends (a second study finds its workers started and their programs
 loaded); ``HostAndPool`` lets this process run one task at a time beside such a pool.
-:mod:`rbjax.studies.executors` decides which executor a study's tasks go to.
+:mod:`rbjax.studies.parallel.executors` decides which executor a study's tasks go to.
 """
 
 from __future__ import annotations

@@ -2,16 +2,16 @@
 candidate names stand for (:func:`candidate_pairs`), the shared structure each is fitted in
 (:func:`shared_structures`: one compiled fit program for many candidates) and their relative
 cost per evaluation (:func:`structure_cost`). A fitted, cross-validated candidate is a
-:class:`~rbjax.studies.selection_results.Candidate`.
+:class:`~rbjax.studies.selection.results.Candidate`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from .._validate import check_choice
-from ..fit import parse_model_name, parse_model_terms
-from ..terms.model import BLOCKED_FORCE_OPTIONS, Model, superset_model
+from ..._validate import check_choice
+from ...fit import parse_model_name, parse_model_terms
+from ...terms.model import BLOCKED_FORCE_OPTIONS, Model, superset_model
 
 __all__ = [
     "candidate_pairs",

@@ -15,10 +15,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._progress import progress as say
-from ..fit import FitResult, fit, prepare_data
-from ..fit.options import options_or_default
-from .executors import Parallel, Task, run_tasks
+from ..._progress import progress as say
+from ...fit import FitResult, fit, prepare_data
+from ...fit.options import options_or_default
+from ..parallel.executors import Parallel, Task, run_tasks
 
 __all__ = [
     "HeldOut",
@@ -147,7 +147,7 @@ def cross_validate(
             ``fit_kwargs``).
         heights: the heights held out in turn, m (default: every height in the data).
         workers: where the folds run: 1 (default: in this process), a worker count, ``None``
-            (every usable core) or a :class:`~rbjax.studies.executors.Parallel`.
+            (every usable core) or a :class:`~rbjax.studies.parallel.executors.Parallel`.
         progress: one line per fold on stderr.
         fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
@@ -157,7 +157,7 @@ def cross_validate(
     Raises:
         ValueError: data with fewer than two drop heights, a held-out height that is not one
             of the data's, or data that cannot be prepared (``rbjax.data.DataError``).
-        rbjax.studies.executors.TaskError: a fold's fit failed (named).
+        rbjax.studies.parallel.executors.TaskError: a fold's fit failed (named).
     """
     data = prepare_data(data)
     check_folds(data)

@@ -8,14 +8,14 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 
-from .._progress import progress as say
-from ..fit import MODEL_NAMES, FitResult, predict, prepare_data
-from ..spectrum.bands import OCTAVE_BANDS
-from ..terms.model import BLOCKED_FORCE_OPTIONS
-from ..text import fmt, format_table
+from ..._progress import progress as say
+from ...fit import MODEL_NAMES, FitResult, predict, prepare_data
+from ...spectrum.bands import OCTAVE_BANDS
+from ...terms.model import BLOCKED_FORCE_OPTIONS
+from ...text import fmt, format_table
+from ..parallel.executors import Parallel, Task, run_tasks
 from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import fit_task, held_out_rows
-from .executors import Parallel, Task, run_tasks
 
 __all__ = ["HoldOutComparison", "held_out_comparison"]
 
@@ -78,12 +78,12 @@ def held_out_comparison(
         data: a :class:`~rbjax.fit.FitData`, recordings or paths (see
             :func:`rbjax.fit.prepare_data`).
         fit_heights: the heights fitted, m; the other heights of the data are predicted.
-        candidates: model names, as in :func:`~rbjax.studies.selection.select_model`.
+        candidates: model names, as in :func:`~rbjax.studies.selection.select.select_model`.
         blocked_forces: the blocked-force definitions each name is tried with, as in
-            :func:`~rbjax.studies.selection.select_model`.
+            :func:`~rbjax.studies.selection.select.select_model`.
         starts: optional warm starts, {(model, blocked_force): FitResult}.
-        workers: as in :func:`~rbjax.studies.selection.select_model` (each candidate's fit is a
-            task).
+        workers: as in :func:`~rbjax.studies.selection.select.select_model` (each candidate's
+            fit is a task).
         progress: one line per fit on stderr.
         fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
@@ -94,7 +94,7 @@ def held_out_comparison(
     Raises:
         ValueError: every height of the data is in ``fit_heights``, bad candidate names or
             blocked forces, or data that cannot be prepared (``rbjax.data.DataError``).
-        rbjax.studies.executors.TaskError: a candidate's fit failed (named).
+        rbjax.studies.parallel.executors.TaskError: a candidate's fit failed (named).
     """
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)

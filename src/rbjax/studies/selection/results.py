@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 
-from ..fit import FitResult
-from ..spectrum.bands import OCTAVE_BANDS
-from ..text import fmt, format_table
+from ...fit import FitResult
+from ...spectrum.bands import OCTAVE_BANDS
+from ...text import fmt, format_table
 
 __all__ = ["Candidate", "Selection"]
 
@@ -24,8 +24,8 @@ class Candidate:
         model_name: the model name (:mod:`rbjax.fit`).
         blocked_force: its blocked-force definition, ``"paper"`` or ``"momentum"``.
         fit: its full fit to every height (:class:`~rbjax.fit.FitResult`).
-        folds: its :class:`~rbjax.studies.cross_validation.HeldOut` errors, one per height left
-            out.
+        folds: its :class:`~rbjax.studies.selection.cross_validation.HeldOut` errors, one per
+            height left out.
     """
 
     model_name: str
@@ -80,18 +80,18 @@ class Candidate:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Selection:
-    """The outcome of :func:`~rbjax.studies.selection.select_model`.
+    """The outcome of :func:`~rbjax.studies.selection.select.select_model`.
 
     Attributes:
         candidates: every :class:`Candidate`, in the order they were tried.
         recommended: the :class:`Candidate` the rule recommends.
         within_noise: the candidates within the noise of the best
-            (:func:`~rbjax.studies.selection_rule.recommend`).
+            (:func:`~rbjax.studies.selection.rule.recommend`).
         rule: the rule, in words.
         blocked_force_note: what the held-out errors say about the blocked-force definition
             of the recommended model.
-        baseline: the unfitted paper model's :class:`~rbjax.studies.cross_validation.HeldOut`
-            errors at every height.
+        baseline: the unfitted paper model's
+            :class:`~rbjax.studies.selection.cross_validation.HeldOut` errors at every height.
         elapsed_s: how long the selection took, s.
     """
 

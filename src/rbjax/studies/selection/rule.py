@@ -1,5 +1,5 @@
 """The paired one-standard-error rule of a model selection (:data:`RULE`, :func:`recommend`;
-stated in :mod:`rbjax.studies.selection`) and what the same paired comparison of held-out
+stated in :mod:`rbjax.studies.selection.select`) and what the same paired comparison of held-out
 errors says about the blocked-force definition (:func:`blocked_force_note`).
 """
 
@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .selection_results import Candidate
+from .results import Candidate
 
 __all__ = ["RULE", "recommend", "blocked_force_note"]
 

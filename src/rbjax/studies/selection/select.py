@@ -20,10 +20,11 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 
-from .._progress import progress as say
-from .._x64 import require_x64
-from ..fit import MODEL_NAMES, predict, prepare_data
-from ..terms.model import BLOCKED_FORCE_OPTIONS, Model
+from ..._progress import progress as say
+from ..._x64 import require_x64
+from ...fit import MODEL_NAMES, predict, prepare_data
+from ...terms.model import BLOCKED_FORCE_OPTIONS, Model
+from ..parallel.executors import Parallel, Task, run_tasks
 from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import (
     check_folds,
@@ -32,9 +33,8 @@ from .cross_validation import (
     fold_tasks,
     held_out_rows,
 )
-from .executors import Parallel, Task, run_tasks
-from .selection_results import Candidate, Selection
-from .selection_rule import RULE, blocked_force_note, recommend
+from .results import Candidate, Selection
+from .rule import RULE, blocked_force_note, recommend
 
 __all__ = ["select_model"]
 
@@ -65,12 +65,12 @@ def select_model(
             ``"name/momentum"`` for one pairing.
         workers: worker processes the fits run in (default: every core this process may use;
             1: one fit after another in this process; or a
-            :class:`~rbjax.studies.executors.Parallel`). The full fits are tasks, and each
+            :class:`~rbjax.studies.parallel.executors.Parallel`). The full fits are tasks, and each
             fold, warm-started from its candidate's full fit, is a task of its own as soon as
             that fit is done, the costliest first; the results are those of ``workers=1``,
             bit for bit (the same programs on the same inputs).
         scheduler: address of a Dask scheduler to send the fits to instead (``rbjax[cluster]``;
-            see :mod:`rbjax.studies.executors`).
+            see :mod:`rbjax.studies.parallel.executors`).
         progress: one line per full fit and per fold on stderr.
         fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
@@ -79,7 +79,8 @@ def select_model(
 
     Raises:
         ValueError: bad candidates, data or worker count.
-        rbjax.studies.executors.TaskError: a fit failed on a worker (named: candidate, fold).
+        rbjax.studies.parallel.executors.TaskError: a fit failed on a worker (named: candidate,
+            fold).
     """
     require_x64()
     t0 = time.perf_counter()

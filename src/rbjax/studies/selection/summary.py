@@ -16,11 +16,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._progress import progress as say
-from ..fit.layout import fitted_parameter_names, model_from_name
-from ..fit.summary import as_table, fit_summary
-from ..fit.summary_result import SummaryFitResult
-from ..text import format_table
+from ..._progress import progress as say
+from ...fit.layout import fitted_parameter_names, model_from_name
+from ...fit.summary import as_table, fit_summary
+from ...fit.summary_result import SummaryFitResult
+from ...text import format_table
 
 #: The candidates compared by default: the paper's elastic model, with cubic stiffening, and two
 #: damping laws (on the fast exact paths; the ball mode runs on the ODE and is left out).

@@ -24,7 +24,8 @@ def batch_evaluator(samples: Mapping, gradients: bool = False, **settings):
 
     An evaluator given in its place is called the same way, once per design (DGSM: once more
     for the gradients at the base points), and must return the same; e.g.
-    ``rbjax.studies.sweep`` splits the rows into tasks for worker processes or a Dask cluster.
+    ``rbjax.studies.sweeps.sweep`` splits the rows into tasks for worker processes or a Dask
+    cluster.
     """
 
     if gradients:

@@ -111,7 +111,7 @@ def global_sensitivity(
             progress bars.
         evaluator: evaluates the design's rows, called as ``evaluator(samples, gradients,
             **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
-            ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweep`` passes
+            ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweeps.sweep`` passes
             one that splits the rows into tasks for worker processes or a Dask cluster.
         options: ``seed`` (default 0: of the design and of SALib's bootstrap; every method has
             it) and the method's keyword options (``method_options(method)``), e.g.

@@ -1,6 +1,6 @@
 """The rows of a design evaluated as tasks: chunks of whole ``chunk_size`` steps, each a
-picklable call (:func:`evaluate_chunk`) run by :func:`rbjax.studies.executors.run_tasks` on local
-worker processes, a Dask cluster or a given executor, joined in order here.
+picklable call (:func:`evaluate_chunk`) run by :func:`rbjax.studies.parallel.executors.run_tasks`
+on local worker processes, a Dask cluster or a given executor, joined in order here.
 
 Every impact is computed by itself, so the outputs do not depend on the split, but for the one
 choice ``rbjax.solve.batch.evaluate`` makes for a whole batch: the L_FE history's window and
@@ -8,7 +8,7 @@ sub-steps, from the longest and the shortest contact. With L_FE, a first pass of
 (:func:`contact_times`) gives the contact time of every row, and every chunk is evaluated with
 the rows of the design's shortest and longest contact beside its own (and dropped after): the
 whole design's window in every chunk. :func:`evaluate_rows` also evaluates one slice of the
-rows that way (a part of a job array, ``rbjax.studies.sweep_parts.run_part``);
+rows that way (a part of a job array, ``rbjax.studies.sweeps.parts.run_part``);
 :func:`task_evaluator` is the ``evaluator`` the studies of ``rbjax.studies.sensitivity`` take.
 """
 
@@ -19,9 +19,9 @@ from collections.abc import Callable, Mapping
 import numpy as np
 from tqdm import tqdm
 
-from ..solve.options import EvaluationSpec
-from .executors import Parallel, Task, run_tasks
-from .sensitivity import batch_evaluator
+from ...solve.options import EvaluationSpec
+from ..parallel.executors import Parallel, Task, run_tasks
+from ..sensitivity import batch_evaluator
 
 __all__ = [
     "evaluate_chunk",

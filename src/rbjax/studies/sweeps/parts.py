@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from ... import __version__
+from ..parallel.executors import Parallel
 from .chunks import evaluate_rows, on_devices, row_count, unflatten
-from .executors import Parallel
 from .sweep import run_study
 
 #: The marker of a part file (``run_part``), and its format's version.
@@ -140,7 +140,7 @@ def run_part(
     every part repeats it).
 
     Args:
-        config: the sweep configuration (:func:`~rbjax.studies.sweep.load_config`).
+        config: the sweep configuration (:func:`~rbjax.studies.sweeps.sweep.load_config`).
         part: which part, 1 … ``parts``.
         parts: how many parts the design is cut into.
         path: the file to write (NumPy ``.npz``, written whole or not at all): the part's
@@ -148,9 +148,9 @@ def run_part(
             :func:`merge_parts`.
         progress: progress bars on stderr.
         devices: the JAX devices of the in-process evaluation (default: all of them).
-        workers: as in :func:`~rbjax.studies.sweep.run_sweep`.
-        scheduler: as in :func:`~rbjax.studies.sweep.run_sweep`.
-        executor: as in :func:`~rbjax.studies.sweep.run_sweep`.
+        workers: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
+        scheduler: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
+        executor: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
 
     Returns:
         ``path``, as a :class:`~pathlib.Path`.
@@ -158,8 +158,8 @@ def run_part(
     Raises:
         ValueError: ``part``/``parts`` not integers with 1 ≤ part ≤ parts, a bad
             configuration, or ``workers``/``scheduler``/``executor`` as in
-            :func:`~rbjax.studies.sweep.run_sweep`.
-        rbjax.studies.executors.TaskError: a chunk failed, or its local worker died more
+            :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
+        rbjax.studies.parallel.executors.TaskError: a chunk failed, or its local worker died more
             often than allowed.
     """
     part, parts = _check_part(part, parts)
@@ -233,7 +233,7 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
         progress: progress bars on stderr.
 
     Returns:
-        The study's result, as :func:`~rbjax.studies.sweep.run_sweep` returns it.
+        The study's result, as :func:`~rbjax.studies.sweeps.sweep.run_sweep` returns it.
 
     Raises:
         ValueError: no paths; a file that is not a sweep part; a part of another design or

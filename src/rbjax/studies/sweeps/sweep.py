@@ -67,8 +67,8 @@ the rows are evaluated, SALib analyses the outputs. :func:`run_sweep` runs the e
   gives one CPU device per core; GPUs as they are);
 * as tasks (``workers=N``, ``scheduler=ADDRESS`` or ``executor=``; the command line's default
   is one worker per usable core): the rows are cut into chunks of whole ``chunk_size`` steps,
-  each chunk is a task (``rbjax.studies.chunks.evaluate_chunk``, a picklable call) of
-  :func:`rbjax.studies.executors.run_tasks` — a local pool of worker processes with one JAX
+  each chunk is a task (``rbjax.studies.sweeps.chunks.evaluate_chunk``, a picklable call) of
+  :func:`rbjax.studies.parallel.executors.run_tasks` — a local pool of worker processes with one JAX
   CPU device each, or a Dask distributed cluster — and the chunks' outputs are joined here, in
   order, before the analysis. A task that fails names its rows and their first values; a
   worker that dies has its chunks run again; a result is never analysed with a chunk missing.
@@ -94,9 +94,9 @@ alike)::
 
 (or ``run_sweep(config, scheduler=cluster.scheduler_address)``); the workers must be able to
 import rbjax, in the same version. Without a scheduler, a plain job array runs one part each
-(:func:`~rbjax.studies.sweep_parts.run_part`, ``rbjax sweep cfg.toml --shard I/P``: rows cut
+(:func:`~rbjax.studies.sweeps.parts.run_part`, ``rbjax sweep cfg.toml --shard I/P``: rows cut
 deterministically, each part written with the digest of the design) and
-:func:`~rbjax.studies.sweep_parts.merge_parts` (``--merge``) joins them, refusing a missing,
+:func:`~rbjax.studies.sweeps.parts.merge_parts` (``--merge``) joins them, refusing a missing,
 repeated or foreign part, and analyses the whole.
 """
 
@@ -109,16 +109,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..solve.batch import (
+from ...solve.batch import (
     BALL_PARAMETERS,
 )
-from ..solve.options import EvaluationSpec
-from ..terms.ball import JIS_RUBBER_BALL
-from ..terms.model import Solver
-from ..terms.serialize import model_from_dict, to_json
-from . import sensitivity as sens
+from ...solve.options import EvaluationSpec
+from ...terms.ball import JIS_RUBBER_BALL
+from ...terms.model import Solver
+from ...terms.serialize import model_from_dict, to_json
+from .. import sensitivity as sens
+from ..parallel.executors import Parallel
 from .chunks import task_evaluator
-from .executors import Parallel
 
 SWEEP_KINDS = (*sens.METHODS, "conformance")
 CONFIG_KEYS = (
@@ -261,7 +261,7 @@ def run_sweep(
         scheduler: the address of a Dask scheduler (``"tcp://host:8786"``, e.g. a
             dask-jobqueue cluster's ``scheduler_address``: module docstring): the chunks run
             on its workers. A scheduler that does not answer within
-            ``rbjax.studies.executors.CONNECT_TIMEOUT_S`` is a ``ValueError``.
+            ``rbjax.studies.parallel.executors.CONNECT_TIMEOUT_S`` is a ``ValueError``.
         executor: a ``concurrent.futures.Executor`` of the caller's for the chunks (not
             closed here).
 
@@ -277,7 +277,7 @@ def run_sweep(
             missing ``[ranges]`` (or ``[distributions]``) table, a bad ``outputs`` list or
             method option; a worker count below 1, both ``scheduler`` and ``executor``, or a
             scheduler that does not answer.
-        rbjax.studies.executors.TaskError: a chunk failed (the message names its rows and
+        rbjax.studies.parallel.executors.TaskError: a chunk failed (the message names its rows and
             their first values), or its local worker died more often than allowed.
     """
     parallel = Parallel(workers=workers, scheduler=scheduler, executor=executor)
