@@ -73,7 +73,7 @@ def describe(floor) -> dict:
 
 
 def agreement(floor) -> dict:
-    res = rbjax.simulate(np.array(CHECK_HEIGHTS), BALL, floor=floor, method="ode")
+    res = rbjax.simulate(np.array(CHECK_HEIGHTS), BALL, floor=floor, path="ode")
     res.raise_for_status()
     err = {q: 0.0 for q in QUANTITIES}
     for i, h in enumerate(CHECK_HEIGHTS):
@@ -86,7 +86,7 @@ def agreement(floor) -> dict:
 def throughput(floor, batch: int, method: str) -> dict:
     heights = np.linspace(0.1, 1.6, batch)
     t = time_call(
-        lambda: rbjax.simulate(heights, BALL, floor=floor, method=method).contact_time_s,
+        lambda: rbjax.simulate(heights, BALL, floor=floor, path=method).contact_time_s,
         min_repeats=3,
         max_time_s=20.0,
     )

@@ -134,11 +134,11 @@ def elastic_scalars(rows, sizes, scipy_per_impact):
             if method == "ode" and n > 10_000:
                 continue
             t = time_call(
-                lambda: blocked(rbjax.simulate(h, method=method)),
+                lambda: blocked(rbjax.simulate(h, path=method)),
                 min_repeats=3 if n >= 10_000 else 5,
                 min_time_s=0.5,
             )
-            res = rbjax.simulate(h, method=method)
+            res = rbjax.simulate(h, path=method)
             r = row(
                 rows,
                 "scalar",

@@ -55,7 +55,7 @@ def _errors(model, options) -> dict:
     n = int(math.ceil(contact.max() * RATE_Hz)) + 2
     return {
         "ode": _max_error(
-            force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact, method="ode"),
+            force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact, path="ode"),
             refs,
         ),
         "sampled": _max_error(
@@ -78,7 +78,7 @@ def _paths(heights, model, contact):
             ("ode", "contact"): lambda: trajectory(heights, times, BALL, model, SOLVER).force_N,
             ("ode", "record"): lambda: (
                 force_history(
-                    heights, BALL, model, SOLVER, contact_time_s=contact, method="ode"
+                    heights, BALL, model, SOLVER, contact_time_s=contact, path="ode"
                 ).force_N
             ),
             ("sampled", "contact"): lambda: (

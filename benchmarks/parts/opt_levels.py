@@ -41,14 +41,14 @@ def compute(quick: bool = False) -> dict[str, np.ndarray]:
         for k in ("contact_time_s", "peak_force_N", "restitution"):
             out[f"{path}|{k}"] = np.asarray(getattr(res, k))
 
-    quad = rbjax.simulate(HEIGHTS_M, method="quadrature")
+    quad = rbjax.simulate(HEIGHTS_M, path="quadrature")
     scalars("quadrature", quad)
     out["sampled|force_N"] = np.asarray(quad.history(rate_Hz=44_100.0, duration_s=0.05).force_N)
     out["sampled|lfe_octave_dB"] = np.asarray(quad.lfe_octave_dB())
     zener = dict(damping=rbjax.Zener(0.3, 1e-3), blocked_force="momentum")
     hunt = dict(damping=rbjax.HuntCrossley(0.05), blocked_force="momentum")  # the angle path's
-    scalars("angle", rbjax.simulate(HEIGHTS_M, method="angle", **hunt))
-    ode = rbjax.simulate(HEIGHTS_M, method="ode", **zener)
+    scalars("angle", rbjax.simulate(HEIGHTS_M, path="angle", **hunt))
+    ode = rbjax.simulate(HEIGHTS_M, path="ode", **zener)
     scalars("ode", ode)
     out["ode-sampled|force_N"] = np.asarray(ode.history(rate_Hz=44_100.0, duration_s=0.05).force_N)
     mode = rbjax.simulate(
@@ -63,7 +63,7 @@ def compute(quick: bool = False) -> dict[str, np.ndarray]:
         return rbjax.simulate(1.0, ball.replace(youngs_Pa=E), **kw).contact_time_s
 
     out["quadrature|grad"] = np.asarray(jax.grad(tc)(1.6e6))  # the README's example, un-jitted
-    out["angle|grad"] = np.asarray(jax.grad(lambda E: tc(E, method="angle", **hunt))(1.6e6))
+    out["angle|grad"] = np.asarray(jax.grad(lambda E: tc(E, path="angle", **hunt))(1.6e6))
     fwd = rbjax.Solver(adjoint="forward")
     out["ode|grad (jacfwd)"] = np.asarray(
         jax.jacfwd(lambda E: tc(E, solver=fwd, **zener))(jnp.asarray(1.6e6))

@@ -39,11 +39,11 @@ def main(quick: bool = False) -> None:
 
         def run(options=options):
             return rbjax.simulate(
-                HEIGHTS, blocked_force="momentum", method="ode", **options
+                HEIGHTS, blocked_force="momentum", path="ode", **options
             ).contact_time_s
 
         t = time_call(run)
-        res = rbjax.simulate(HEIGHTS, blocked_force="momentum", method="ode", **options)
+        res = rbjax.simulate(HEIGHTS, blocked_force="momentum", path="ode", **options)
         steps = float(np.mean(np.asarray(res.num_steps)))
         us = 1e6 * t["median_s"] / HEIGHTS.size
         out[name] = {
