@@ -25,7 +25,7 @@ import rbjax
 from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Zener
 from rbjax.cli import main
 from rbjax.data import examples_dir
-from rbjax.fit import FitOptions, fit, model_histories, parameter_names
+from rbjax.fit import FitOptions, fit, fitted_parameter_names, model_histories
 
 from scipy_reference import reference_impact
 from synthetic_records import (
@@ -291,7 +291,7 @@ def test_bad_input_names_the_parameter():
         fit(data, "paper", options=FitOptions(optimizer="newton"))
     with pytest.raises(ValueError, match="hold_poisson='0.5' is outside"):
         FitOptions(hold_poisson="0.5")
-    assert parameter_names("zener+stiffening") == (
+    assert fitted_parameter_names("zener+stiffening") == (
         "youngs_Pa",
         "poisson",
         "stiffness_ratio",

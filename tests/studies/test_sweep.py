@@ -24,7 +24,7 @@ import pytest
 
 import rbjax
 from rbjax.cli import main
-from rbjax.solve.batch import evaluate, evaluate_jacobian, evaluation_paths, parameter_names
+from rbjax.solve.batch import evaluate, evaluate_jacobian, evaluation_paths
 from rbjax.solve.devices import device_map
 from rbjax.spectrum.levels import lfe_octave_dB
 from rbjax.studies.parallel.executors import TaskError
@@ -155,7 +155,9 @@ def test_evaluate_rejects_bad_samples():
         evaluate({"mass_kg": np.ones(3), "height_m": np.ones(2)})
     with pytest.raises(ValueError, match="not known"):
         evaluate({"colour": np.ones(2)})
-    assert "damping_Ns_per_m" in parameter_names(rbjax.Model(damping=rbjax.KelvinVoigt(1.0)))
+    assert "damping_Ns_per_m" in rbjax.parameter_names(
+        model=rbjax.Model(damping=rbjax.KelvinVoigt(1.0))
+    )
 
 
 SHARDED_SCRIPT = textwrap.dedent(

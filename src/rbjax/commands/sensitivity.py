@@ -117,8 +117,9 @@ def run(args) -> int:
     import numpy as np
 
     from .._validate import check_range
-    from ..solve.batch import canonical_name, parameter_names
+    from ..solve.batch import canonical_name
     from ..studies.sensitivity import local_sensitivity
+    from ..terms.parameters import parameter_names
     from .simulate import load_ball_and_model
 
     check_range("height_m", np.asarray(args.height_m), lower=0.0)
@@ -128,7 +129,7 @@ def run(args) -> int:
         wrt = [canonical_name(w, model) for w in args.wrt]  # unknown names fail before any solve
     progress(
         f"differentiating at {len(args.height_m)} drop height(s) w.r.t. "
-        f"{', '.join(wrt or parameter_names(model))}"
+        f"{', '.join(wrt or parameter_names(model=model))}"
     )
     result = local_sensitivity(
         args.height_m,

@@ -18,13 +18,13 @@ from .layout import (
     MODEL_NAMES,
     STIFFENING_SUFFIX,
     all_model_names,
+    fitted_parameter_names,
     model_from_name,
     parse_model_name,
     parse_model_terms,
 )
 from .options import FitOptions
 from .prediction import model_histories, predict
-from .prediction import parameter_names_of as parameter_names
 from .program import OPTIMIZERS
 from .records import FitData, load_data, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction
@@ -41,10 +41,10 @@ __all__ = [
     "Prediction",
     "all_model_names",
     "fit",
+    "fitted_parameter_names",
     "load_data",
     "model_from_name",
     "model_histories",
-    "parameter_names",
     "parse_model_name",
     "parse_model_terms",
     "predict",

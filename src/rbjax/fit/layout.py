@@ -214,9 +214,23 @@ def model_from_name(
     )
 
 
-def fitted_parameter_names(model: Model) -> tuple[str, ...]:
-    """The physical parameters a fit of ``model`` frees by default: E, ν and every parameter
-    of its damping laws, stiffening, ball mode and series element."""
+def fitted_parameter_names(model: str | Model) -> tuple[str, ...]:
+    """The physical parameters a fit of ``model`` frees by default, e.g. ``("youngs_Pa",
+    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``.
+
+    Args:
+        model: a model name (see :func:`parse_model_terms`) or an ``rbjax.Model``.
+
+    Returns:
+        The names (tuple of str), in the fit's order: E and ν, then the parameters of the
+        damping laws, stiffening, ball mode and series element (not R, h, M).
+
+    Raises:
+        TypeError: ``model`` is neither a str nor a ``Model``.
+        ValueError: ``model`` is not a model name.
+    """
+    if not isinstance(model, Model):
+        model = model_from_name(model)
     names = [row.name for row in parameter_table(1.0, Ball(1.0, 0.5, 1.0, 1.0, 0.0), model)]
     return tuple(n for n in names if n not in CONSTANT_PARAMETERS and n != "height_m")
 

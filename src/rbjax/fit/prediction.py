@@ -78,7 +78,7 @@ def model_histories(
         data: a :class:`FitData`, Recording objects, or paths/a directory (see
             :func:`prepare_data`).
         model: a model name or an ``rbjax.Model`` (its values replaced by ``params``).
-        params: name → value of every name of ``rbjax.fit.parameter_names(model)``, in the
+        params: name → value of every name of ``rbjax.fit.fitted_parameter_names(model)``, in the
             units the names state (others are not used).
         onset_shift_s: the contact start of each record in its time axis, s: one per
             record, or one for all.
@@ -130,25 +130,3 @@ def model_histories(
     n = data.n_records * data.n_samples
     jac = out["jac_theta"][:n].reshape(data.n_records, data.n_samples, -1)
     return out["force"], jac, tuple(lay.names)
-
-
-def parameter_names_of(
-    model: str | Model, *, blocked_force: str = "paper", gas: str = "adiabatic"
-) -> tuple[str, ...]:
-    """The fitted physical parameters of a model (name or ``Model``), e.g. ``("youngs_Pa",
-    "poisson", "stiffness_ratio", "relaxation_time_s")`` for ``zener``.
-
-    Args:
-        model: a model name or an ``rbjax.Model``.
-        blocked_force: for a model name: ``paper`` or ``momentum``. A ``Model`` brings its own.
-        gas: for a model name: ``adiabatic`` or ``none``. A ``Model`` brings its own.
-
-    Returns:
-        The names (tuple of str), in the fit's order: E and ν, then the parameters of the
-        damping laws, stiffening, ball mode and series element (not R, h, M).
-
-    Raises:
-        ValueError: ``model`` is not a model name, or ``blocked_force`` or ``gas`` is not
-            an option.
-    """
-    return fitted_parameter_names(candidate_model(model, blocked_force, gas)[1])

@@ -66,7 +66,6 @@ HISTORY_BLOCK = 128
 __all__ = [
     "BALL_PARAMETERS",
     "SCALAR_OUTPUTS",
-    "parameter_names",
     "canonical_name",
     "assemble",
     "nominal_parameters",
@@ -81,11 +80,6 @@ __all__ = [
 # Parameters: names, and a (height, ball, model) with some of them replaced.
 
 
-def parameter_names(model: Model | None = None) -> tuple[str, ...]:
-    """Every continuous parameter of an impact with ``model`` (``rbjax.terms.parameters``)."""
-    return params.parameter_names(1.0, JIS_RUBBER_BALL, model)
-
-
 def canonical_name(name: str, model: Model | None = None) -> str:
     """The parameter called ``name`` in any letter case (``youngs_pa`` → ``youngs_Pa``)."""
     return params.canonical_name(name, JIS_RUBBER_BALL, model)
@@ -98,7 +92,7 @@ def assemble(values: Mapping, height_m, ball: Ball, model: Model):
 
 
 def nominal_parameters(height_m, ball: Ball, model: Model) -> dict[str, float]:
-    """Every parameter of ``parameter_names(model)`` with its nominal value."""
+    """Every parameter of ``rbjax.parameter_names(model=model)`` with its nominal value."""
     return {row.name: row.value for row in params.parameter_table(float(height_m), ball, model)}
 
 
@@ -164,8 +158,8 @@ def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
     respect to those parameters (forward mode, one ``jax.jacfwd`` per sample).
 
     ``fn(batch, (nominal, model))``: ``batch`` holds a column per varied parameter, ``nominal``
-    the value of every other parameter of ``parameter_names(model)`` (a scalar each, shared by
-    the rows), so the program does not depend on the nominal values.
+    the value of every other parameter of ``rbjax.parameter_names(model=model)`` (a scalar
+    each, shared by the rows), so the program does not depend on the nominal values.
     """
 
     def one(row, shared):
@@ -308,10 +302,11 @@ def evaluate(
 ) -> dict[str, np.ndarray]:
     """Impact outputs for N parameter samples, sharded over the devices.
 
-    ``samples`` maps parameter names (``parameter_names(model)``, any case) to arrays of length N;
-    the other parameters keep the values of ``height_m``, ``ball`` and ``model``. Returns NumPy
-    arrays of length N: ``contact_time_s``, ``peak_force_N``, ``restitution``,
-    ``max_deflection_m``, ``status`` and, with ``lfe=True``, ``lfe_<band>_dB`` per octave band
+    ``samples`` maps parameter names (``rbjax.parameter_names(model=model)``, any case) to
+    arrays of length N; the other parameters keep the values of ``height_m``, ``ball`` and
+    ``model``. Returns NumPy arrays of length N: ``contact_time_s``, ``peak_force_N``,
+    ``restitution``, ``max_deflection_m``, ``status`` and, with ``lfe=True``, ``lfe_<band>_dB``
+    per octave band
     (of the record ``evaluation.rate_Hz`` × ``evaluation.duration_s``). Outputs of flagged
     solves (status ≠ 0) are NaN.
 

@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ...solve.batch import assemble, canonical_name, lfe_output_names, parameter_names
+from ...solve.batch import assemble, canonical_name, lfe_output_names
 from ...solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
 from ...solve.options import model_from_shortcuts
 from ...solve.outcome import STATUS_NAMES
@@ -30,7 +30,7 @@ from ...solve.simulate import simulate_model, trajectory
 from ...spectrum.levels import lfe_octave_dB
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model, Solver
-from ...terms.parameters import parameter_table
+from ...terms.parameters import parameter_names, parameter_table
 from ._common import is_lfe
 
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution")
@@ -230,7 +230,7 @@ def local_sensitivity(
     if heights.ndim != 1:
         raise ValueError(f"height_m has shape {np.shape(height_m)}; expected a scalar or 1-D array")
     model = model_from_shortcuts("local_sensitivity", model, {})
-    valid = parameter_names(model)
+    valid = parameter_names(model=model)
     wrt = (
         valid
         if wrt is None

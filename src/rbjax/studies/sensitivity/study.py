@@ -94,7 +94,7 @@ def global_sensitivity(
     """Global sensitivity of the impact outputs over uniform parameter ranges (SALib).
 
     Args:
-        ranges: parameter name (any case; see ``rbjax.solve.batch.parameter_names``) → (low, high).
+        ranges: parameter name (any case; see ``rbjax.parameter_names``) → (low, high).
         n: the method's sample size: ``"sobol"`` base points N (a power of two; N (d + 2)
             impacts, N (2d + 2) with ``second_order=True``, the default), ``"morris"``
             trajectories (n (d + 1) impacts), ``"fast"`` samples per parameter (n d), ``"pawn"``
