@@ -3,7 +3,8 @@ and what XLA's optimisation level changes.
 
     .venv/bin/python benchmarks/accuracy.py [--quick] [--only SECTION] [--list]
 
-Sections (each writes ``results/<section>.json``; the figures are in RESULTS.md, "Accuracy"):
+Sections (each writes ``results/<section>.json``; the figures are in RESULTS.md, "Accuracy
+against the independent scipy reference" and "Work–precision and stability"):
 
 * ``reference_agreement``: the default settings against the scipy reference, every model;
 * ``work_precision``: error against cost per diffrax method and tolerance, and the quadrature;
