@@ -304,11 +304,11 @@ def held_out_rows(result, heights) -> list[SimpleNamespace]:
 
 
 def shared_structure(names, gas: str = "adiabatic"):
-    """One model holding the terms of every candidate named (``rbjax.terms.superset_model``):
+    """One model holding the terms of every candidate named (``rbjax.terms.structure_model``):
     the structure of the one compiled fit program all candidates run through."""
     from rbjax import Model
     from rbjax.fit import parse_model_terms
-    from rbjax.terms import superset_model
+    from rbjax.terms import structure_model
 
     laws, stiff, mode, series = [], False, False, False
     for name in names:
@@ -317,7 +317,7 @@ def shared_structure(names, gas: str = "adiabatic"):
         stiff = stiff or terms.stiffening
         mode = mode or terms.ball_mode
         series = series or terms.series
-    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
+    return structure_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
 
 
 def usable_cores() -> int:

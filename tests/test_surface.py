@@ -160,7 +160,7 @@ def test_the_studies_take_a_model_only_and_refuse_model_keywords(call):
         (FitOptions, {"extra_weights": {"lfe": -1.0}}, "extra_weights\\['lfe'\\]=-1.0"),
         (FitOptions, {"max_steps": -1}, "max_steps=-1.*valid range"),
         (FitOptions, {"solver": "tsit5"}, "solver='tsit5'"),
-        (FitOptions, {"superset": "zener"}, "superset='zener'"),
+        (FitOptions, {"structure": "zener"}, "structure='zener'"),
         (FitOptions, {"fit_heights": [1.0, float("nan")]}, "fit_heights"),
         (DesignSearch, {"n_starts": 0}, "n_starts=0.*valid range"),
         (DesignSearch, {"steps": -1}, "steps=-1.*valid range"),

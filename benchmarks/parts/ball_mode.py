@@ -84,7 +84,7 @@ def held_out(data, superset, quick: bool):
                 data,
                 name,
                 blocked_force="momentum",
-                options=FitOptions(fit_heights=FIT_HEIGHTS, superset=superset),
+                options=FitOptions(fit_heights=FIT_HEIGHTS, structure=superset),
                 start=start,
                 progress=False,
             )

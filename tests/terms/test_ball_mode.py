@@ -16,7 +16,7 @@ from rbjax.fit.layout import fitted_parameter_names
 from rbjax.fit.problem import embed
 from rbjax.studies.selection.candidates import candidate_pairs, shared_structure
 from rbjax.terms.ball_mode import from_modal_mass
-from rbjax.terms.model import superset_model
+from rbjax.terms.model import structure_model
 
 from scipy_ball_mode_reference import reference_ball_mode_impact
 from scipy_reference import reference_impact
@@ -317,7 +317,7 @@ def test_the_shared_structure_holds_the_mode_off_for_candidates_without_it():
     plain = rbjax.Model(blocked_force="momentum", damping=law)
     inside = embed(
         plain,
-        superset_model(
+        structure_model(
             rbjax.Model(blocked_force="momentum"), [HuntCrossley], stiffening=False, ball_mode=True
         ),
         BALL,
@@ -333,7 +333,7 @@ def test_the_shared_structure_holds_the_mode_off_for_candidates_without_it():
     )
     np.testing.assert_allclose(np.asarray(b.peak_force_N), np.asarray(a.peak_force_N), rtol=1e-9)
     # a ball-mode model does not fit in a structure without the mode
-    with pytest.raises(ValueError, match="superset lacks"):
+    with pytest.raises(ValueError, match="structure lacks"):
         embed(model_from_name("hunt-crossley+ball-mode"), shared_structure(["hunt-crossley"]), BALL)
 
 

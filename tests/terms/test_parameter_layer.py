@@ -16,7 +16,7 @@ import pytest
 import rbjax
 from rbjax import JIS_RUBBER_BALL, AbstractDamping, KelvinVoigt, Model, Parameter, Zener
 from rbjax.terms import parameters as params
-from rbjax.terms.model import superset_model
+from rbjax.terms.model import structure_model
 
 from scipy_reference import reference_impact
 from synthetic_records import synthetic_data
@@ -130,10 +130,10 @@ def test_transforms_invert_and_their_slope_is_the_derivative(transform):
 
 
 @pytest.mark.parametrize("blocked_force", ["paper", "momentum"])
-def test_the_superset_with_its_extra_terms_off_is_the_elastic_model(blocked_force):
+def test_the_structure_with_its_extra_terms_off_is_the_elastic_model(blocked_force):
     # the shared structure of model selection: every law present at its off values, β = 0
     heights = np.array([0.1, 1.0, 1.6])
-    model = superset_model(Model(blocked_force=blocked_force))
+    model = structure_model(Model(blocked_force=blocked_force))
     assert len(model.damping) == len(rbjax.DAMPING_MODELS) and model.stiffening is not None
     res = rbjax.simulate(
         heights, blocked_force=blocked_force, damping=model.damping, stiffening=model.stiffening
@@ -141,7 +141,7 @@ def test_the_superset_with_its_extra_terms_off_is_the_elastic_model(blocked_forc
     assert np.all(res.status == 0)
     for i, h in enumerate(heights):
         ref = reference_impact(float(h), JIS_RUBBER_BALL, blocked_force=blocked_force, rtol=1e-12)
-        # docs/guides/fitting.md: the superset "agrees with the elastic model
+        # docs/guides/fitting.md: the shared structure "agrees with the elastic model
         # to 1e-9" (measured ≤ 1.7e-10 against the independent reference)
         for q in ("contact_time_s", "peak_force_N", "restitution"):
             assert float(getattr(res, q)[i]) == pytest.approx(getattr(ref, q), rel=1e-9), q

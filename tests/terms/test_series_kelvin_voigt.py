@@ -162,10 +162,10 @@ def test_names_files_and_the_fit_layer():
     assert "series" not in model_to_dict(
         rbjax.Model()
     )  # files without the element stay as they were
-    superset = shared_structure(["hunt-crossley", name, "hunt-crossley+ball-mode"])
+    structure = shared_structure(["hunt-crossley", name, "hunt-crossley+ball-mode"])
     assert (
-        float(superset.series.series_compliance_m_per_N) == 0.0
-        and float(superset.ball_mode.mode_mass_ratio) == 0.0
+        float(structure.series.series_compliance_m_per_N) == 0.0
+        and float(structure.ball_mode.mode_mass_ratio) == 0.0
     )
     # a selection fits the candidates without the element in a structure without it
     structures = shared_structures(["paper", "hunt-crossley+ball-mode", name])
@@ -176,7 +176,7 @@ def test_names_files_and_the_fit_layer():
     assert structures[name].series is not None and structures[name].ball_mode is None
     reading = series_structure(_model(None, "paper", 1.0 / 3.3e5, 1.5e3 / 3.3e5))
     assert "3.3e+05 N/m" in reading and "1.5e+03 N s/m" in reading
-    assert series_structure(superset) == ""
+    assert series_structure(structure) == ""
 
 
 def test_every_name_the_parser_accepts_is_listed_and_builds_its_model():

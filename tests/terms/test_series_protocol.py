@@ -2,7 +2,7 @@
 only (a massless dashpot in series with the shell, ẇ = −φ F_c: a fluidity φ of its own), and
 with no edit to the library it simulates (against an independent scipy reference, written
 here), is refused by name by the energy balance, is fitted through the public API (records
-from that reference: the fit must recover φ), is held off in a superset, and round-trips
+from that reference: the fit must recover φ), is held off in a shared structure, and round-trips
 through parameter files.
 
 The reference is not the formulation rbjax solves: rbjax carries δ̇ as a state and solves for
@@ -31,7 +31,7 @@ import rbjax
 from rbjax import JIS_RUBBER_BALL, Model, Parameter
 from rbjax.data import Recording
 from rbjax.fit import prepare_data
-from rbjax.terms import SERIES_ELEMENTS, AbstractSeriesElement, superset_model
+from rbjax.terms import SERIES_ELEMENTS, AbstractSeriesElement, structure_model
 from rbjax.terms.serialize import load_params, model_to_dict, save_params
 
 from scipy_reference import ball_parameters, gas_force, shell_stiffness
@@ -164,11 +164,11 @@ def test_it_simulates_as_the_scipy_reference(height_m):
     assert ref.restitution < 0.99 * float(rbjax.simulate(height_m, BALL).restitution)
 
 
-def test_held_off_in_a_superset_it_is_the_elastic_model():
-    superset = superset_model(Model(), laws=(), stiffening=False, elements=(ToyDashpot,))
-    assert superset.name == "paper+toy-dashpot"
-    assert float(superset.series_elements[0].toy_fluidity_m_per_Ns) == 0.0
-    off, plain = rbjax.simulate(1.0, BALL, superset), rbjax.simulate(1.0, BALL, Model())
+def test_held_off_in_a_shared_structure_it_is_the_elastic_model():
+    structure = structure_model(Model(), laws=(), stiffening=False, elements=(ToyDashpot,))
+    assert structure.name == "paper+toy-dashpot"
+    assert float(structure.series_elements[0].toy_fluidity_m_per_Ns) == 0.0
+    off, plain = rbjax.simulate(1.0, BALL, structure), rbjax.simulate(1.0, BALL, Model())
     assert float(off.contact_time_s) == pytest.approx(float(plain.contact_time_s), rel=1e-9)
     assert float(off.restitution) == pytest.approx(float(plain.restitution), rel=1e-9)
 

@@ -92,7 +92,7 @@ def fit(
         options: a :class:`~rbjax.fit.options.FitOptions` (default ``FitOptions()``): the
             optimiser and its step budget, the residual's scale, decimation and extra rows, the
             prediction's path and ``Solver``, ν held or given a prior, drop-height errors, the
-            heights fitted, a shared superset program.
+            heights fitted, a shared structure (one compiled program).
         progress: print one line per optimiser round to stderr.
 
     Returns:
@@ -108,7 +108,7 @@ def fit(
             ``start`` names a parameter the model lacks, or is a :class:`FitResult` of
             another model or number of records; ``options`` is not a
             :class:`~rbjax.fit.options.FitOptions`;
-            ``fit_heights`` names a height without records; the ``superset`` lacks a term
+            ``fit_heights`` names a height without records; the ``structure`` lacks a term
             of the model or has another gas.
         TypeError: ``model`` neither a str nor an ``rbjax.Model``; data
             that are neither paths nor recordings.

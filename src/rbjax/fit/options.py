@@ -48,8 +48,8 @@ class FitOptions:
         height_error: also fit each record's drop-height error, bounded by ±1 cm.
         fit_heights: heights (m) whose records enter the fit (default all); the others are
             predicted (onset-aligned, nothing fitted to them) and reported as held out.
-        superset: a model containing every term of the fitted model (e.g.
-            ``rbjax.terms.model.superset_model``): the fit runs in its compiled program with the
+        structure: a model containing every term of the fitted model (e.g.
+            ``rbjax.terms.model.structure_model``): the fit runs in its compiled program with the
             terms the model lacks held at their values, so fits of different models share one
             program (model selection does this).
 
@@ -58,7 +58,7 @@ class FitOptions:
             not an integer ≥ 1; ``hold_poisson`` is outside (−1, 0.5]; ``poisson_prior`` is
             not a (mean, std) with −1 < mean < 0.5, std > 0; ``extra_weights`` names an
             unknown term or gives a negative or non-finite weight; ``max_steps`` is not an
-            integer ≥ 0; ``solver`` is not an ``rbjax.Solver``; ``superset`` is not an
+            integer ≥ 0; ``solver`` is not an ``rbjax.Solver``; ``structure`` is not an
             ``rbjax.Model``; ``height_error`` is not a bool; ``fit_heights`` is not a
             sequence of finite heights.
     """
@@ -74,7 +74,7 @@ class FitOptions:
     poisson_prior: tuple[float, float] | None = None
     height_error: bool = False
     fit_heights: Sequence[float] | None = None
-    superset: Model | None = None
+    structure: Model | None = None
 
     def __post_init__(self):
         check_choice("optimizer", self.optimizer, OPTIMIZERS)
@@ -114,8 +114,8 @@ class FitOptions:
             )
         if self.solver is not None and not isinstance(self.solver, Solver):
             raise ValueError(f"solver={self.solver!r} must be an rbjax.Solver")
-        if self.superset is not None and not isinstance(self.superset, Model):
-            raise ValueError(f"superset={self.superset!r} must be an rbjax.Model or None")
+        if self.structure is not None and not isinstance(self.structure, Model):
+            raise ValueError(f"structure={self.structure!r} must be an rbjax.Model or None")
         if not isinstance(self.height_error, bool):
             raise ValueError(f"height_error={self.height_error!r} must be True or False")
         if self.fit_heights is not None:

@@ -22,7 +22,7 @@ def predict(
     model: Model | None = None,
     *,
     solver: Solver | None = None,
-    superset: Model | None = None,
+    structure: Model | None = None,
 ) -> Prediction:
     """Compare a given (unfitted) model with the records; nothing is fitted.
 
@@ -37,7 +37,7 @@ def predict(
         model: any ``rbjax.Model`` (default: the paper's elastic model).
         solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then
             runs on the diffrax ODE; default: the fit's path for the model.
-        superset: run in that model's compiled program (see :func:`fit`).
+        structure: run in that model's compiled program (see :func:`fit`).
 
     Returns:
         The :class:`Prediction`: ``per_height`` rows as in :class:`FitResult` (all held
@@ -46,14 +46,14 @@ def predict(
 
     Raises:
         RuntimeError: float64 was switched off after importing rbjax.
-        ValueError: ``solver`` is not an ``rbjax.Solver``, or ``superset`` has another gas
+        ValueError: ``solver`` is not an ``rbjax.Solver``, or ``structure`` has another gas
             or lacks a term of ``model``.
         TypeError: a model name that is not a str.
         DataError: the records cannot be prepared (see :func:`prepare_data`).
     """
     require_x64()
     model = Model() if model is None else model
-    problem, _, out = aligned(data, ball, model, solver, superset)
+    problem, _, out = aligned(data, ball, model, solver, structure)
     d = problem.data
     rows = per_height_rows(
         problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool)

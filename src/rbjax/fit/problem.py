@@ -1,6 +1,6 @@
 """One fit problem: the records, the parameter layout and the compiled program, and the steps
 every fit and prediction shares (onset alignment, the per-height table, embedding a model in a
-superset of its terms).
+shared structure that holds its terms).
 """
 
 from __future__ import annotations
@@ -330,18 +330,20 @@ def candidate_model(model, blocked_force, gas) -> tuple[str, Model]:
 
 
 def embed(model: Model, structure: Model | None, ball: Ball) -> Model:
-    """``model``'s values inside ``structure`` (a superset of its terms), or ``model`` itself."""
+    """``model``'s values inside ``structure`` (a structure with its terms), or ``model`` itself."""
     if structure is None:
         return model
     if structure.gas != model.gas:
         raise ValueError(
-            f"superset gas={structure.gas!r} differs from the model's gas={model.gas!r}"
+            f"structure gas={structure.gas!r} differs from the model's gas={model.gas!r}"
         )
     have = set(parameter_names(1.0, ball, structure))
     mine = [n for n in parameter_names(1.0, ball, model) if n != "height_m"]
     missing = [n for n in mine if n not in have]
     if missing or not {type(d) for d in model.damping} <= {type(d) for d in structure.damping}:
-        raise ValueError(f"superset lacks the terms of model {model.name!r} (parameters {missing})")
+        raise ValueError(
+            f"structure lacks the terms of model {model.name!r} (parameters {missing})"
+        )
 
     values = {
         r.name: r.value
@@ -351,10 +353,10 @@ def embed(model: Model, structure: Model | None, ball: Ball) -> Model:
     return replace(values, 1.0, ball, structure)[2]
 
 
-def aligned(data, ball: Ball, model: Model, solver, superset=None):
+def aligned(data, ball: Ball, model: Model, solver, structure=None):
     """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
     data = prepare_data(data)
-    model = embed(model, superset, ball)
+    model = embed(model, structure, ball)
     problem = Problem(
         data,
         ball,

@@ -4,7 +4,7 @@ optimistix Levenberg–Marquardt (or Gauss–Newton) with exact forward-mode Jac
 The program depends only on the model's *structure* (which terms exist) and the data's shape;
 everything else is a runtime value: the parameter values, which of them are free (a mask), the
 records in the fit (a mask), the extra residual weights, the ν prior. So every candidate of a
-model selection, embedded in one superset model whose unused terms are held at their off
+model selection, embedded in one shared structure whose unused terms are held at their off
 values, and every cross-validation fold run through the same compiled program, and the
 program can be exported and kept on disk (no host callback; see :mod:`rbjax.fit.program_store`).
 

@@ -93,7 +93,7 @@ class FitSetup:
 
     @property
     def structure(self) -> Model:
-        """The model whose compiled program the fit runs (``candidate`` or its superset)."""
+        """The model whose compiled program the fit runs (``candidate`` or its shared structure)."""
         return self.problem.structure_model
 
     @property
@@ -117,7 +117,7 @@ def set_up(
     data = prepare_data(data)
     ball = ball.replace(**{k: v for k, v in fixed.items() if k in CONSTANT_PARAMETERS})
     fit_mask = _height_mask(data, options.fit_heights)
-    structure = embed(candidate, options.superset, ball)
+    structure = embed(candidate, options.structure, ball)
     path, why_ode = fit_path(options.path, structure, options.solver)
     problem = Problem(
         data,

@@ -54,7 +54,7 @@ from .forces import (
     reissner_stiffness_N_per_m,
     shell_force_N,
 )
-from .model import Model, Solver, superset_model
+from .model import Model, Solver, structure_model
 from .parameters import (
     ParameterInfo,
     canonical_name,
@@ -116,7 +116,7 @@ __all__ = [
     "shell_force_N",
     "Model",
     "Solver",
-    "superset_model",
+    "structure_model",
     "ParameterInfo",
     "canonical_name",
     "from_vector",

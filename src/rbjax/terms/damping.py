@@ -69,7 +69,7 @@ class AbstractDamping(eqx.Module):
 
     @classmethod
     def off(cls) -> AbstractDamping:
-        """The law with parameters that make its force vanish (for a shared superset model):
+        """The law with parameters that make its force vanish (for a shared structure):
         by default every parameter at its lower bound 0; a law for which that is not "off"
         (or not allowed) overrides this."""
         specs = cls.PARAMETERS

@@ -372,7 +372,7 @@ class Solver(eqx.Module):
         return optx.Newton(rtol=1e-12, atol=1e-13)
 
 
-def superset_model(
+def structure_model(
     base: Model,
     laws=None,
     stiffening: bool = True,
@@ -385,11 +385,11 @@ def superset_model(
     and the series element too) present but switched off (their ``off()`` values, β = 0,
     μ = 0, C = 0).
 
-    Models that differ in which of these terms are on share the superset's structure, so one
+    Models that differ in which of these terms are on share this structure, so one
     compiled program serves them all; the terms a candidate leaves off are held at their
     off values. The elements are opt-in: held off they are exact (w ≡ 0) but carry their
     states and Jacobian columns through every solve (the ball mode two states and three
-    columns). The superset holds its elements in the order their classes were defined
+    columns). The structure holds its elements in the order their classes were defined
     (``SERIES_ELEMENTS``).
     """
     laws = tuple(DAMPING_MODELS.values()) if laws is None else tuple(laws)

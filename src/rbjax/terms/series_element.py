@@ -17,7 +17,7 @@ element only through :class:`AbstractSeriesElement`:
   for the velocity jump δ̇ = v0 + ẇ(0);
 - its free motion after the contact ends (``free_change_m``: w(τ) − w(0) with F_c = 0) over a
   horizon of its slowest time scale (``recontact_horizon_s``), for the recontact check;
-- its "off" value (``off``: parameters that make w ≡ 0, held by a shared superset fit), its
+- its "off" value (``off``: parameters that make w ≡ 0, held by a fit in a shared structure), its
   start values for fitting (``start``, and ``START_ALTERNATIVES``), and its parameters'
   declarations (``PARAMETERS``).
 
@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from .declare import Parameter, check_declared
 
 #: name → class of every element in series with the shell (filled by subclassing, in the order
-#: the classes are defined: the order a shared superset model holds them in).
+#: the classes are defined: the order a shared structure holds them in).
 SERIES_ELEMENTS: dict[str, type[AbstractSeriesElement]] = {}
 
 
@@ -127,7 +127,7 @@ class AbstractSeriesElement(eqx.Module):
 
     @classmethod
     def off(cls) -> AbstractSeriesElement:
-        """The element with parameters that keep w ≡ 0 (for a shared superset model): by
+        """The element with parameters that keep w ≡ 0 (for a shared structure): by
         default every parameter at its lower bound 0; an element for which that is not "off"
         (or not allowed) overrides this."""
         specs = cls.PARAMETERS

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from ..._validate import check_choice
 from ...fit import parse_model_name, parse_model_terms
-from ...terms.model import BLOCKED_FORCE_OPTIONS, Model, superset_model
+from ...terms.model import BLOCKED_FORCE_OPTIONS, Model, structure_model
 
 __all__ = [
     "candidate_pairs",
@@ -55,7 +55,7 @@ def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
         stiff = stiff or terms.stiffening
         mode = mode or terms.ball_mode
         series = series or terms.series
-    return superset_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
+    return structure_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
 
 
 def shared_structures(

@@ -70,11 +70,11 @@ def held_out_rows(result, heights) -> list[HeldOut]:
 def fit_task(data, model, blocked_force, fit_heights, start, fit_kwargs) -> FitResult:
     """One fit of a selection as a task of its own (a module-level function, so that a worker
     process or a Dask worker can run it): :func:`rbjax.fit.fit` without progress lines, its
-    ``options`` (in ``fit_kwargs``) with ``fit_heights`` and the ``superset`` of ``fit_kwargs``."""
+    ``options`` (in ``fit_kwargs``) with ``fit_heights`` and the ``structure`` of ``fit_kwargs``."""
     kwargs = dict(fit_kwargs)
-    superset = kwargs.pop("superset", None)
+    structure = kwargs.pop("structure", None)
     options = options_or_default(kwargs.pop("options", None))
-    options = options.replace(fit_heights=fit_heights, superset=superset)
+    options = options.replace(fit_heights=fit_heights, structure=structure)
     return fit(
         data,
         model,

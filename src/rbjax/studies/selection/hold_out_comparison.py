@@ -101,7 +101,7 @@ def held_out_comparison(
     structures = shared_structures(
         [name for name, _ in pairs],
         fit_kwargs.get("gas", "adiabatic"),
-        fit_kwargs.pop("superset", None),
+        fit_kwargs.pop("structure", None),
     )
     fit_heights = tuple(float(h) for h in fit_heights)
     rest = tuple(
@@ -119,7 +119,7 @@ def held_out_comparison(
                 bf,
                 fit_heights,
                 (starts or {}).get((name, bf)),
-                {**fit_kwargs, "superset": structures[name]},
+                {**fit_kwargs, "structure": structures[name]},
             ),
             cost=structure_cost(name),
         )
@@ -134,6 +134,6 @@ def held_out_comparison(
     results = run_tasks(workers, tasks, then=then, label="held-out comparison")
     rows = {f"{name}/{bf}": tuple(held_out_rows(r, rest)) for (name, bf), r in zip(pairs, results)}
     rows["paper (unfitted)"] = tuple(
-        held_out_rows(predict(data, superset=structures[pairs[0][0]]), rest)
+        held_out_rows(predict(data, structure=structures[pairs[0][0]]), rest)
     )
     return HoldOutComparison(fit_heights, rest, rows)

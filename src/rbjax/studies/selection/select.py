@@ -39,9 +39,9 @@ from .rule import RULE, blocked_force_note, recommend
 __all__ = ["select_model"]
 
 
-def _baseline_task(data, superset: Model):
+def _baseline_task(data, structure: Model):
     """The unfitted paper model's held-out rows at every height (a task, see :func:`fit_task`)."""
-    return tuple(held_out_rows(predict(data, superset=superset), data.heights_m))
+    return tuple(held_out_rows(predict(data, structure=structure), data.heights_m))
 
 
 def select_model(
@@ -91,7 +91,7 @@ def select_model(
     structures = shared_structures(
         [name for name, _ in pairs],
         fit_kwargs.get("gas", "adiabatic"),
-        fit_kwargs.pop("superset", None),
+        fit_kwargs.pop("structure", None),
     )
     costs = {name: structure_cost(name) for name, _ in pairs}
     # The first fit of each shared structure starts first: workers then trace different
@@ -101,7 +101,7 @@ def select_model(
         Task(
             f"{name}/{bf} (all heights)",
             fit_task,
-            (data, name, bf, None, None, {**fit_kwargs, "superset": structures[name]}),
+            (data, name, bf, None, None, {**fit_kwargs, "structure": structures[name]}),
             cost=costs[name] * (1e6 if first[id(structures[name])] == (name, bf) else 1.0),
         )
         for name, bf in pairs
@@ -123,7 +123,7 @@ def select_model(
             f"select: {name}/{bf}: rms {result.residual_rms_N:.2f} N, {result.message}",
             enabled=progress,
         )
-        kwargs = {**fit_kwargs, "superset": structures[name]}
+        kwargs = {**fit_kwargs, "structure": structures[name]}
         new = fold_tasks(data, name, bf, result, data.heights_m, kwargs, costs[name])
         start = len(tasks) + len(folds_of)
         folds_of.update({start + j: (i, h) for j, h in enumerate(data.heights_m)})
