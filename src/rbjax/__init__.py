@@ -35,6 +35,7 @@ if TYPE_CHECKING:
         impact_velocity_m_per_s,
     )
     from .solve.simulate import ImpactResult, simulate, trajectory
+    from .solve.solver import Solver
     from .terms.ball import JIS_RUBBER_BALL, Ball
     from .terms.ball_mode import BallMode
     from .terms.damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
@@ -53,7 +54,7 @@ if TYPE_CHECKING:
         reissner_stiffness_N_per_m,
         shell_force_N,
     )
-    from .terms.model import Model, Solver
+    from .terms.model import Model
     from .terms.parameters import parameter_names, parameter_table
     from .terms.series_kelvin_voigt import SeriesKelvinVoigt
 
@@ -69,6 +70,7 @@ _WHERE = {
         "impact_velocity_m_per_s",
     ),
     "solve.simulate": ("ImpactResult", "simulate", "trajectory"),
+    "solve.solver": ("Solver",),
     "terms.ball": ("JIS_RUBBER_BALL", "Ball"),
     "terms.ball_mode": ("BallMode",),
     "terms.damping": ("DAMPING_MODELS", "AbstractDamping", "HuntCrossley", "KelvinVoigt", "Zener"),
@@ -87,7 +89,7 @@ _WHERE = {
         "reissner_stiffness_N_per_m",
         "shell_force_N",
     ),
-    "terms.model": ("Model", "Solver"),
+    "terms.model": ("Model",),
     "terms.parameters": ("parameter_names", "parameter_table"),
     "terms.series_kelvin_voigt": ("SeriesKelvinVoigt",),
 }

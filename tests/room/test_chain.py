@@ -29,8 +29,9 @@ from rbjax.room import (
 )
 from rbjax.room.chain import bands, modal_bands, slab_mode_orders
 from rbjax.room.injection import modal_energies_J, modal_grid_size
+from rbjax.solve import Solver
 from rbjax.spectrum import lfe_octave_dB
-from rbjax.terms import JIS_RUBBER_BALL, FloatingFloor, Solver, floating_floor
+from rbjax.terms import JIS_RUBBER_BALL, FloatingFloor, floating_floor
 from rbjax.terms.floors.kinds import Rigid
 from tests.cli_runner import run_cli
 

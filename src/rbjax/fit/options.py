@@ -15,7 +15,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from .._validate import check_choice, check_range, settings_or_default
-from ..terms.model import Model, Solver
+from ..solve.solver import Solver
+from ..terms.model import Model
 from .problem import FIT_PATHS
 from .program import OPTIMIZERS
 

@@ -7,8 +7,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._x64 import require_x64
+from ..solve.solver import Solver
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from ..terms.parameters import replace
 from .layout import fitted_parameter_names
 from .problem import Problem, aligned, candidate_model, fit_path, fit_solver, per_height_rows

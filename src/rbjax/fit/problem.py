@@ -15,10 +15,11 @@ import numpy as np
 from .._validate import check_choice
 from ..solve.outcome import impact_velocity_m_per_s
 from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
+from ..solve.solver import Solver
 from ..solve.vector_field import RESTITUTION_FIELD, initial_state
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
 from .lanes import current_batcher

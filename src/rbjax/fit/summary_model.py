@@ -25,8 +25,9 @@ import numpy as np
 from ..solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, as_arrays
 from ..solve.sampled import sampled_history_unsupported, sampled_solve, substeps_for_contact
 from ..solve.simulate import simulate, trajectory
+from ..solve.solver import Solver
 from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from ..terms.parameters import replace
 from .summary_table import OCTAVE_FIGURES, SCALAR_FIGURES, THIRD_OCTAVE_FIGURES
 

@@ -61,11 +61,12 @@ import numpy as np
 from .. import _x64  # noqa: F401  (float64 on)
 from ..solve.inputs import as_arrays
 from ..solve.simulate import simulate, trajectory
+from ..solve.solver import Solver
 from ..spectrum.bands import band_centres_Hz, band_edges_Hz, nominal_centres_Hz
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractFloor, AbstractModalFloor
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .detector import cascade, maximum_over_time
 from .finite_slab import modal_band_energies_J, mode_orders, slab_modes
 from .injection import (
@@ -200,7 +201,7 @@ def contact_samples(height_m, ball, model: Model, rate_Hz: float, solver: Solver
         ball: the :class:`~rbjax.terms.ball.Ball`.
         model: the impact :class:`~rbjax.terms.model.Model` (its floor is the one struck).
         rate_Hz: the sampling rate of the force, Hz.
-        solver: the :class:`~rbjax.terms.model.Solver` of the pre-solve.
+        solver: the :class:`~rbjax.solve.solver.Solver` of the pre-solve.
 
     Returns:
         ⌈t_c · rate_Hz⌉ + 2 samples (t_c: the contact time), an ``int``: the ``n_samples`` of
@@ -325,7 +326,7 @@ def room_levels(
         fraction: 1 (octaves 31.5 Hz–1 kHz) or 3 (one-third octaves 25 Hz–1.25 kHz).
         rate_Hz: the sampling rate of the force, Hz.
         n_samples: the force samples over the contact (:func:`contact_samples`).
-        solver: the :class:`~rbjax.terms.model.Solver` of the force history.
+        solver: the :class:`~rbjax.solve.solver.Solver` of the force history.
         n_fft: the frequency grid of a modal floor's energies
             (``rbjax.room.injection.modal_grid_size``, the default where the floor's values
             are concrete; give it where they are traced).

@@ -11,10 +11,11 @@ import numpy as np
 from .._validate import as_float
 from ..solve.outcome import STATUS_NAMES
 from ..solve.simulate import simulate, trajectory
+from ..solve.solver import Solver
 from ..terms.ball import JIS_RUBBER_BALL
 from ..terms.floors.floating import FloatingFloor
 from ..terms.floors.kinds import AbstractModalFloor
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .chain import (
     RoomLevels,
     bands,

@@ -8,8 +8,9 @@ sampled inside a fixed-step solve (:mod:`~rbjax.solve.sampled`) — with
 :func:`~rbjax.solve.simulate.simulate` choosing among them (:mod:`~rbjax.solve.path`) and
 running the path chosen (:mod:`~rbjax.solve.path_runner`), the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
-(:mod:`~rbjax.solve.batch`). Concrete batches of both are cut in chunks split over the local
-devices, each device running its own program (:mod:`~rbjax.solve.devices`)."""
+(:mod:`~rbjax.solve.batch`); how the ODE is integrated is a
+:class:`~rbjax.solve.solver.Solver`. Concrete batches of both are cut in chunks split over the
+local devices, each device running its own program (:mod:`~rbjax.solve.devices`)."""
 
 from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian
@@ -28,6 +29,7 @@ from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
 from .sampled import sampled_history
 from .simulate import ImpactResult, force_history, simulate, trajectory
+from .solver import Solver
 
 __all__ = [
     "impact_angle",
@@ -56,5 +58,6 @@ __all__ = [
     "ImpactResult",
     "force_history",
     "simulate",
+    "Solver",
     "trajectory",
 ]

@@ -46,7 +46,7 @@ from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import lfe_octave_dB
 from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .angle import impact_angle
 from .devices import default_chunk_size, device_map, local_devices
 from .inputs import PAPER_RATE_Hz, padded_rows
@@ -56,6 +56,7 @@ from .outcome import STATUS_CODES, nan_where
 from .path import resolve_path
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
+from .solver import Solver
 
 BALL_PARAMETERS = tuple(Ball.PARAMETERS)
 SCALAR_OUTPUTS = ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m")

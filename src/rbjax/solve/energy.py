@@ -28,11 +28,12 @@ from jaxtyping import ArrayLike
 
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.forces import dynamic_mass_kg
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .inputs import broadcast_inputs, check_inputs
 from .ode import final_state, impact_status, solve_phases
 from .options import model_from_shortcuts
 from .outcome import nan_where
+from .solver import Solver
 from .vector_field import body_velocity_m_per_s, split_energy
 
 
@@ -118,7 +119,7 @@ def energy_balance(
         ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``).
         model: the :class:`~rbjax.terms.model.Model` (default ``Model()``), without elements in
             series with the shell.
-        solver: the :class:`~rbjax.terms.model.Solver` of the diffrax ODE (default ``Solver()``).
+        solver: the :class:`~rbjax.solve.solver.Solver` of the diffrax ODE (default ``Solver()``).
 
     Returns:
         An :class:`EnergyBalance` with the broadcast shape of the inputs.

@@ -30,7 +30,7 @@ import jax.numpy as jnp
 
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from ..terms.series_element import free_oscillation
 from .outcome import (
     SINGULAR_FRACTION,
@@ -40,6 +40,7 @@ from .outcome import (
     impact_velocity_m_per_s,
     nan_where,
 )
+from .solver import Solver
 from .vector_field import (
     COMPRESSION_ENERGY_FIELD,
     COMPRESSION_FIELD,

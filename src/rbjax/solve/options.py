@@ -22,9 +22,10 @@ from ..terms.ball_mode import BallMode
 from ..terms.damping import AbstractDamping
 from ..terms.floors.kinds import AbstractFloor
 from ..terms.forces import CubicStiffening
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from ..terms.series_kelvin_voigt import SeriesKelvinVoigt
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz
+from .solver import Solver
 
 #: The solve paths (``"auto"``: the fastest exact path the model allows; see
 #: ``rbjax.solve.path.resolve_path``).

@@ -9,9 +9,10 @@ with the ODE as the fallback of the impacts it flags, is :mod:`rbjax.solve.path_
 from __future__ import annotations
 
 from .._validate import check_choice
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .angle import angle_unsupported
 from .options import PATHS
+from .solver import Solver
 
 
 def quadrature_unsupported(model: Model) -> str | None:

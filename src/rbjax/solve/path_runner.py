@@ -20,13 +20,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._validate import is_traced
-from ..terms.model import Solver
 from .angle import impact_angle
 from .devices import cached_jit, default_chunk_size, device_map
 from .inputs import as_arrays, broadcast_inputs, padded_rows
 from .ode import impact_batch
 from .outcome import STATUS_CODES
 from .quadrature import DEFAULT_NODES, check_quadrature, impact_quadrature
+from .solver import Solver
 
 
 def scalar_outputs(path: str, height_m, ball, model, solver, fallback: bool):

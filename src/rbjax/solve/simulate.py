@@ -19,7 +19,7 @@ from jaxtyping import ArrayLike
 from .._validate import check_choice, check_range, is_traced
 from ..spectrum.levels import lfe_octave_dB, lfe_third_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import Model, Solver
+from ..terms.model import Model
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inputs
 from .ode import trajectory_batch
 from .options import ModelShortcuts, model_from_shortcuts
@@ -27,6 +27,7 @@ from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
 from .path import resolve_path
 from .path_runner import scalar_outputs
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
+from .solver import Solver
 
 
 class ImpactResult(eqx.Module):
@@ -47,7 +48,7 @@ class ImpactResult(eqx.Module):
         num_steps: the path's count of steps per impact (see ``path``).
         ball: the :class:`~rbjax.terms.ball.Ball` simulated.
         model: the :class:`~rbjax.terms.model.Model` simulated.
-        solver: the :class:`~rbjax.terms.model.Solver` of the ODE (and of ``history()``).
+        solver: the :class:`~rbjax.solve.solver.Solver` of the ODE (and of ``history()``).
         rate_Hz: sample rate of the force record (Hz) of ``force_N``, ``history()`` and the L_FE.
         duration_s: length of that record (s).
         path: the path that computed the scalars: ``"ode"`` (diffrax, ``num_steps`` = solver
@@ -212,7 +213,7 @@ def simulate(
             be arrays that broadcast against ``height_m``.
         model: the :class:`~rbjax.terms.model.Model` (default: built from ``shortcuts``, else
             ``Model()``).
-        solver: a :class:`~rbjax.terms.model.Solver`: asks for the diffrax ODE with it (default:
+        solver: a :class:`~rbjax.solve.solver.Solver`: asks for the diffrax ODE with it (default:
             none, ``Solver()`` where the ODE runs).
         path: the path of the scalar outputs, ``"auto"``, ``"ode"``, ``"quadrature"`` or
             ``"angle"`` (see above).
@@ -300,7 +301,7 @@ def trajectory(
         times_s: the sample times after first contact (s), a 1-D array.
         ball: the :class:`~rbjax.terms.ball.Ball` (default ``JIS_RUBBER_BALL``).
         model: the :class:`~rbjax.terms.model.Model` (default ``Model()``).
-        solver: the :class:`~rbjax.terms.model.Solver` of the diffrax ODE (default ``Solver()``).
+        solver: the :class:`~rbjax.solve.solver.Solver` of the diffrax ODE (default ``Solver()``).
 
     Returns:
         A :class:`~rbjax.solve.outcome.Trajectory` whose samples have the broadcast shape of

@@ -33,10 +33,10 @@ from ..fit import prepare_data
 from ..solve.inputs import PAPER_RATE_Hz, check_inputs
 from ..solve.path import resolve_path
 from ..solve.simulate import simulate, simulate_model
+from ..solve.solver import Solver
 from ..spectrum.bands import OCTAVE_BANDS
 from ..spectrum.levels import lfe_octave_dB
 from ..terms.ball import JIS_RUBBER_BALL, Ball
-from ..terms.model import Solver
 
 __all__ = [
     "LINEAR_SOURCE_dB",

@@ -54,7 +54,7 @@ from .forces import (
     reissner_stiffness_N_per_m,
     shell_force_N,
 )
-from .model import Model, Solver, structure_model
+from .model import Model, structure_model
 from .parameters import (
     ParameterInfo,
     canonical_name,
@@ -115,7 +115,6 @@ __all__ = [
     "reissner_stiffness_N_per_m",
     "shell_force_N",
     "Model",
-    "Solver",
     "structure_model",
     "ParameterInfo",
     "canonical_name",

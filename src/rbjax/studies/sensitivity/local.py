@@ -27,9 +27,10 @@ from ...solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
 from ...solve.options import model_from_shortcuts
 from ...solve.outcome import STATUS_NAMES
 from ...solve.simulate import simulate_model, trajectory
+from ...solve.solver import Solver
 from ...spectrum.levels import lfe_octave_dB
 from ...terms.ball import JIS_RUBBER_BALL, Ball
-from ...terms.model import Model, Solver
+from ...terms.model import Model
 from ...terms.parameters import parameter_names, parameter_table
 from ._common import is_lfe
 

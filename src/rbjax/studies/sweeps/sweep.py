@@ -113,8 +113,8 @@ from ...solve.batch import (
     BALL_PARAMETERS,
 )
 from ...solve.options import EvaluationSpec
+from ...solve.solver import Solver
 from ...terms.ball import JIS_RUBBER_BALL
-from ...terms.model import Solver
 from ...terms.serialize import model_from_dict, to_json
 from .. import sensitivity as sens
 from ..parallel.executors import Parallel
