@@ -1,6 +1,6 @@
 """rbjax: the blocked force of the JIS/ISO rubber-ball heavy impact source, in JAX.
 
-Importing rbjax switches on float64 in JAX (``jax_enable_x64``); see ``rbjax._x64``.
+Importing rbjax switches on float64 in JAX (``jax_enable_x64``), here, once; see ``rbjax._x64``.
 
 The names below load on first use (PEP 562 ``__getattr__``): ``import rbjax`` itself imports
 neither JAX nor SciPy, so that the command line answers ``rbjax --help`` at once; the first
@@ -16,11 +16,12 @@ from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
-# float64 before anything touches JAX: JAX reads JAX_ENABLE_X64 when it is first imported, and
-# where it already is, rbjax._x64 sets the flag now. (Not `from . import _x64` always: JAX
+# float64 before anything touches JAX, here and only here (every rbjax module relies on it;
+# entry points check it with rbjax._x64.require_x64): JAX reads JAX_ENABLE_X64 when it is first
+# imported, and where it already is, the flag is set now. (Not by importing JAX always: JAX
 # costs ~1 s at import, which `rbjax --help` does not need.)
 if "jax" in sys.modules:
-    from . import _x64  # noqa: F401
+    sys.modules["jax"].config.update("jax_enable_x64", True)
 else:
     os.environ["JAX_ENABLE_X64"] = "1"
 

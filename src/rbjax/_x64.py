@@ -1,17 +1,16 @@
-"""float64 for every rbjax computation.
+"""float64 for every rbjax computation: the check.
 
-rbjax switches JAX's ``jax_enable_x64`` flag on when it is imported (documented in
-docs/guides/solving.md, "Precision"). The flag is process-wide: code that imports rbjax gets
-float64 as JAX's default dtype too. ``rbjax/__init__.py`` imports this module where JAX is imported
-already; otherwise it sets ``JAX_ENABLE_X64=1``, which JAX reads when it is first imported (so
+Importing rbjax switches JAX's ``jax_enable_x64`` flag on, once, in the package ``__init__``
+(documented in docs/guides/solving.md, "Precision"): where JAX is imported already it sets the
+flag; otherwise it sets ``JAX_ENABLE_X64=1``, which JAX reads when it is first imported (so
 ``import rbjax`` itself need not import JAX; the variable is inherited by child processes).
-Each public entry point checks the flag and raises if a caller switched it off again
-afterwards, rather than silently computing in float32.
+Every rbjax module is imported after that ``__init__`` and relies on it; none sets the flag.
+The flag is process-wide: code that imports rbjax gets float64 as JAX's default dtype too.
+Each public entry point calls :func:`require_x64`, which raises if a caller switched the flag
+off afterwards, rather than silently computing in float32.
 """
 
 import jax
-
-jax.config.update("jax_enable_x64", True)
 
 
 def require_x64() -> None:

@@ -58,7 +58,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from ..solve.inputs import as_arrays
 from ..solve.simulate import simulate, trajectory
 from ..solve.solver import Solver

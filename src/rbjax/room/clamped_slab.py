@@ -45,7 +45,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .mode_radiation import RADIATION_NODES
 from .radiation import SPEED_OF_SOUND_m_per_s
 

@@ -38,7 +38,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import check_range
 from .standards import FAST_TIME_CONSTANT_s
 

@@ -58,7 +58,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import is_traced
 from .clamped_slab import beam_function, clamped_frequencies_Hz, clamped_radiation_efficiency
 from .injection import dtft_Ns

@@ -32,7 +32,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import is_traced
 from ..spectrum.levels import band_energies_N2s, energy_spectrum
 from ..terms.floors.floating import FloatingFloor

@@ -32,7 +32,6 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .radiation import SPEED_OF_SOUND_m_per_s
 
 #: Gauss–Legendre nodes per angle of the far-field integral.

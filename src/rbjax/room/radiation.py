@@ -42,8 +42,6 @@ import math
 
 import jax.numpy as jnp
 
-from .. import _x64  # noqa: F401  (float64 on)
-
 #: Air at 20 °C, 101.325 kPa: density, kg/m³, and speed of sound, m/s (ISO 12354-1:2017, 3.x
 #: constants ρ₀ = 1.21 kg/m³, c₀ = 343 m/s).
 AIR_DENSITY_kg_per_m3 = 1.21

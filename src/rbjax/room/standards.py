@@ -52,7 +52,6 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import check_range, is_traced
 
 #: Fast time constant τ_F, s (IEC 61672-1:2013, 3.7 and 5.8.1).

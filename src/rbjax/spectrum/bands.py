@@ -9,7 +9,6 @@ from decimal import Decimal
 
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
 from .._validate import check_range
 
 #: Octave frequency ratio of base-ten filters, G = 10^(3/10) (IEC 61260-1:2014, 5.2).

@@ -23,8 +23,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import _x64  # noqa: F401  (float64 on)
-
 __all__ = [
     "butter_lowpass_sos",
     "sosfilt_jax",
