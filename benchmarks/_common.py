@@ -141,12 +141,12 @@ class SweepSolver(Solver):
     step_array: jax.Array | None = None
 
     def controller(self):
-        if self.method in FIXED_STEP_METHODS:
+        if self.scheme in FIXED_STEP_METHODS:
             return dfx.ConstantStepSize()
         return dfx.PIDController(rtol=self.rtol_array, atol=self.atol_array)
 
     def dt0(self):
-        return self.step_array if self.method in FIXED_STEP_METHODS else None
+        return self.step_array if self.scheme in FIXED_STEP_METHODS else None
 
 
 def sweep_solver(
@@ -154,7 +154,7 @@ def sweep_solver(
 ) -> SweepSolver:
     fixed = method in FIXED_STEP_METHODS
     return SweepSolver(
-        method=method,
+        scheme=method,
         step_s=1e-5 if fixed else None,
         max_steps=max_steps,
         adjoint=adjoint,

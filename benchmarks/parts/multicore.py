@@ -49,7 +49,7 @@ from _common import (
     write_json,
 )
 
-RECOMMENDED = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10)
+RECOMMENDED = rbjax.Solver(scheme="tsit5", rtol=1e-7, atol=1e-10)
 
 
 def timing_row(variant: str, devices: str, n: int, t: dict, err: float) -> dict:

@@ -330,8 +330,8 @@ def _plot_convergence(res: dict, path) -> None:
 def part_dgsm(out: dict, quick: bool) -> None:
     n = 64 if quick else 512
     outputs = ("contact_time_s", "peak_force_N", "restitution", "lfe")
-    global_sensitivity(RANGES, n, method="dgsm", outputs=outputs)  # compile
-    res = global_sensitivity(RANGES, n, method="dgsm", outputs=outputs)
+    global_sensitivity(RANGES, n, analysis="dgsm", outputs=outputs)  # compile
+    res = global_sensitivity(RANGES, n, analysis="dgsm", outputs=outputs)
     d = len(RANGES)
     per_fd, per_exact = res.seconds_fd / n, res.seconds_exact / n
     entry: dict = {

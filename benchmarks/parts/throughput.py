@@ -61,8 +61,8 @@ N_RECORD = 44_100  # the paper's 1 s record (§2.4)
 BALL = rbjax.JIS_RUBBER_BALL
 DEFAULT = rbjax.Solver()
 #: The recommended default (see RESULTS.md, work–precision): tsit5 at rtol 1e-7, atol 1e-10.
-RECOMMENDED = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10)
-RECOMMENDED_FWD = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10, adjoint="forward")
+RECOMMENDED = rbjax.Solver(scheme="tsit5", rtol=1e-7, atol=1e-10)
+RECOMMENDED_FWD = rbjax.Solver(scheme="tsit5", rtol=1e-7, atol=1e-10, adjoint="forward")
 #: Other node counts of the quadrature's interpolant (default 12, ≤ 1e-12): 10 still ≤ 1e-10 for
 #: the JIS ball over 0.1–1.6 m, 16 to round-off (fewer are flagged solver_failed by its estimate).
 QUAD_FAST_NODES = (10, 16)
@@ -316,7 +316,7 @@ def history_workload(rows, sizes):
     # rbjax.trajectory keeps each phase's dense interpolant for max_steps steps: ~16 floats per step
     # and phase (tsit5), 1 MB per impact at max_steps = 4096; a batch of 10 000 needs ~10 GB (the
     # first full run was killed there). Batches ≥ 10 000 run only with max_steps = 256.
-    small = rbjax.Solver(method="tsit5", rtol=1e-7, atol=1e-10, max_steps=256)
+    small = rbjax.Solver(scheme="tsit5", rtol=1e-7, atol=1e-10, max_steps=256)
     upto_1000 = [n for n in sizes if n <= 1000]
     variants = [
         (
@@ -333,7 +333,7 @@ def history_workload(rows, sizes):
             sizes[-1:],
         ),
     ]
-    ref_fn = windowed(rbjax.Solver(method="dopri8", rtol=1e-12, atol=1e-15, max_steps=256))
+    ref_fn = windowed(rbjax.Solver(scheme="dopri8", rtol=1e-12, atol=1e-15, max_steps=256))
     refs = {}
     for name, fn, ns in variants:
         for n in ns:

@@ -614,8 +614,8 @@ def test_average_frequency_and_time_reproduce_the_pulse():
     np.testing.assert_allclose(fa.force_N, target, atol=2e-3 * target.max())
     ta = D.average(recs, domain="time")
     np.testing.assert_allclose(ta.force_N, fa.force_N, atol=1e-9 * target.max())
-    for method in ("linear", "cubic"):
-        tl = D.average(recs, domain="time", method=method)
+    for interpolation in ("linear", "cubic"):
+        tl = D.average(recs, domain="time", interpolation=interpolation)
         np.testing.assert_allclose(tl.force_N, target, atol=1e-2 * target.max())
     # without alignment the average would be smeared
     unaligned = np.mean([r.force_N for r in recs], axis=0)
@@ -641,10 +641,10 @@ def test_average_warns_on_heights_and_needs_onsets():
         D.average([recs[0].replace(onset_s=None)])
 
 
-def test_fractional_shift_names_an_unknown_method_even_for_no_shift():
+def test_fractional_shift_names_an_unknown_interpolation_even_for_no_shift():
     from rbjax.data import fractional_shift
 
-    with pytest.raises(ValueError, match="method='sinc'"):
-        fractional_shift(np.ones(8), 0.0, method="sinc")
-    with pytest.raises(ValueError, match="method='sinc'"):
-        fractional_shift(np.ones(8), 0.5, method="sinc")
+    with pytest.raises(ValueError, match="interpolation='sinc'"):
+        fractional_shift(np.ones(8), 0.0, interpolation="sinc")
+    with pytest.raises(ValueError, match="interpolation='sinc'"):
+        fractional_shift(np.ones(8), 0.5, interpolation="sinc")

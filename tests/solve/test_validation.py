@@ -114,13 +114,13 @@ def test_unknown_model_option(option, value):
         rbjax.simulate(1.0, **{option: value})
 
 
-def test_unknown_solver_method():
-    with pytest.raises(ValueError, match=r"method='rk4'"):
-        rbjax.Solver(method="rk4")
+def test_unknown_solver_scheme():
+    with pytest.raises(ValueError, match=r"scheme='rk4'"):
+        rbjax.Solver(scheme="rk4")
     with pytest.raises(ValueError, match=r"adjoint="):
         rbjax.Solver(adjoint="backward")
     with pytest.raises(ValueError, match=r"step_s"):
-        rbjax.Solver(method="euler")  # a fixed-step method needs its step
+        rbjax.Solver(scheme="euler")  # a fixed-step scheme needs its step
     with pytest.raises(ValueError, match=r"rtol="):
         rbjax.Solver(rtol=-1e-9)
 

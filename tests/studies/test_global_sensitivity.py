@@ -224,9 +224,9 @@ def test_bad_input_is_named():
         morris_screening(ishigami, PI_RANGES, 10, n_levels=3)
     with pytest.raises(ValueError, match="n_per_parameter=64.*4 M² = 64"):
         fast_indices(ishigami, PI_RANGES, 64)
-    with pytest.raises(ValueError, match="method='hdmr'.*'sobol'"):
-        global_sensitivity({"youngs_Pa": (1.2e6, 2e6)}, 16, method="hdmr")
-    with pytest.raises(ValueError, match="options \\['n_levels'\\].*method='sobol'"):
+    with pytest.raises(ValueError, match="analysis='hdmr'.*'sobol'"):
+        global_sensitivity({"youngs_Pa": (1.2e6, 2e6)}, 16, analysis="hdmr")
+    with pytest.raises(ValueError, match="options \\['n_levels'\\].*analysis='sobol'"):
         global_sensitivity({"youngs_Pa": (1.2e6, 2e6)}, 16, n_levels=4)
     with pytest.raises(ValueError, match="youngs"):
         global_sensitivity({"youngs_Pa": (-1.0, 2e6)}, 16)

@@ -19,7 +19,7 @@ def average(
     recordings: Iterable[Recording],
     *,
     domain: str = "frequency",
-    method: str = "fourier",
+    interpolation: str = "fourier",
     onset_s: float | None = None,
 ) -> Recording:
     """Average repeated drops after aligning their onsets to a fraction of a sample.
@@ -37,7 +37,7 @@ def average(
     instead smear the pulse (a low-pass by the spread of the onsets).
 
     ``domain="time"``: each record is shifted by ``-dt_k`` with
-    :func:`fractional_shift` (``method``: ``"fourier"``, which makes the two domains
+    :func:`fractional_shift` (``interpolation``: ``"fourier"``, which makes the two domains
     agree to rounding, ``"cubic"`` or ``"linear"``) and the samples are averaged.
 
     The reference onset is ``onset_s`` if given, else the first record's. Records of
@@ -47,7 +47,7 @@ def average(
     Args:
         recordings: the conditioned records (each with ``onset_s``), of one sampling rate.
         domain: ``"frequency"`` or ``"time"``.
-        method: :func:`fractional_shift` method for ``domain="time"``: ``"fourier"``,
+        interpolation: :func:`fractional_shift` interpolation for ``domain="time"``: ``"fourier"``,
             ``"cubic"`` or ``"linear"``.
         onset_s: the reference onset, s from the first sample; default: the first
             record's.
@@ -61,7 +61,7 @@ def average(
     Raises:
         DataError: no records, a record without ``onset_s``, different sample rates
             (the message lists files and rates).
-        ValueError: an unknown ``domain``, or (``domain="time"``) an unknown ``method``.
+        ValueError: an unknown ``domain``, or (``domain="time"``) an unknown ``interpolation``.
 
     Warns:
         DataWarning: drop heights more than 2 cm apart.
@@ -110,7 +110,10 @@ def average(
         y = np.fft.irfft(acc / len(recs), N)[:m]
     else:
         y = np.mean(
-            [fractional_shift(r.force_N[:m], -d, method=method) for r, d in zip(recs, shifts)],
+            [
+                fractional_shift(r.force_N[:m], -d, interpolation=interpolation)
+                for r, d in zip(recs, shifts)
+            ],
             axis=0,
         )
 

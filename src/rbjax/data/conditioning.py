@@ -182,7 +182,7 @@ def condition(
     onset_fraction: float = 0.05,
     threshold_N: float | None = None,
     min_separation_s: float = 0.1,
-    shift_method: str = "fourier",
+    interpolation: str = "fourier",
 ) -> Recording:
     """Condition a raw record for fitting: one impact, no baseline, known onset, fixed window.
 
@@ -200,7 +200,7 @@ def condition(
     4. Onset to a fraction of a sample by :func:`locate_onset` with ``onset_fraction``.
     5. Cut ``window_s`` seconds starting ``pre_onset_s`` before the onset. With
        ``align=True`` the record is also shifted by the fractional sample
-       (:func:`fractional_shift`, ``shift_method``) so that ``onset_s == pre_onset_s``
+       (:func:`fractional_shift`, ``interpolation``) so that ``onset_s == pre_onset_s``
        exactly and records of one height line up sample by sample; with ``align=False``
        the window starts on the sample at or before ``onset - pre_onset_s``, and
        ``onset_s`` is in ``[pre_onset_s, pre_onset_s + 1/rate)``.
@@ -228,7 +228,7 @@ def condition(
         threshold_N: impact detection level above the baseline, N; default
             ``max(10 N, 8 * noise rms)``.
         min_separation_s: runs above the threshold closer than this, s, are one impact.
-        shift_method: :func:`fractional_shift` method of the alignment: ``"fourier"``,
+        interpolation: :func:`fractional_shift` interpolation of the alignment: ``"fourier"``,
             ``"cubic"`` or ``"linear"``.
 
     Returns:
@@ -243,7 +243,7 @@ def condition(
         DataError: the window would cut the impact; fewer than 20 pre-trigger samples for
             the ``"pretrigger"`` baseline.
         ValueError: an unknown ``which`` or ``baseline``, an index ``which`` out of range,
-            an unknown ``shift_method`` (with ``align=True``).
+            an unknown ``interpolation`` (with ``align=True``).
 
     Warns:
         DataWarning: further impacts in the record, or inside the window.
@@ -369,7 +369,7 @@ def condition(
         seg = x[i0 - pad : i0 + m + 1 + pad] if frac > 0 else x[i0 : i0 + m]
         if frac > 0:
             # advance by frac samples: y[i] = x(i0 + frac + i)
-            y = fractional_shift(seg, -frac, method=shift_method)[pad : pad + m]
+            y = fractional_shift(seg, -frac, interpolation=interpolation)[pad : pad + m]
         else:
             y = seg
         onset_s = float(pre_onset_s)

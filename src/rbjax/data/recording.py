@@ -160,7 +160,7 @@ class Recording:
         u = solve_crossing(x, j, -level, sign=-1.0)
         return start / self.rate_Hz, (j - 1 + u) / self.rate_Hz
 
-    def aligned(self, onset_s: float, *, method: str = "fourier") -> Recording:
+    def aligned(self, onset_s: float, *, interpolation: str = "fourier") -> Recording:
         """The record shifted in time so that its onset lands at ``onset_s`` (same length).
 
         Sub-sample shift by :func:`fractional_shift` (``"fourier"``: band-limited,
@@ -169,19 +169,19 @@ class Recording:
 
         Args:
             onset_s: where the onset is to land, seconds from the first sample.
-            method: ``"fourier"``, ``"linear"`` or ``"cubic"``.
+            interpolation: ``"fourier"``, ``"linear"`` or ``"cubic"``.
 
         Returns:
             A copy of the :class:`Recording` with the shifted ``force_N`` and ``onset_s``.
 
         Raises:
             DataError: the record has no ``onset_s`` (not conditioned).
-            ValueError: an unknown ``method`` (when the shift is not zero).
+            ValueError: an unknown ``interpolation`` (when the shift is not zero).
         """
         if self.onset_s is None:
             raise DataError(f"{self.source}: no onset_s; condition() the recording first")
         shift = (float(onset_s) - self.onset_s) * self.rate_Hz
-        y = fractional_shift(self.force_N, shift, method=method)
+        y = fractional_shift(self.force_N, shift, interpolation=interpolation)
         return self.replace(force_N=y, onset_s=float(onset_s))
 
 

@@ -20,10 +20,10 @@ def lagrange4(y4, u):
     )
 
 
-def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.ndarray:
+def fractional_shift(x, shift_samples: float, *, interpolation: str = "fourier") -> np.ndarray:
     """Delay ``x`` by ``shift_samples`` (may be fractional or negative): ``y[i] = x(i - shift)``.
 
-    Samples brought in from outside ``x`` are 0. Methods:
+    Samples brought in from outside ``x`` are 0. Interpolations:
 
     * ``"fourier"``: band-limited shift, multiply the spectrum of the zero-padded
       record by ``exp(-2 pi i f shift / rate)`` (exact for band-limited signals; a
@@ -35,14 +35,14 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
     Args:
         x: the samples, 1-D.
         shift_samples: the delay in samples (negative: an advance).
-        method: ``"fourier"``, ``"cubic"`` or ``"linear"``.
+        interpolation: ``"fourier"``, ``"cubic"`` or ``"linear"``.
 
     Returns:
         The shifted samples, a float64 array as long as ``x``.
 
     Raises:
         ValueError: ``x`` is not 1-D, ``shift_samples`` is not finite, or an unknown
-            ``method``.
+            ``interpolation``.
     """
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
@@ -51,11 +51,11 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
     d = float(shift_samples)
     if not math.isfinite(d):
         raise ValueError(f"shift_samples={shift_samples!r} must be finite")
-    if method not in ("fourier", "linear", "cubic"):
-        raise ValueError(f"method={method!r}: use 'fourier', 'cubic' or 'linear'")
+    if interpolation not in ("fourier", "linear", "cubic"):
+        raise ValueError(f"interpolation={interpolation!r}: use 'fourier', 'cubic' or 'linear'")
     if d == 0:
         return x.copy()
-    if method == "fourier":
+    if interpolation == "fourier":
         from scipy.fft import next_fast_len  # lazy: scipy.fft costs 0.3 s at import (RESULTS.md)
 
         N = next_fast_len(
@@ -76,6 +76,6 @@ def fractional_shift(x, shift_samples: float, *, method: str = "fourier") -> np.
         j = np.clip(j, -2, n + 2)
         return xp[j + 2]
 
-    if method == "linear":
+    if interpolation == "linear":
         return (1 - u) * at(ip) + u * at(ip + 1)
     return lagrange4((at(ip - 1), at(ip), at(ip + 1), at(ip + 2)), u)

@@ -9,7 +9,7 @@ import optimistix as optx
 
 from .._validate import check_choice, check_range
 
-_SOLVERS = {
+_SCHEMES = {
     "euler": dfx.Euler,
     "heun": dfx.Heun,
     "midpoint": dfx.Midpoint,
@@ -19,7 +19,7 @@ _SOLVERS = {
     "dopri8": dfx.Dopri8,
     "kvaerno5": dfx.Kvaerno5,
 }
-FIXED_STEP_METHODS = ("euler", "heun", "midpoint")
+FIXED_STEP_SCHEMES = ("euler", "heun", "midpoint")
 ADJOINTS = ("reverse", "forward")
 
 
@@ -27,20 +27,20 @@ class Solver(eqx.Module):
     """How the equation of motion is integrated.
 
     Attributes:
-        method: a diffrax solver name, one of ``_SOLVERS`` (default ``tsit5``).
+        scheme: the diffrax scheme by name, one of ``_SCHEMES`` (default ``tsit5``).
         rtol, atol: adaptive step-size tolerances (atol in the state's units, m and m/s).
-        step_s: fixed step for the fixed-step methods (required for them, ignored otherwise).
+        step_s: fixed step for the fixed-step schemes (required for them, ignored otherwise).
         max_steps: step budget per phase; exhausting it gives status ``step_limit``.
         adjoint: ``"reverse"`` (works with ``jax.grad``) or ``"forward"`` (works with
             ``jax.jacfwd``/``jax.jvp``, cheaper for a few parameters).
 
     Raises:
-        ValueError: an unknown ``method`` or ``adjoint``; ``rtol``, ``atol`` or ``step_s``
-            outside (0, 1); a fixed-step method without ``step_s``; ``max_steps`` ≤ 0. The
+        ValueError: an unknown ``scheme`` or ``adjoint``; ``rtol``, ``atol`` or ``step_s``
+            outside (0, 1); a fixed-step scheme without ``step_s``; ``max_steps`` ≤ 0. The
             message names the field.
     """
 
-    method: str = eqx.field(static=True, default="tsit5")
+    scheme: str = eqx.field(static=True, default="tsit5")
     rtol: float = eqx.field(static=True, default=1e-9)
     atol: float = eqx.field(static=True, default=1e-12)
     step_s: float | None = eqx.field(static=True, default=None)
@@ -48,27 +48,27 @@ class Solver(eqx.Module):
     adjoint: str = eqx.field(static=True, default="reverse")
 
     def __check_init__(self):
-        check_choice("method", self.method, tuple(_SOLVERS))
+        check_choice("scheme", self.scheme, tuple(_SCHEMES))
         check_choice("adjoint", self.adjoint, ADJOINTS)
         check_range("rtol", self.rtol, lower=0.0, upper=1.0)
         check_range("atol", self.atol, lower=0.0, upper=1.0)
-        if self.method in FIXED_STEP_METHODS and self.step_s is None:
-            raise ValueError(f"method={self.method!r} is a fixed-step method: give step_s > 0")
+        if self.scheme in FIXED_STEP_SCHEMES and self.step_s is None:
+            raise ValueError(f"scheme={self.scheme!r} is a fixed-step scheme: give step_s > 0")
         if self.step_s is not None:
             check_range("step_s", self.step_s, lower=0.0, upper=1.0)
         check_range("max_steps", self.max_steps, lower=0.0)
 
     def diffrax_solver(self):
-        return _SOLVERS[self.method]()
+        return _SCHEMES[self.scheme]()
 
     def controller(self):
-        if self.method in FIXED_STEP_METHODS:
+        if self.scheme in FIXED_STEP_SCHEMES:
             return dfx.ConstantStepSize()
-        # Kvaerno5 and the explicit RK methods alike: PID control on rtol/atol.
+        # Kvaerno5 and the explicit RK schemes alike: PID control on rtol/atol.
         return dfx.PIDController(rtol=self.rtol, atol=self.atol)
 
     def dt0(self):
-        return self.step_s if self.method in FIXED_STEP_METHODS else None
+        return self.step_s if self.scheme in FIXED_STEP_SCHEMES else None
 
     def diffrax_adjoint(self):
         return dfx.ForwardMode() if self.adjoint == "forward" else dfx.RecursiveCheckpointAdjoint()

@@ -39,7 +39,7 @@ from .dgsm import DGSMResult, dgsm_measures
 from .indices import SOBOL_DESIGNS, fast_indices, morris_screening, pawn_indices, sobol_indices
 from .local import SCALAR_OUTPUTS, Sensitivity, local_sensitivity
 from .results import FastResult, IndexResult, MorrisResult, PawnResult, SobolResult
-from .study import METHODS, global_sensitivity, method_options, size_name
+from .study import ANALYSES, analysis_options, global_sensitivity, size_name
 
 __all__ = [
     "SCALAR_OUTPUTS",
@@ -57,8 +57,8 @@ __all__ = [
     "pawn_indices",
     "DGSMResult",
     "dgsm_measures",
-    "METHODS",
-    "method_options",
+    "ANALYSES",
+    "analysis_options",
     "size_name",
     "global_sensitivity",
     "batch_evaluator",

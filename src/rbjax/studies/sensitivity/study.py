@@ -27,10 +27,10 @@ from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
 
-#: The methods of ``global_sensitivity`` and the function that runs each (``n`` is its first
+#: The analyses of ``global_sensitivity`` and the function that runs each (``n`` is its first
 #: size argument: Sobol and DGSM base points, Morris trajectories, eFAST samples per parameter,
 #: PAWN samples).
-METHODS: dict[str, Callable] = {
+ANALYSES: dict[str, Callable] = {
     "sobol": sobol_indices,
     "morris": morris_screening,
     "fast": fast_indices,
@@ -39,18 +39,18 @@ METHODS: dict[str, Callable] = {
 }
 
 
-def _signature(method: str) -> inspect.Signature:
-    if method not in METHODS:
+def _signature(analysis: str) -> inspect.Signature:
+    if analysis not in ANALYSES:
         raise ValueError(
-            f"method={method!r} is not a known sensitivity method; valid: "
-            f"{', '.join(map(repr, METHODS))}"
+            f"analysis={analysis!r} is not a known sensitivity analysis; valid: "
+            f"{', '.join(map(repr, ANALYSES))}"
         )
-    return inspect.signature(METHODS[method])
+    return inspect.signature(ANALYSES[analysis])
 
 
-def method_options(method: str) -> tuple[str, ...]:
-    """The keyword options of ``method`` (e.g. ``second_order``, ``n_levels``)."""
-    parameters = _signature(method).parameters
+def analysis_options(analysis: str) -> tuple[str, ...]:
+    """The keyword options of ``analysis`` (e.g. ``second_order``, ``n_levels``)."""
+    parameters = _signature(analysis).parameters
     return tuple(
         k
         for k, p in parameters.items()
@@ -58,9 +58,9 @@ def method_options(method: str) -> tuple[str, ...]:
     )
 
 
-def size_name(method: str) -> str:
-    """The name of ``method``'s sample size (``n_base``, ``n_trajectories``, ...)."""
-    return list(_signature(method).parameters)[2]
+def size_name(analysis: str) -> str:
+    """The name of ``analysis``'s sample size (``n_base``, ``n_trajectories``, ...)."""
+    return list(_signature(analysis).parameters)[2]
 
 
 def impact_outputs(outputs) -> tuple[tuple[str, ...], bool]:
@@ -82,7 +82,7 @@ def global_sensitivity(
     ranges: Mapping,
     n: int,
     *,
-    method: str = "sobol",
+    analysis: str = "sobol",
     outputs=("contact_time_s", "peak_force_N", "restitution", "lfe"),
     height_m: float = 1.0,
     ball: Ball = JIS_RUBBER_BALL,
@@ -95,12 +95,12 @@ def global_sensitivity(
 
     Args:
         ranges: parameter name (any case; see ``rbjax.parameter_names``) → (low, high).
-        n: the method's sample size: ``"sobol"`` base points N (a power of two; N (d + 2)
+        n: the analysis's sample size: ``"sobol"`` base points N (a power of two; N (d + 2)
             impacts, N (2d + 2) with ``second_order=True``, the default), ``"morris"``
             trajectories (n (d + 1) impacts), ``"fast"`` samples per parameter (n d), ``"pawn"``
             samples (n), ``"dgsm"`` base points (n (d + 1) impacts for SALib's finite
             differences, and the exact gradients at the n base points).
-        method: ``"sobol"``, ``"morris"``, ``"fast"``, ``"pawn"`` or ``"dgsm"``.
+        analysis: ``"sobol"``, ``"morris"``, ``"fast"``, ``"pawn"`` or ``"dgsm"``.
         outputs: among ``contact_time_s``, ``peak_force_N``, ``restitution``,
             ``max_deflection_m``, ``lfe_<band>_dB`` and ``"lfe"`` (all octave bands).
         height_m, ball, model: the nominal impact (an ``rbjax.Model``, default ``Model()``);
@@ -113,24 +113,24 @@ def global_sensitivity(
             **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
             ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweeps.sweep`` passes
             one that splits the rows into tasks for worker processes or a Dask cluster.
-        options: ``seed`` (default 0: of the design and of SALib's bootstrap; every method has
-            it) and the method's keyword options (``method_options(method)``), e.g.
+        options: ``seed`` (default 0: of the design and of SALib's bootstrap; every analysis has
+            it) and the analysis's keyword options (``analysis_options(analysis)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
             ``optimal_trajectories``, ``interference``, ``n_conditioning``, ``delta``.
 
     Returns:
-        the method's result object (``rbjax.studies.sensitivity.results``, ``DGSMResult``):
+        the analysis's result object (``rbjax.studies.sensitivity.results``, ``DGSMResult``):
         ``.driver(output)`` names the parameter that drives an output's spread, ``.table()``,
         ``.plot()``, ``.to_dict()``, ``.salib`` (SALib's own results).
     """
     model, evaluation = study_settings("global_sensitivity", model, evaluation)
     options = dict(options)
     seed = options.pop("seed", 0)
-    valid = method_options(method)
+    valid = analysis_options(analysis)
     unknown = sorted(set(options) - set(valid))
     if unknown:
         raise ValueError(
-            f"options {unknown} are not known for method={method!r}; valid: {', '.join(valid)}"
+            f"options {unknown} are not known for analysis={analysis!r}; valid: {', '.join(valid)}"
         )
     ranges = check_ranges(ranges, lambda name: canonical_name(name, model))
     names, lfe = impact_outputs(outputs)
@@ -153,11 +153,11 @@ def global_sensitivity(
         out = evaluator(inputs, False, **common)
         return {o: out[o] for o in names}
 
-    if method == "dgsm":
+    if analysis == "dgsm":
 
         def jacobian(inputs):
             _, jac = evaluator(inputs, True, **common)
             return {o: jac[o] for o in names}
 
         return dgsm_measures(func, ranges, n, jacobian=jacobian, seed=seed, **options)
-    return METHODS[method](func, ranges, n, seed=seed, **options)
+    return ANALYSES[analysis](func, ranges, n, seed=seed, **options)

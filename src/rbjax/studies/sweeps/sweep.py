@@ -55,7 +55,7 @@ Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.
     height_m = {kind = "uniform", low = 0.99, high = 1.01}   # | {kind = "lognormal", median, sigma}
 
 A method's table holds its sample size and any of its options
-(``rbjax.studies.sensitivity.method_options``).
+(``rbjax.studies.sensitivity.analysis_options``).
 
 Where the impacts run
 ---------------------
@@ -120,7 +120,7 @@ from .. import sensitivity as sens
 from ..parallel.executors import Parallel
 from .chunks import task_evaluator
 
-SWEEP_KINDS = (*sens.METHODS, "conformance")
+SWEEP_KINDS = (*sens.ANALYSES, "conformance")
 CONFIG_KEYS = (
     "kind",
     "seed",
@@ -227,13 +227,13 @@ def run_study(config: dict, *, evaluator: Callable | None, progress: bool, devic
         raise ValueError(f"{kind} = {config[kind]!r}: expected a [{kind}] table")
     options = dict(config.get(kind, {}))
     size = sens.size_name(kind)
-    valid = (size, *sens.method_options(kind))
+    valid = (size, *sens.analysis_options(kind))
     unknown = set(options) - set(valid)
     if unknown:
         raise ValueError(f"[{kind}] has unknown keys {sorted(unknown)}; valid: {', '.join(valid)}")
     n = options.pop(size, DEFAULT_SIZES[kind])
     return sens.global_sensitivity(
-        ranges, n, method=kind, outputs=tuple(outputs), **options, **common
+        ranges, n, analysis=kind, outputs=tuple(outputs), **options, **common
     )
 
 
