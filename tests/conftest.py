@@ -50,8 +50,8 @@ program_store.store_dir = _store_dir_but_not_the_session_cache
 # Dask workers started by a test inherit, so a level never leaks from one module to the next.
 # JAX's in-memory caches do not key on the level, so a switch clears them (``jax.clear_caches``):
 # no program compiled at one level is reused at the other (the persistent cache keys on it).
-# The difference between the two levels, per path: benchmarks/opt_levels.py, figures in
-# benchmarks/RESULTS.md, "XLA optimisation level".
+# The difference between the two levels, per path: benchmarks/accuracy.py --only opt_levels,
+# figures in benchmarks/RESULTS.md, "XLA optimisation level".
 
 SMOKE = "xla_smoke"
 _ENV = "JAX_DISABLE_MOST_OPTIMIZATIONS"

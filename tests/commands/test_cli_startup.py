@@ -1,6 +1,7 @@
 """An instant command line: ``rbjax --help``, ``rbjax COMMAND --help`` and ``rbjax --version``
 answer without importing JAX, NumPy, SciPy or Matplotlib, and ``import rbjax`` (even with
-every layer) pulls no SciPy submodule nor Matplotlib (benchmarks/RESULTS.md, "Start-up time").
+every layer) pulls no SciPy submodule nor Matplotlib (the figures measured:
+benchmarks/RESULTS.md, "Start-up time").
 Each check runs in a fresh interpreter: in this one the library is loaded already."""
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ the faults real force plates produce, one set of files holding every fault class
 again: E within 1 % and the damping within 2σ of the clean fit, what conditioning did in the
 report, the clipped file excluded (refused with --strict). The same drops recorded at 48 and
 25.6 kHz condition to the records of 44.1 kHz (a fit at another rate compiles another
-program, ~25 s here: measured by benchmarks/other_rates.py instead, figures in
-docs/guides/loader.md).
+program, ~25 s here: measured by ``benchmarks/fitting.py --only loader_faults`` instead,
+figures in docs/guides/loader.md).
 
 Fits are costly: the clean and the faulty set share one compiled program (same shapes).
 The per-fault checks without a fit are tests/data/test_faults.py.
@@ -141,7 +141,8 @@ def test_every_fault_class_at_once_gives_the_clean_fit(faulty, clean_fit):
     assert_same_fit(result, clean_fit)
 
 
-#: docs/guides/loader.md, the fits' table (benchmarks/loader_faults.py fits these same sets):
+#: docs/guides/loader.md, the fits' table (``benchmarks/fitting.py --only loader_faults`` fits
+#: these same sets):
 #: E (Pa), c (N s/m), c − truth in its own σ, for the clean and the faulty set at 44.1 kHz; the
 #: clean fit's σ of c; the faulty set's ΔE (%) and Δc (clean σ). Asserted at 10× half a unit of
 #: the printed digit (this module compiles with most optimisations off: round-off apart, the same).

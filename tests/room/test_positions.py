@@ -19,7 +19,7 @@ from tests.cli_runner import run_cli
 
 SLAB = Slab.of_material("concrete", 0.15)  # 4 m × 5 m, clamped, the preset concrete-150mm
 ROOM = ReceivingRoom(50.0, 0.5)
-#: the five points of benchmarks/RESULTS.md's thickness table, m from a corner
+#: the five points of the thickness table (benchmarks/RESULTS.md, "Room"), m from a corner
 POINTS = [(2.0, 2.5), (1.2, 2.0), (2.8, 1.75), (1.6, 3.5), (2.6, 3.25)]
 #: ISO 717-2:2020 Table D.3, A-weighted reference values of the octaves 63-500 Hz, as printed
 TABLE_D3 = np.array([-26.2, -16.2, -8.7, -3.2])

@@ -2,7 +2,8 @@
 
 Each point is either solved correctly (within 1e-6 of the independent scipy reference,
 tests/scipy_reference.py: paper Eq. 7 by DOP853 at rtol 1e-12) or returned with a clear status
-and NaN outputs; never silently wrong (benchmarks/stability_map.py maps the whole space).
+and NaN outputs; never silently wrong (``benchmarks/accuracy.py --only stability_map`` maps
+the whole space).
 
 * status names: ``deflection_limit`` beyond δ_max = 2h (paper §2.1: the small-deflection shell
   model holds below buckling), ``mass_singularity`` where δ reaches 2R and the dynamic mass

@@ -1,6 +1,6 @@
 """rbjax design: the margins against the printed table's check, and bad input. (The design
 itself, its agreement with `rbjax simulate` + the check and the 32-start bar, is measured in
-benchmarks/design_check.py: one design compiles for ~40 s.)"""
+``benchmarks/fitting.py --only design_check``: one design compiles for ~40 s.)"""
 
 import numpy as np
 import pytest
@@ -18,7 +18,7 @@ from rbjax.studies.design import (
 from cli_runner import run_cli
 
 # A smoke test (tests/conftest.py: compiled with most optimisations off): margins and bad input;
-# the design itself: benchmarks/design_check.py.
+# the design itself: benchmarks/fitting.py --only design_check.
 pytestmark = pytest.mark.xla_smoke
 
 

@@ -202,7 +202,7 @@ class Problem:
         other fits there (one batch on the accelerator). Otherwise, on a CPU the lanes go
         through the program one at a time: it is compute-bound, so B lanes in lockstep cost B
         lanes' work, and each would run as many steps as the slowest (measured in
-        ``benchmarks/fit_time.py``); on an accelerator they go in one call."""
+        ``benchmarks/fitting.py --only fit_time``); on an accelerator they go in one call."""
         lay = self.layout
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         b, n = thetas.shape

@@ -5,8 +5,9 @@ this module samples the history at given times from the same integrals in δ (se
 module's docstring for the derivation), with its own nested Gauss–Legendre rules.
 
 A reference implementation, kept for the tests (``tests/solve/test_quadrature.py``: the
-histories against the ODE's) and the accuracy benchmark (``benchmarks/work_precision.py``: the
-reference history): no path of :func:`rbjax.simulate` or the fit calls it. It stays public as
+histories against the ODE's) and the accuracy benchmark
+(``benchmarks/accuracy.py --only work_precision``: the reference history): no path of
+:func:`rbjax.simulate` or the fit calls it. It stays public as
 ``rbjax.solve.force_history_quadrature``.
 """
 

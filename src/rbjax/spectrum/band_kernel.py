@@ -13,7 +13,8 @@ import numpy as np
 # SHORT_FFT_OVERSAMPLING * n) and a band kernel from n_record >= SHORT_PATH_MIN_RATIO * n
 # on, the padded FFT otherwise. Measured (2 cores, n = 256 and 512, batches 1 and 1000): the
 # padded FFT is faster up to n_record ≈ 2n, the two are even near 3n, the short one is
-# faster beyond (4-7x at 8n, two decades at the 1 s record; benchmarks/pulse_spectrum.py).
+# faster beyond (4-7x at 8n, two decades at the 1 s record;
+# benchmarks/forward.py --only pulse_spectrum).
 SHORT_FFT_OVERSAMPLING = 3
 SHORT_PATH_MIN_RATIO = 3
 # Largest band kernel built, in (bins in the bands) × (short-FFT bins) evaluations (~1 s of
