@@ -37,8 +37,10 @@ if TYPE_CHECKING:
     )
     from .solve.simulate import ImpactResult, simulate, trajectory
     from .solve.solver import Solver
+    from .terms.arrest import WaveLimitedArrest
     from .terms.ball import JIS_RUBBER_BALL, Ball
     from .terms.ball_mode import BallMode
+    from .terms.contact_layer import ContactLayer
     from .terms.damping import DAMPING_MODELS, AbstractDamping, HuntCrossley, KelvinVoigt, Zener
     from .terms.declare import Parameter
     from .terms.floors.kinds import (
@@ -72,8 +74,10 @@ _WHERE = {
     ),
     "solve.simulate": ("ImpactResult", "simulate", "trajectory"),
     "solve.solver": ("Solver",),
+    "terms.arrest": ("WaveLimitedArrest",),
     "terms.ball": ("JIS_RUBBER_BALL", "Ball"),
     "terms.ball_mode": ("BallMode",),
+    "terms.contact_layer": ("ContactLayer",),
     "terms.damping": ("DAMPING_MODELS", "AbstractDamping", "HuntCrossley", "KelvinVoigt", "Zener"),
     "terms.declare": ("Parameter",),
     "terms.floors.kinds": (
@@ -114,6 +118,8 @@ __all__ = [
     "Zener",
     "BallMode",
     "SeriesKelvinVoigt",
+    "ContactLayer",
+    "WaveLimitedArrest",
     "Rigid",
     "Dashpot",
     "InfinitePlate",

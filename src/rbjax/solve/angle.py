@@ -74,7 +74,20 @@ EDGE = 1e-9
 def angle_unsupported(model: Model) -> str | None:
     """Why the phase-angle path cannot solve ``model``; None if it can (rigid floor, no ball mode:
     the contact is a half-turn in (δ, δ̇) only when δ is the ball's rigid motion)."""
-    return model.coupling
+    return local_terms_unsupported(model) or model.coupling
+
+
+def local_terms_unsupported(model: Model) -> str | None:
+    """Why the fast paths (quadrature, phase angle) cannot solve a model with a contact layer
+    or an arrest law (they are written for the shell's force and the share w of the paper's
+    flux; the ODE and the sampled paths solve these terms); None without them."""
+    names = [t.name for t in (model.layer, model.arrest) if t is not None]
+    if not names:
+        return None
+    return (
+        f"the {' and '.join(names)} term{'s' if len(names) > 1 else ''} run on the ODE and the "
+        "sampled paths only"
+    )
 
 
 @functools.cache

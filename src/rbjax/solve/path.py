@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from .._validate import check_choice
 from ..terms.model import Model
-from .angle import angle_unsupported
+from .angle import angle_unsupported, local_terms_unsupported
 from .options import PATHS
 from .solver import Solver
 
@@ -22,6 +22,9 @@ def quadrature_unsupported(model: Model) -> str | None:
     without ``CubicStiffening``), the gas force or none, either blocked-force convention, any
     ``max_deflection_ratio``. A damping law makes the force depend on δ̇ or on internal states.
     """
+    local = local_terms_unsupported(model)
+    if local is not None:
+        return local
     if model.damping:
         names = ", ".join(d.name for d in model.damping)
         return (

@@ -33,12 +33,18 @@ def contact_force(y, ball, model):
 
 
 def floor_force_N(y, ball, model):
-    """The force on the floor for state y: the contact force plus the share
-    ``model.momentum_flux_weight`` of the momentum flux during compression (the blocked force
-    on the rigid floor)."""
-    v = y[1]
-    flux = jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
-    return contact_force(y, ball, model) + model.momentum_flux_weight * flux
+    """The force on the floor for state y: the contact force plus the arrested momentum's flux
+    during compression (``floor_flux_N``; the blocked force on the rigid floor)."""
+    return contact_force(y, ball, model) + floor_flux_N(y[1], ball, model)
+
+
+def floor_flux_N(v, ball, model):
+    """The arrested momentum's flux the floor receives during compression (δ̇ > 0): the model's
+    arrest law (``model.arrest``, :mod:`rbjax.terms.arrest`), or the share
+    ``model.momentum_flux_weight`` of the paper's (M/2R)δ̇²."""
+    if model.arrest is not None:
+        return model.arrest.flux_N(v, ball)
+    return model.momentum_flux_weight * jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
 
 
 def floor_velocity_m_per_s(y, ball, model):
@@ -140,8 +146,9 @@ def _vector_field(flux_on: bool, energy: bool = False):
 
 
 #: Energy accumulators (``energy_balance``): floor work ∫F u̇ dt, flux loss ∫½(M/2R)|δ̇|³ dt,
-#: contact work ∫F_c δ̇ dt, and the work the quasi-static cap and the share 1 − w of the flux
-#: leave out, ∫[½(M/2R)δ̇ u̇² + (1 − w)(M/2R)δ̇² H(δ̇) u̇] dt.
+#: contact work ∫F_c δ̇ dt, and the work the quasi-static cap and the flux the floor does not
+#: receive leave out, ∫[½(M/2R)δ̇ u̇² + ((M/2R)δ̇² H(δ̇) − F_flux) u̇] dt (F_flux:
+#: ``floor_flux_N``, the share w of the flux or the arrest law's).
 NUM_ENERGY_STATES = 4
 
 
@@ -151,13 +158,17 @@ def _energy_rates(y, ball, model):
     u_dot = floor_velocity_m_per_s(y, ball, model)
     flux = momentum_flux_N(v, ball)
     per_speed = ball.mass_kg / (2.0 * ball.radius_m)
-    cap = (
-        0.5 * per_speed * v * u_dot**2
-        + (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0) * u_dot
-    )
+    cap = 0.5 * per_speed * v * u_dot**2 + _flux_left_out(v, flux, ball, model) * u_dot
     return jnp.stack(
         [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, contact_force(y, ball, model) * v, cap]
     )
+
+
+def _flux_left_out(v, flux, ball, model):
+    """The part of the flux (M/2R)δ̇² H(δ̇) the floor does not receive."""
+    if model.arrest is None:
+        return (1.0 - model.momentum_flux_weight) * jnp.where(v > 0.0, flux, 0.0)
+    return jnp.where(v > 0.0, flux, 0.0) - floor_flux_N(v, ball, model)
 
 
 def split_energy(y, model):

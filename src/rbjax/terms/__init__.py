@@ -12,8 +12,10 @@ them; :mod:`~rbjax.terms.shell_modes` holds the free shell's eigenfrequencies.
 Nothing here solves an impact: the solvers are :mod:`rbjax.solve`.
 """
 
+from .arrest import ARREST_LAWS, AbstractArrest, WaveLimitedArrest, column_mass_rate_kg_per_m
 from .ball import JIS_RUBBER_BALL, Ball, validate_ball
 from .ball_mode import BallMode, from_modal_mass
+from .contact_layer import ContactLayer
 from .damping import (
     DAMPING_MODELS,
     AbstractDamping,
@@ -70,6 +72,11 @@ from .series_kelvin_voigt import SeriesKelvinVoigt
 from .shell_modes import ShellModes, shell_frequencies_Hz
 
 __all__ = [
+    "ARREST_LAWS",
+    "AbstractArrest",
+    "WaveLimitedArrest",
+    "column_mass_rate_kg_per_m",
+    "ContactLayer",
     "JIS_RUBBER_BALL",
     "Ball",
     "validate_ball",

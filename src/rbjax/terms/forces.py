@@ -167,14 +167,29 @@ def shell_force_N(deflection_m, ball, stiffening=None):
 
 
 def contact_force_N(deflection_m, velocity_m_per_s, internal, ball, model):
-    """Force between shell and floor, F_B + F_G + F_d (the right-hand side of Eq. 7).
+    """Force between shell and floor, F_B + F_G + F_d (the right-hand side of Eq. 7; F_B + F_G
+    through the contact layer where the model has one).
 
     ``internal`` holds the internal states of the model's damping terms, in their order.
     """
-    force = shell_force_N(deflection_m, ball, model.stiffening)
-    if model.gas == "adiabatic":
-        force = force + gas_force_N(deflection_m, ball)
-    return force + damping_force_N(deflection_m, velocity_m_per_s, internal, ball, model)
+    return elastic_force_N(deflection_m, ball, model) + damping_force_N(
+        deflection_m, velocity_m_per_s, internal, ball, model
+    )
+
+
+def elastic_force_N(deflection_m, ball, model):
+    """F_B + F_G of the deflection alone; with a contact layer in series with the shell
+    (``model.layer``, :mod:`rbjax.terms.contact_layer`), the force of the pair pressed by δ."""
+
+    def shell_and_gas(d):
+        force = shell_force_N(d, ball, model.stiffening)
+        if model.gas == "adiabatic":
+            force = force + gas_force_N(d, ball)
+        return force
+
+    if model.layer is None:
+        return shell_and_gas(deflection_m)
+    return model.layer.series_force_N(deflection_m, shell_and_gas)
 
 
 def damping_force_N(deflection_m, velocity_m_per_s, internal, ball, model):

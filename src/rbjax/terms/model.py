@@ -11,7 +11,9 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from .._validate import as_float, check_choice, check_range, is_traced
+from .arrest import AbstractArrest
 from .ball_mode import BallMode
+from .contact_layer import ContactLayer
 from .damping import DAMPING_MODELS, AbstractDamping
 from .declare import Parameter, check_declared
 from .floors.kinds import AbstractFloor, Rigid
@@ -78,6 +80,11 @@ class Model(eqx.Module):
             one element or a tuple of them (any subclass: a new element is one class).
         floor: an ``rbjax.terms.floors.kinds.AbstractFloor``; ``Rigid()`` (the default) is the
             paper's immobile floor, others move under the force (``rbjax.terms.floors.kinds``).
+        layer: ``None`` or a ``ContactLayer``: a massless layer F = K y^p in series with the
+            shell (``rbjax.terms.contact_layer``); the contact force stays a function of δ.
+        arrest: ``None`` or an ``rbjax.terms.arrest.AbstractArrest`` (``WaveLimitedArrest``):
+            the flux of the wall's arrested momentum on the floor during compression, in place
+            of the share ``momentum_flux_weight`` of the paper's (M/2R)δ̇².
 
     ``Model(blocked_force="momentum")`` sets ``momentum_flux_weight=1``.
 
@@ -87,7 +94,10 @@ class Model(eqx.Module):
             ``SeriesKelvinVoigt``; a ``damping``, ``stiffening``, ``series_elements`` or
             ``floor`` of the wrong kind; a damping law or element in series given twice;
             ``momentum_flux_weight`` outside [0, 1] or ``max_deflection_ratio`` ≤ 0 (concrete
-            values only). The message names the argument.
+            values only); ``layer`` not a ``ContactLayer``; ``arrest`` not an arrest law, or
+            given together with a non-zero ``momentum_flux_weight`` (``blocked_force=
+            "momentum"``): both say what the floor receives of the flux. The message names the
+            argument.
     """
 
     gas: str = eqx.field(static=True)
@@ -97,6 +107,8 @@ class Model(eqx.Module):
     max_deflection_ratio: float = eqx.field(static=True)
     series_elements: tuple
     floor: AbstractFloor
+    layer: ContactLayer | None
+    arrest: AbstractArrest | None
     PARAMETERS: ClassVar = {
         "momentum_flux_weight": Parameter(
             "1",
@@ -122,6 +134,8 @@ class Model(eqx.Module):
         floor: AbstractFloor | None = None,
         series: SeriesKelvinVoigt | None = None,
         series_elements: AbstractSeriesElement | Sequence[AbstractSeriesElement] = (),
+        layer: ContactLayer | None = None,
+        arrest: AbstractArrest | None = None,
     ):
         if blocked_force is not None and momentum_flux_weight is not None:
             raise ValueError("give blocked_force or momentum_flux_weight, not both")
@@ -136,6 +150,8 @@ class Model(eqx.Module):
         self.max_deflection_ratio = max_deflection_ratio
         self.series_elements = _as_element_tuple(ball_mode, series, series_elements)
         self.floor = Rigid() if floor is None else floor
+        self.layer = layer
+        self.arrest = arrest
 
     def __check_init__(self):
         check_choice("gas", self.gas, GAS_OPTIONS)
@@ -175,6 +191,21 @@ class Model(eqx.Module):
             upper=float("inf"),
             upper_open=False,
         )
+        if self.layer is not None and not isinstance(self.layer, ContactLayer):
+            raise ValueError(f"layer={self.layer!r} must be None or an rbjax.ContactLayer")
+        if self.arrest is not None:
+            if not isinstance(self.arrest, AbstractArrest):
+                raise ValueError(
+                    f"arrest={self.arrest!r} is not an arrest law; valid: None or an "
+                    "rbjax.terms.arrest.AbstractArrest (WaveLimitedArrest)"
+                )
+            w = self.momentum_flux_weight
+            if not is_traced(w) and np.ndim(w) == 0 and as_float(w) != 0.0:
+                raise ValueError(
+                    f"arrest={self.arrest.name!r} with momentum_flux_weight={as_float(w)!r}: both "
+                    "say what the floor receives of the momentum flux; give the arrest law with "
+                    "blocked_force='paper' (momentum_flux_weight=0)"
+                )
 
     @property
     def blocked_force(self) -> str:
@@ -187,12 +218,15 @@ class Model(eqx.Module):
 
     @property
     def name(self) -> str:
-        """``paper`` or the damping laws' names joined by ``+``, then ``+stiffening`` and
-        ``+name`` of each element in series with the shell (``+ball-mode``,
-        ``+series-kelvin-voigt``, …)."""
+        """``paper`` or the damping laws' names joined by ``+``, then ``+stiffening``,
+        ``+contact-layer``, ``+arrest`` and ``+name`` of each element in series with the shell
+        (``+ball-mode``, ``+series-kelvin-voigt``, …)."""
         base = "+".join(d.name for d in self.damping) or "paper"
         stiffening = "+stiffening" if self.stiffening is not None else ""
-        return base + stiffening + "".join(f"+{e.name}" for e in self.series_elements)
+        layer = f"+{self.layer.name}" if self.layer is not None else ""
+        arrest = f"+{self.arrest.name}" if self.arrest is not None else ""
+        elements = "".join(f"+{e.name}" for e in self.series_elements)
+        return base + stiffening + layer + arrest + elements
 
     @property
     def ball_mode(self) -> BallMode | None:
@@ -343,4 +377,6 @@ def structure_model(
         momentum_flux_weight=base.momentum_flux_weight,
         floor=base.floor,
         series_elements=in_series,
+        layer=base.layer,
+        arrest=base.arrest,
     )
