@@ -142,8 +142,8 @@ def test_energy_balance_says_it_does_not_cover_it():
 def test_names_files_and_the_fit_layer():
     name = "hunt-crossley+series-kelvin-voigt"
     assert name in all_model_names() and "zener+stiffening+series-kelvin-voigt" in all_model_names()
-    assert parse_model_terms(name) == ((HuntCrossley,), False, False, True)
-    assert parse_model_terms("hunt-crossley+ball-mode") == ((HuntCrossley,), False, True, False)
+    assert parse_model_terms(name) == ((HuntCrossley,), False, False, True, False, False)
+    assert parse_model_terms("hunt-crossley+ball-mode") == ((HuntCrossley,), False, True, False, False, False)
     model = model_from_name(
         name, blocked_force="momentum", values={"series_compliance_m_per_N": 3e-6}
     )
@@ -196,6 +196,6 @@ def test_every_name_the_parser_accepts_is_listed_and_builds_its_model():
     listed = all_model_names()
     assert len(listed) == len(set(listed)) and set(listed) == accepted
     both = "hunt-crossley+stiffening+ball-mode+series-kelvin-voigt"
-    assert both in listed and parse_model_terms(both) == ((HuntCrossley,), True, True, True)
+    assert both in listed and parse_model_terms(both) == ((HuntCrossley,), True, True, True, False, False)
     for name in listed:  # each builds the model that Model.name writes back as the name
         assert model_from_name(name).name == name

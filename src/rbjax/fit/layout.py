@@ -16,8 +16,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..terms.arrest import WaveLimitedArrest
 from ..terms.ball import Ball
 from ..terms.ball_mode import BallMode
+from ..terms.contact_layer import ContactLayer
 from ..terms.damping import DAMPING_MODELS, AbstractDamping
 from ..terms.declare import HEIGHT_ERROR, ONSET_SHIFT
 from ..terms.forces import CubicStiffening
@@ -44,6 +46,8 @@ MODEL_NAMES = (
     "hunt-crossley+series-kelvin-voigt",
 )
 STIFFENING_SUFFIX = "+stiffening"
+LAYER_SUFFIX = "+contact-layer"
+ARREST_SUFFIX = "+arrest"
 BALL_MODE_SUFFIX = "+ball-mode"
 SERIES_SUFFIX = "+series-kelvin-voigt"
 #: Parameters that are never fitted: constants of the program (``fix`` may still set them).
@@ -97,14 +101,17 @@ def all_model_names() -> tuple[str, ...]:
 
     Returns:
         The names, a tuple of str: ``paper`` and each registered damping law, then each of
-        these with ``+stiffening``, then all of those with ``+ball-mode``, then all of them
+        these with ``+stiffening``, then all of those with ``+contact-layer``, ``+arrest`` and
+        ``+contact-layer+arrest``, then all of those with ``+ball-mode``, then all of them
         with ``+series-kelvin-voigt``, then all of them with ``+ball-mode+series-kelvin-voigt``
         (both elements in series with the shell).
     """
     base = ("paper",) + tuple(n for n in DAMPING_MODELS if n != "paper")
     with_stiffening = base + tuple(m + STIFFENING_SUFFIX for m in base)
+    local = (LAYER_SUFFIX, ARREST_SUFFIX, LAYER_SUFFIX + ARREST_SUFFIX)
+    with_local = with_stiffening + tuple(m + s for s in local for m in with_stiffening)
     elements = (BALL_MODE_SUFFIX, SERIES_SUFFIX, BALL_MODE_SUFFIX + SERIES_SUFFIX)
-    return with_stiffening + tuple(m + suffix for suffix in elements for m in with_stiffening)
+    return with_local + tuple(m + suffix for suffix in elements for m in with_local)
 
 
 class ModelTerms(NamedTuple):
@@ -114,6 +121,8 @@ class ModelTerms(NamedTuple):
     stiffening: bool
     ball_mode: bool
     series: bool
+    layer: bool = False
+    arrest: bool = False
 
 
 def parse_model_terms(name: str) -> ModelTerms:
@@ -122,7 +131,8 @@ def parse_model_terms(name: str) -> ModelTerms:
 
     Args:
         name: a model name: ``paper`` or a registered damping law, then optionally
-            ``+stiffening``, ``+ball-mode`` and ``+series-kelvin-voigt``, in this order.
+            ``+stiffening``, ``+contact-layer``, ``+arrest``, ``+ball-mode`` and
+            ``+series-kelvin-voigt``, in this order.
 
     Returns:
         A ``ModelTerms`` ``(laws, stiffening, ball_mode, series)``: the damping law classes
@@ -144,12 +154,15 @@ def parse_model_terms(name: str) -> ModelTerms:
 
     rest, series = strip(name, SERIES_SUFFIX)
     rest, mode = strip(rest, BALL_MODE_SUFFIX)
+    rest, arrest = strip(rest, ARREST_SUFFIX)
+    rest, layer = strip(rest, LAYER_SUFFIX)
     base, stiff = strip(rest, STIFFENING_SUFFIX)
     if base != "paper" and base not in DAMPING_MODELS:
         raise ValueError(
             f"model={name!r} is not a known model; valid: {', '.join(all_model_names())}"
         )
-    return ModelTerms((() if base == "paper" else (DAMPING_MODELS[base],)), stiff, mode, series)
+    laws = () if base == "paper" else (DAMPING_MODELS[base],)
+    return ModelTerms(laws, stiff, mode, series, layer, arrest)
 
 
 def parse_model_name(name: str) -> tuple[tuple[type[AbstractDamping], ...], bool]:
@@ -204,6 +217,22 @@ def model_from_name(
         default = cls.start(5e4, 2.5, 0.8, 0.02, 1.0)
         return cls(**{k: values.get(k, default[k]) for k in cls.PARAMETERS})
 
+    layer = None
+    if terms.layer:
+        layer = ContactLayer(
+            values.get("layer_deflection_m", 1e-3), values.get("layer_exponent", 2.0)
+        )
+    arrest = None
+    if terms.arrest:
+        if blocked_force != "paper":
+            raise ValueError(
+                f"model={name!r} with blocked_force={blocked_force!r}: the arrest law says what "
+                "the floor receives of the momentum flux; valid: blocked_force='paper'"
+            )
+        default = WaveLimitedArrest.start(4.4)
+        arrest = WaveLimitedArrest(
+            **{k: values.get(k, default[k]) for k in WaveLimitedArrest.PARAMETERS}
+        )
     return Model(
         gas=gas,
         blocked_force=blocked_force,
@@ -211,6 +240,8 @@ def model_from_name(
         stiffening=stiffening,
         ball_mode=term(BallMode, terms.ball_mode),
         series=term(SeriesKelvinVoigt, terms.series),
+        layer=layer,
+        arrest=arrest,
     )
 
 

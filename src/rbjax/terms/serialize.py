@@ -6,11 +6,14 @@
                "stiffening": null | {"beta": ..},
                "ball_mode": null | {"mode_mass_ratio": .., "mode_frequency_Hz": .., "mode_loss_factor": ..},
                "series": {"series_compliance_m_per_N": .., "series_time_constant_s": ..},
+               "layer": {"layer_deflection_m": .., "layer_exponent": ..},
+               "arrest": {"name": "arrest", "arrest_speed_m_per_s": .., "arrest_exponent": ..},
                "floor": {"name": "rigid"} | {"name": "infinite-plate", "plate_thickness_m": .., ...}}}
 
 Each element in series with the shell is one table under its class's ``key()`` (``ball_mode``,
 ``series``, or a new element's ``name``), absent without it (``ball_mode`` is written null, as
-files have always had it); the tables present are read back in the file's order.
+files have always had it); the tables present are read back in the file's order. ``layer`` (a ``ContactLayer``) and
+``arrest`` (an arrest law, by name) are absent without them.
 
 A fit's JSON output carries these two keys, so ``rbjax simulate --params FIT.json`` predicts
 with the fitted model.
@@ -27,7 +30,9 @@ from typing import Any
 import numpy as np
 
 from .._validate import as_float
+from .arrest import ARREST_LAWS
 from .ball import Ball
+from .contact_layer import ContactLayer
 from .damping import DAMPING_MODELS
 from .floors.kinds import FLOOR_MODELS
 from .forces import CubicStiffening
@@ -42,6 +47,8 @@ MODEL_KEYS = (
     "max_deflection_ratio",
     "damping",
     "stiffening",
+    "layer",
+    "arrest",
     "floor",
 )
 
@@ -107,6 +114,10 @@ def model_to_dict(model: Model) -> dict:
             "stiffening": stiffening,
         }
     )
+    if model.layer is not None:
+        out["layer"] = _fields(model.layer)
+    if model.arrest is not None:
+        out["arrest"] = {"name": model.arrest.name, **_fields(model.arrest)}
     out["ball_mode"] = None  # null without a ball mode, as files have always had it
     for element in model.series_elements:  # the others absent without them
         out[element.key()] = _fields(element)
@@ -144,6 +155,18 @@ def model_from_dict(d: dict) -> Model:
     floor_name = floor.pop("name", None)
     if floor_name not in FLOOR_MODELS:
         raise ValueError(f"floor name={floor_name!r} is not known; valid: {sorted(FLOOR_MODELS)}")
+    layer = d.get("layer")
+    if layer is not None:
+        layer = _construct("layer", ContactLayer, _table("layer", layer))
+    arrest = d.get("arrest")
+    if arrest is not None:
+        arrest = dict(_table("arrest", arrest))
+        arrest_name = arrest.pop("name", None)
+        if arrest_name not in ARREST_LAWS:
+            raise ValueError(
+                f"arrest name={arrest_name!r} is not known; valid: {sorted(ARREST_LAWS)}"
+            )
+        arrest = _construct(f"arrest {arrest_name!r}", ARREST_LAWS[arrest_name], arrest)
     weight = d.get("momentum_flux_weight")
     return Model(
         gas=d.get("gas", "adiabatic"),
@@ -154,6 +177,8 @@ def model_from_dict(d: dict) -> Model:
         momentum_flux_weight=None if weight is None else float(weight),
         series_elements=elements,
         floor=_construct(f"floor {floor_name!r}", FLOOR_MODELS[floor_name], floor),
+        layer=layer,
+        arrest=arrest,
     )
 
 

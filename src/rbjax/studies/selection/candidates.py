@@ -10,7 +10,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ..._validate import check_choice
-from ...fit import parse_model_name, parse_model_terms
+from ...fit import model_from_name, parse_model_name, parse_model_terms
+from ...fit.layout import ARREST_SUFFIX, LAYER_SUFFIX
 from ...terms.model import BLOCKED_FORCE_OPTIONS, Model, structure_model
 
 __all__ = [
@@ -38,6 +39,8 @@ def candidate_pairs(
         if sep:
             check_choice("blocked_force", bf, BLOCKED_FORCE_OPTIONS)
             pairs.append((name, bf))
+        elif parse_model_terms(name).arrest:  # the arrest law is its own blocked force
+            pairs.append((name, "paper"))
         else:
             pairs += [(name, b) for b in blocked_forces]
     return list(dict.fromkeys(pairs))
@@ -48,14 +51,24 @@ def shared_structure(names: Sequence[str], gas: str = "adiabatic") -> Model:
     stiffening, the ball mode and the series element if any candidate has them): the structure
     of the one compiled fit program that all candidates and folds run through, each with the
     terms it lacks held off (the ball mode at μ = 0, the series element at C = 0)."""
-    laws, stiff, mode, series = [], False, False, False
+    laws, stiff, mode, series, local = [], False, False, False, set()
     for name in names:
         terms = parse_model_terms(name)
         laws += [t for t in terms.laws if t not in laws]
         stiff = stiff or terms.stiffening
         mode = mode or terms.ball_mode
         series = series or terms.series
-    return structure_model(Model(gas=gas), laws, stiffening=stiff, ball_mode=mode, series=series)
+        local.add((terms.layer, terms.arrest))
+    if len(local) > 1:
+        raise ValueError(
+            f"models {list(names)} differ in the contact layer or the arrest law, which have no "
+            "off value: they cannot share one structure"
+        )
+    (layer, arrest), *_ = local or {(False, False)}
+    base = model_from_name(
+        "paper" + LAYER_SUFFIX * layer + ARREST_SUFFIX * arrest, gas=gas, blocked_force="paper"
+    )
+    return structure_model(base, laws, stiffening=stiff, ball_mode=mode, series=series)
 
 
 def shared_structures(
@@ -68,9 +81,10 @@ def shared_structures(
     again for the Jacobian), so the other candidates do not carry it."""
     if given is not None:
         return {name: given for name in names}
-    groups: dict[bool, list[str]] = {}
+    groups: dict[tuple[bool, bool, bool], list[str]] = {}
     for name in names:
-        groups.setdefault(parse_model_terms(name).series, []).append(name)
+        terms = parse_model_terms(name)
+        groups.setdefault((terms.series, terms.layer, terms.arrest), []).append(name)
     out = {}
     for group in groups.values():
         structure = shared_structure(group, gas)
@@ -82,4 +96,5 @@ def structure_cost(name: str) -> float:
     """A candidate's relative cost per evaluation (the order in which work starts, nothing
     else): the ball mode and the series element make every solve several times dearer."""
     terms = parse_model_terms(name)
-    return 1.0 + 3.0 * terms.ball_mode + 2.0 * terms.series + 0.5 * len(terms.laws)
+    local = 1.0 * terms.layer + 0.5 * terms.arrest
+    return 1.0 + 3.0 * terms.ball_mode + 2.0 * terms.series + 0.5 * len(terms.laws) + local
