@@ -58,6 +58,20 @@ def test_bad_design_input_is_named(kwargs, needle):
         design(search=search, **kwargs)
 
 
+def test_every_model_name_of_the_fit_has_a_search_range():
+    # issue 43, item 3: design takes every model the fit takes (each parameter gets a finite
+    # interval: DESIGN_RANGES, else its term's declared range)
+    from rbjax.fit.layout import all_model_names, fitted_parameter_names, model_from_name
+    from rbjax.studies.design import _specs
+
+    ball = GEOMETRIES["jis"]
+    for name in all_model_names():
+        base = model_from_name(name)
+        names = tuple(n for n in fitted_parameter_names(base) if n != "poisson") + ("wall_m",)
+        for n, spec in zip(names, _specs(names, ball, base), strict=True):
+            assert np.isfinite(spec.lower) and np.isfinite(spec.upper) and spec.lower < spec.upper
+
+
 def test_cli_help_of_the_new_commands():
     code, out, _ = run_cli(["design", "--help"])
     assert code == 0 and "--geometry" in out and "optax" in out

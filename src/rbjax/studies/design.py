@@ -37,8 +37,11 @@ from .._progress import progress as say
 from .._validate import as_float, check_choice, check_range, settings_or_default
 from ..fit.layout import FIT_RANGES, fitted_parameter_names, model_from_name, parse_model_terms
 from ..fit.summary_model import figures_of, window_samples
+from ..solve.angle import local_terms_unsupported
 from ..solve.inputs import as_arrays
+from ..solve.path import quadrature_unsupported, resolve_path
 from ..solve.simulate import simulate
+from ..solve.solver import Solver
 from ..spectrum.standards import (
     CLAUSE,
     RUBBER_BALL_TOLERANCES,
@@ -50,7 +53,7 @@ from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.declare import Parameter
 from ..terms.forces import reissner_stiffness_N_per_m
 from ..terms.model import Model
-from ..terms.parameters import parameter_table, replace
+from ..terms.parameters import declaration, parameter_table, replace
 from ..terms.serialize import ball_to_dict, model_to_dict
 
 GEOMETRIES = {
@@ -58,7 +61,10 @@ GEOMETRIES = {
     "iso": Ball(radius_m=0.090, wall_m=0.030, mass_kg=2.5, youngs_Pa=1.6e6, poisson=0.5),
 }
 #: The search ranges of a design (interval transforms): wide enough for any conforming ball;
-#: the ball mode's and the series element's are a fit's (``rbjax.fit.layout.FIT_RANGES``).
+#: the ball mode's and the series element's are a fit's (``rbjax.fit.layout.FIT_RANGES``). The
+#: contact layer's compression under 1 kN runs to 20 mm (as soft as the JIS ball's shell,
+#: ~50 kN/m); a parameter not named here (the layer's exponent, the arrest law's) is searched
+#: over its term's declared range (``rbjax.terms.declare``), which must then be finite.
 DESIGN_RANGES = {
     "youngs_Pa": (0.5e6, 8.0e6),
     "damping_Ns_per_m": (0.0, 400.0),
@@ -66,6 +72,7 @@ DESIGN_RANGES = {
     "stiffness_ratio": (0.0, 3.0),
     "relaxation_time_s": (1e-4, 0.05),
     "beta": (0.0, 2.0),
+    "layer_deflection_m": (1e-4, 0.02),
     **FIT_RANGES,
 }
 #: The wall's range with ``vary_wall``: the mass follows it at the ball's density and is checked.
@@ -85,10 +92,24 @@ _TOLERANCES = tuple(RUBBER_BALL_TOLERANCES.lfe_octave_dB[b] for b in TOLERANCED_
 SOFTMIN_TEMPERATURE = 0.01
 
 
-def _specs(names) -> tuple[Parameter, ...]:
+def _range(name, ball, model) -> tuple[float, float]:
+    if name == "wall_m":
+        return WALL_RANGE_M
+    if name in DESIGN_RANGES:
+        return DESIGN_RANGES[name]
+    spec = declaration(name, ball, model)
+    if not (math.isfinite(spec.lower) and math.isfinite(spec.upper)):
+        raise ValueError(
+            f"parameter {name!r} has no finite range to design in ({spec.lower}, {spec.upper}): "
+            "name one in rbjax.studies.design.DESIGN_RANGES"
+        )
+    return float(spec.lower), float(spec.upper)
+
+
+def _specs(names, ball, model) -> tuple[Parameter, ...]:
     out = []
     for n in names:
-        lo, hi = WALL_RANGE_M if n == "wall_m" else DESIGN_RANGES[n]
+        lo, hi = _range(n, ball, model)
         out.append(Parameter("", lower=lo, upper=hi, transform="interval"))
     return tuple(out)
 
@@ -115,10 +136,21 @@ def normalised_margins(values) -> jnp.ndarray:
     return jnp.minimum(values - lower, upper - values) / half
 
 
+def _figures(ball, model, num_samples):
+    """The items but the mass at 1 m: ``figures_of``; with a contact layer or an arrest law (on
+    the ODE, not coupled) the scalars from the ODE with forward-mode sensitivities (``jacfwd``
+    cannot run through the default adjoint) and the bands from the sampled path."""
+    height = jnp.asarray(STANDARD_HEIGHT_M)
+    if local_terms_unsupported(model) is None:
+        return figures_of(height, ball, model, tuple(ITEMS[:-1]), num_samples)
+    bands = figures_of(height, ball, model, tuple(ITEMS[:-3]), num_samples)
+    res = simulate(height, ball, model, solver=Solver(adjoint="forward"))
+    return jnp.concatenate([bands, jnp.stack([res.contact_time_s, res.restitution])])
+
+
 def _item_values(phi, ball, model, names, specs, density, num_samples):
     b, m = _ball_model(phi, ball, model, names, specs, density)
-    figures = tuple(ITEMS[:-1])
-    values = figures_of(jnp.asarray(STANDARD_HEIGHT_M), b, m, figures, num_samples)
+    values = _figures(b, m, num_samples)
     return jnp.concatenate([values, jnp.reshape(b.mass_kg, (1,))])
 
 
@@ -288,8 +320,11 @@ def design(
     """Maximise the smallest margin to the rubber-ball table at 1 m (see the module docstring).
 
     Args:
-        model: a model name (``paper``, ``kelvin-voigt``, ``hunt-crossley``, ``zener``,
-            ``+stiffening``; coupled models (``+ball-mode``) run on the ODE, slowly).
+        model: any model name of the fit (:func:`rbjax.fit.layout.all_model_names`:
+            ``paper`` or a damping law, then ``+stiffening``, ``+contact-layer``, ``+arrest``,
+            ``+ball-mode``, ``+series-kelvin-voigt``). The contact layer and the arrest law (no
+            fast path solves them) and the coupled elements run on the ODE, more slowly (the
+            progress line says so).
         geometry: ``jis`` or ``iso`` (:data:`GEOMETRIES`).
         search: a :class:`DesignSearch` (default ``DesignSearch()``): starts, Adam's steps and
             step size, seed.
@@ -309,11 +344,17 @@ def design(
     names = tuple(n for n in fitted_parameter_names(base) if n != "poisson") + (
         ("wall_m",) if vary_wall else ()
     )
-    specs = _specs(names)
+    specs = _specs(names, ball, base)
     start_model = model_from_name(
         model, gas=gas, blocked_force=blocked_force, values=_start_values(base, ball)
     )
     density = _density(ball)
+    if resolve_path("auto", base) == "ode":
+        say(
+            f"design {model}/{geometry}: {quadrature_unsupported(base)}: the search runs on the "
+            "ODE, slower than on the fast paths",
+            enabled=progress,
+        )
     rng = np.random.default_rng(seed)
     first = [
         float(s.to_unconstrained(_value_of(n, ball, start_model))) for n, s in zip(names, specs)
