@@ -9,7 +9,7 @@ the elastic model, the phase-angle path for Zener with the momentum blocked forc
 outputs are checked to agree (rtol 1e-12). Timings: the best of repeats after a first
 (compiling) call, run alternately (the 2-core machine is shared; its load average is recorded).
 
-Run: ``.venv/bin/python benchmarks/evaluate_speed.py [--quick]`` (quick: 10× fewer impacts);
+Run: ``.venv/bin/python benchmarks/evaluate_speed.py [--quick]`` (quick: 100× fewer impacts);
 writes ``results/evaluate_speed.json`` and prints a table.
 """
 
@@ -78,7 +78,7 @@ def main(quick: bool = False) -> None:
     t0 = time.perf_counter()
     rows = []
     for name, (model, n) in MODELS.items():
-        n = n // 10 if quick else n
+        n = n // 100 if quick else n
         heights = np.linspace(0.1, 1.6, n)
         youngs = np.linspace(1.3e6, 1.9e6, n)
         ball = rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=youngs)

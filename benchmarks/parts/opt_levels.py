@@ -9,7 +9,10 @@ sampled and the ODE force histories, their octave L_FE, gradients (``jax.grad`` 
 time in E, the README's un-jitted example, on each path; forward mode on the ODE) and a fit of
 the bundled recordings (its parameters).
 
-    python benchmarks/opt_levels.py            # both levels, the table (a few minutes)
+    python benchmarks/accuracy.py --only opt_levels   # both levels, the table (a few minutes)
+
+``--quick``: the quadrature path, its sampled history and its gradient only (the ODE and phase-angle
+programs take most of the minutes to compile, twice).
 """
 
 from __future__ import annotations
@@ -45,6 +48,13 @@ def compute(quick: bool = False) -> dict[str, np.ndarray]:
     scalars("quadrature", quad)
     out["sampled|force_N"] = np.asarray(quad.history(rate_Hz=44_100.0, duration_s=0.05).force_N)
     out["sampled|lfe_octave_dB"] = np.asarray(quad.lfe_octave_dB())
+
+    def tc(E, **kw):
+        return rbjax.simulate(1.0, ball.replace(youngs_Pa=E), **kw).contact_time_s
+
+    out["quadrature|grad"] = np.asarray(jax.grad(tc)(1.6e6))  # the README's example, un-jitted
+    if quick:
+        return out
     zener = dict(damping=rbjax.Zener(0.3, 1e-3), blocked_force="momentum")
     hunt = dict(damping=rbjax.HuntCrossley(0.05), blocked_force="momentum")  # the angle path's
     scalars("angle", rbjax.simulate(HEIGHTS_M, path="angle", **hunt))
@@ -59,17 +69,11 @@ def compute(quick: bool = False) -> dict[str, np.ndarray]:
     scalars("ode-floor", floor)
     out["ode-floor|force_N"] = np.asarray(floor.history(rate_Hz=44_100.0, duration_s=0.05).force_N)
 
-    def tc(E, **kw):
-        return rbjax.simulate(1.0, ball.replace(youngs_Pa=E), **kw).contact_time_s
-
-    out["quadrature|grad"] = np.asarray(jax.grad(tc)(1.6e6))  # the README's example, un-jitted
     out["angle|grad"] = np.asarray(jax.grad(lambda E: tc(E, path="angle", **hunt))(1.6e6))
     fwd = rbjax.Solver(adjoint="forward")
     out["ode|grad (jacfwd)"] = np.asarray(
         jax.jacfwd(lambda E: tc(E, solver=fwd, **zener))(jnp.asarray(1.6e6))
     )
-    if quick:
-        return out
     res = fit(examples_dir(), "hunt-crossley", blocked_force="momentum", progress=False)
     for name, p in res.parameters.items():
         if not p.fixed:

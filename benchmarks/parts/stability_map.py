@@ -18,7 +18,8 @@ elastic slices (A, C), scipy DOP853 at rtol 1e-12 (tests/scipy_reference.py) for
 * false flag: flagged although the reference finds a valid impact;
 * step_limit; solver_failed; NaN: status ok with a non-finite output.
 
-Run: ``.venv/bin/python benchmarks/stability_map.py [--quick]``.
+Run: ``.venv/bin/python benchmarks/accuracy.py --only stability_map [--quick]`` (quick: a 3 × 3
+grid on slices A and B, Heun and Tsit5 only).
 """
 
 from __future__ import annotations
@@ -174,17 +175,17 @@ def classify(out, ref):
 def main(quick: bool = False) -> None:
     info = machine_info()
     t0 = time.perf_counter()
-    n = 6 if quick else 16
+    n = 3 if quick else 16
     slices = grids(n)
+    if quick:  # slice C's reference near δ → 2R is scipy's, slow at its corners
+        slices = {k: slices[k] for k in ("A", "B")}
     refs = {}
     for key, s in slices.items():
         t = time.perf_counter()
         refs[key] = reference(key, s)
         print(f"reference {key}: {time.perf_counter() - t:.1f} s", flush=True)
     methods = (
-        METHODS
-        if not quick
-        else (("heun", {}), ("tsit5", {}), ("tsit5", {"rtol": 1e-7, "atol": 1e-10}), ("dopri8", {}))
+        METHODS if not quick else (("heun", {}), ("tsit5", {}))  # one fixed-step, one adaptive
     )
     results = []
     for method, tol in methods:
