@@ -133,8 +133,7 @@ def lm_evaluation_ratio(model: str) -> dict:
     import numpy as np
 
     from rbjax import JIS_RUBBER_BALL
-    from rbjax.fit import prepare_data
-    from rbjax.fit.layout import model_from_name
+    from rbjax.fit import model_from_name, prepare_data
     from rbjax.fit.problem import Problem, fit_solver
     from rbjax.fit.record_forces import record_forces
 

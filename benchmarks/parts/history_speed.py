@@ -1,6 +1,6 @@
 """Force histories: the ODE path (diffrax, dense interpolant at the sample times) against the
-histories sampled inside a fixed-step solve (``rbjax.solve.sampled``, RK4, one step per sample),
-the default of ``force_history`` for the rigid-floor models since this change.
+histories sampled inside a fixed-step solve (``rbjax.solve.sampled_history``, RK4, one step per
+sample), the default of ``force_history`` for the rigid-floor models since this change.
 
 Records per second at batch 100 and 1000 (heights 0.1–1.6 m, 44.1 kHz), for the force samples of
 the contact only (⌈t_c·rate⌉ + 2 samples) and for the whole 1 s record zero-padded by
@@ -22,8 +22,7 @@ import numpy as np
 
 import rbjax
 from rbjax import Model
-from rbjax.solve import force_history, trajectory
-from rbjax.solve.sampled import sampled_solve, substeps_for_contact
+from rbjax.solve import force_history, sampled_history, trajectory
 
 from _common import finish_machine_info, machine_info, table, time_call, write_json
 from scipy_reference import reference_impact
@@ -34,6 +33,9 @@ BALL = rbjax.JIS_RUBBER_BALL
 RATE_Hz = 44_100.0
 SOLVER = rbjax.Solver()
 ERROR_HEIGHTS = np.array([0.1, 0.8, 1.6])
+#: ``force_history``'s rule for its sub-steps: at least this many RK4 steps over the shortest
+#: contact (rbjax.solve.sampled's MIN_STEPS_PER_CONTACT)
+MIN_STEPS_PER_CONTACT = 400
 MODELS = {
     "elastic": {},
     "zener (momentum)": dict(
@@ -62,15 +64,17 @@ def _errors(model, options) -> dict:
         "sampled": _max_error(
             force_history(ERROR_HEIGHTS, BALL, model, SOLVER, contact_time_s=contact), refs
         ),
-        "sampled, 2 steps per sample": _max_error(
-            sampled_solve(ERROR_HEIGHTS, BALL, model, RATE_Hz, n, 2), refs
-        ),
+        "sampled, 2 steps per sample": _max_error(sampled(ERROR_HEIGHTS, model, n, 2), refs),
     }
+
+
+def sampled(heights, model, n, substeps):
+    return sampled_history(heights, BALL, model, num_samples=n, rate_Hz=RATE_Hz, substeps=substeps)
 
 
 def _paths(heights, model, contact):
     n = int(math.ceil(np.max(contact) * RATE_Hz)) + 2
-    substeps = substeps_for_contact(contact, RATE_Hz)
+    substeps = max(1, math.ceil(MIN_STEPS_PER_CONTACT / (float(np.min(contact)) * RATE_Hz)))
     times = jnp.arange(n) / RATE_Hz
     return (
         n,
@@ -82,14 +86,12 @@ def _paths(heights, model, contact):
                     heights, BALL, model, SOLVER, contact_time_s=contact, path="ode"
                 ).force_N
             ),
-            ("sampled", "contact"): lambda: (
-                sampled_solve(heights, BALL, model, RATE_Hz, n, substeps).force_N
-            ),
+            ("sampled", "contact"): lambda: sampled(heights, model, n, substeps).force_N,
             ("sampled", "record"): lambda: (
                 force_history(heights, BALL, model, SOLVER, contact_time_s=contact).force_N
             ),
             ("sampled, 2 steps per sample", "contact"): lambda: (
-                sampled_solve(heights, BALL, model, RATE_Hz, n, 2).force_N
+                sampled(heights, model, n, 2).force_N
             ),
         },
     )

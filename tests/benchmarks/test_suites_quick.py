@@ -31,14 +31,12 @@ CHEAPEST = {
 # benchmarks/… that import a name outside the public surface (a package's ``__all__``), each
 # because the measurement needs what no public name exposes. Only shrinks.
 PENDING = {
-    "parts/ball_mode_growth.py": {"rbjax.studies.growth"},
-    "parts/history_speed.py": {"rbjax.solve.sampled"},
     # the design's own margins beside the tolerance check's: `design` and `DesignSearch` are not
     # in rbjax.studies.__all__ (`rbjax design` is their public face)
     "parts/design_check.py": {"rbjax.studies.design"},
     # one LM evaluation of the fit's compiled program against the forward histories alone: the
     # program (Problem, fit_solver) and the sampled forward (record_forces) are the fit's insides
-    "parts/fit_time.py": {"rbjax.fit.layout", "rbjax.fit.problem", "rbjax.fit.record_forces"},
+    "parts/fit_time.py": {"rbjax.fit.problem", "rbjax.fit.record_forces"},
     # counts every call of the fit program through the lane executor's run hook: the count is
     # the measurement (LaneExecutor, run_lanes, STEPS_PER_ROUND are the fit's insides)
     "parts/selection_lanes.py": {"rbjax.fit.lanes", "rbjax.fit.problem", "rbjax.fit.program"},
