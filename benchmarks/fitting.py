@@ -15,7 +15,9 @@ selection"):
 * ``summary_fit``: recovery of a known model from summary figures, warm time of a 5-height fit;
 * ``loader_faults``: the fit on faulty recordings and other sample rates against the clean fit;
 * ``selection_lanes``: the selection as lanes of batched programs against one fit after another;
-* ``design_check``: ``design``'s margins against ``simulate`` and a 32-start run.
+* ``design_check``: ``design``'s margins against ``simulate`` and a 32-start run;
+* ``selection_race``: ``rbjax fit DIR`` (the selection races) cold and warm beside
+  ``--exhaustive``; the race against the exhaustive selection on the tests' data sets.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ SECTIONS = [
     Section("loader_faults", "fits on faulty recordings vs clean"),
     Section("selection_lanes", "the selection as lanes vs sequential"),
     Section("design_check", "design's margins checked"),
+    Section("selection_race", "the raced selection: time, and the exhaustive one's answer"),
 ]
 
 

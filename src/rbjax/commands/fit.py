@@ -14,7 +14,8 @@ Fit Young's modulus E (with ν held at 0.5: only E/√(1−ν²) is identifiable
 and the parameters of a damping model to force histories of drops from several heights,
 through the measuring chain (causal 4th-order low-pass) as the data went through it.
 Without --model every candidate is fitted and cross-validated over the heights (as
-`rbjax select`, several minutes) and the recommended one is kept.
+`rbjax select`: a race that drops a candidate once every contender beats it at every height;
+--exhaustive runs every fold) and the recommended one is kept.
 
 models: paper (elastic, §2), kelvin-voigt, hunt-crossley, zener, each optionally
 +stiffening and then +ball-mode (one mode of the ball in series with the shell, the
@@ -77,6 +78,47 @@ def add_data_options(p: argparse.ArgumentParser, paths: str = "+") -> None:
     )
 
 
+def add_race_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``fit`` (without ``--model``) and ``select``: how the model selection
+    races (:mod:`rbjax.studies.selection.race`) or runs every fold."""
+    p.add_argument(
+        "--exhaustive",
+        action="store_true",
+        help=(
+            "run every fold of every candidate (the full table); default: race, dropping a "
+            "candidate once every contender beats it at every height (the same recommendation)"
+        ),
+    )
+    p.add_argument(
+        "--race-margin",
+        type=float,
+        default=None,
+        metavar="X",
+        help=(
+            "how far (relatively, >= 0) a candidate's in-sample error at a height whose fold has "
+            "not run must exceed a contender's held-out error to count as beaten (default 0.25)"
+        ),
+    )
+
+
+def race_of(args):
+    """``(exhaustive, race)`` for :func:`~rbjax.studies.selection.select.select_model` from
+    ``--exhaustive`` and ``--race-margin`` (named errors: a bad margin, or both given)."""
+    from ..studies.selection.race import Race
+
+    if args.race_margin is None:
+        return bool(args.exhaustive), None
+    if args.exhaustive:
+        raise ValueError(
+            "--race-margin applies to the race and --exhaustive runs every fold: give one or "
+            "the other"
+        )
+    try:
+        return False, Race(margin=args.race_margin)
+    except ValueError as err:
+        raise ValueError(f"--race-margin {args.race_margin!r}: {err}") from None
+
+
 def parse_lowpass(value: str):
     if value == "auto":
         return "auto"
@@ -134,6 +176,7 @@ def register(subparsers) -> None:
     )
     add_data_options(p, paths="*")
     add_parallel_options(p, what="fits of the model selection (without --model)", lanes=True)
+    add_race_options(p)
     p.add_argument(
         "--summary",
         default=None,
@@ -226,6 +269,7 @@ def run(args) -> int:
     fix = parse_fix(args.fix)
     _check_model_and_fix(args.model, fix)
     parallel = parallel_of(args) if args.model is None else None
+    exhaustive, race = race_of(args)
     if parallel is not None:
         prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
@@ -247,6 +291,8 @@ def run(args) -> int:
             options=options,
             workers=parallel,
             progress=not args.quiet,
+            exhaustive=exhaustive,
+            race=race,
         )
         result = selection.recommended.fit
         progress(f"recommended: {selection.recommended.label}")

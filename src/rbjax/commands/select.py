@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from . import add_command, add_parallel_options, emit_json, parallel_of, progress, write_json_file
-from .fit import add_data_options, load_fit_data
+from .fit import add_data_options, add_race_options, load_fit_data, race_of
 
 DESCRIPTION = """\
 Fit every candidate model (damping: paper = elastic, kelvin-voigt, hunt-crossley, zener;
@@ -12,7 +12,11 @@ time and predict it (leave-one-height-out cross-validation), and recommend the s
 model whose held-out error is within the noise of the best (paired one-standard-error
 rule). The table gives the held-out history error (% of peak), contact time, peak force and
 octave-band L_FE errors, and AIC/BIC; the unfitted paper model (E = 1.6 MPa) is the
-baseline. Takes several minutes (one compilation for all candidates). Any model name of
+baseline. The selection races: after the full fits the folds run in rounds, and a
+candidate that every contender beats at every height (its held-out error, or its full fit's
+in-sample error, a lower bound, where the fold has not run) is dropped with its remaining
+folds; the recommendation is that of --exhaustive (every fold of every candidate). Any model
+name of
 `rbjax fit` is a candidate, e.g. hunt-crossley+ball-mode (a mode of the ball in series with
 the shell; the other candidates then run with it held off, μ = 0, in the same program) or
 hunt-crossley+series-kelvin-voigt (its massless limit, held off at C = 0).
@@ -23,6 +27,7 @@ examples:
   rbjax select recordings/ --candidates hunt-crossley,hunt-crossley+ball-mode \
 --blocked-force momentum
   rbjax select recordings/ --hold-out 0.2,0.8 --json > selection.json
+  rbjax select recordings/ --exhaustive          # every fold: the full table
 """
 
 
@@ -35,6 +40,7 @@ def register(subparsers) -> None:
     )
     add_data_options(p)
     add_parallel_options(p, lanes=True)
+    add_race_options(p)
     p.add_argument(
         "--candidates",
         default=None,
@@ -108,6 +114,7 @@ def run(args) -> int:
     forces = BLOCKED_FORCE_OPTIONS if args.blocked_force == "both" else (args.blocked_force,)
     candidates = _parse_candidates(args.candidates, forces)
     held = _parse_heights(args.hold_out)
+    exhaustive, race = race_of(args)
     parallel = parallel_of(args)
     prestart(parallel)  # the workers import rbjax while the files are read
     data = load_fit_data(args)
@@ -127,6 +134,8 @@ def run(args) -> int:
         workers=parallel,
         gas=args.gas,
         progress=not args.quiet,
+        exhaustive=exhaustive,
+        race=race,
     )
     comparison = None
     if held is not None:

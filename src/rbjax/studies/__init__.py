@@ -16,6 +16,7 @@ from .growth import (
 from .parallel.executors import Parallel, Task, TaskError, run_tasks
 from .selection.cross_validation import cross_validate
 from .selection.hold_out_comparison import held_out_comparison
+from .selection.race import Race
 from .selection.results import Candidate, Selection
 from .selection.rule import recommend
 from .selection.select import select_model
@@ -35,6 +36,7 @@ __all__ = [
     "recording_growth",
     "Candidate",
     "Selection",
+    "Race",
     "cross_validate",
     "held_out_comparison",
     "recommend",

@@ -6,12 +6,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...fit import FitResult
 from ...spectrum.bands import OCTAVE_BANDS
 from ...text import fmt, format_table
+
+if TYPE_CHECKING:
+    from .race import Dropped, RaceSummary
 
 __all__ = ["Candidate", "Selection"]
 
@@ -25,13 +29,16 @@ class Candidate:
         blocked_force: its blocked-force definition, ``"paper"`` or ``"momentum"``.
         fit: its full fit to every height (:class:`~rbjax.fit.FitResult`).
         folds: its :class:`~rbjax.studies.selection.cross_validation.HeldOut` errors, one per
-            height left out.
+            height left out (for a candidate dropped from the race, the folds it ran).
+        dropped: why and when it left the race (a
+            :class:`~rbjax.studies.selection.race.Dropped`), ``None`` if it ran every fold.
     """
 
     model_name: str
     blocked_force: str
     fit: FitResult
     folds: tuple
+    dropped: Dropped | None = None
 
     @property
     def label(self) -> str:
@@ -48,7 +55,9 @@ class Candidate:
 
     @property
     def cv_error_pct(self) -> float:
-        return float(np.mean(self.fold_errors_pct))
+        """The mean held-out error over the folds run (% of peak; NaN if none ran)."""
+        e = self.fold_errors_pct
+        return float(np.mean(e)) if e.size else float("nan")
 
     @property
     def cv_se_pct(self) -> float:
@@ -56,6 +65,8 @@ class Candidate:
         return float(np.std(e, ddof=1) / math.sqrt(e.size)) if e.size > 1 else float("nan")
 
     def mean_abs(self, name: str):
+        if not self.folds:  # dropped from the race before any of its folds ran
+            return np.full(len(OCTAVE_BANDS), np.nan) if name == "lfe_octave_dB" else math.nan
         values = np.array([getattr(f, name) for f in self.folds], dtype=float)
         return np.mean(np.abs(values), axis=0)
 
@@ -75,6 +86,7 @@ class Candidate:
             "cv_mean_abs_lfe_octave_dB": self.mean_abs("lfe_octave_dB").tolist(),
             "parameters": {k: v.to_dict() for k, v in self.fit.parameters.items()},
             "folds": [f.to_dict() for f in self.folds],
+            "dropped": None if self.dropped is None else self.dropped.to_dict(),
         }
 
 
@@ -93,6 +105,9 @@ class Selection:
         baseline: the unfitted paper model's
             :class:`~rbjax.studies.selection.cross_validation.HeldOut` errors at every height.
         elapsed_s: how long the selection took, s.
+        race: the race's rounds and what it dropped
+            (:class:`~rbjax.studies.selection.race.RaceSummary`); ``None`` for an exhaustive
+            selection (every candidate ran every fold).
     """
 
     candidates: tuple
@@ -102,6 +117,7 @@ class Selection:
     blocked_force_note: str
     baseline: tuple
     elapsed_s: float
+    race: RaceSummary | None = None
 
     def table(self) -> str:
 
@@ -124,6 +140,10 @@ class Selection:
                 if c is self.recommended
                 else ("within noise" if c in self.within_noise else "")
             )
+            cv = fmt(c.cv_error_pct, ".2f")
+            if c.dropped is not None:
+                mark = f"dropped after round {c.dropped.round}"
+                cv = f"{cv} ({len(c.folds)} folds)" if c.folds else "— (no fold)"
             rows.append(
                 [
                     c.model_name,
@@ -131,7 +151,7 @@ class Selection:
                     str(c.n_physical),
                     "yes" if c.fit.converged else "no",
                     fmt(c.fit.residual_rms_N, ".1f"),
-                    fmt(c.cv_error_pct, ".2f"),
+                    cv,
                     fmt(c.cv_se_pct, ".2f"),
                     fmt(c.mean_abs("contact_time_pct"), ".2f"),
                     fmt(c.mean_abs("peak_force_pct"), ".2f"),
@@ -163,6 +183,7 @@ class Selection:
             f"rule: {self.rule}.",
             f"recommended: {self.recommended.label}.",
             self.blocked_force_note,
+            *(self.race.lines() if self.race is not None else []),
             f"selection took {self.elapsed_s:.0f} s.",
         ]
         return "\n".join(lines)
@@ -181,4 +202,5 @@ class Selection:
             "candidates": [c.to_dict() for c in self.candidates],
             "baseline_paper_unfitted": [b.to_dict() for b in self.baseline],
             "elapsed_s": self.elapsed_s,
+            "race": None if self.race is None else self.race.to_dict(),
         }

@@ -33,7 +33,8 @@ def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
 
     Args:
         candidates: the cross-validated :class:`Candidate` objects; those with a non-finite
-            held-out error are left out.
+            held-out error, and those dropped from a race (their folds are partial), are left
+            out.
 
     Returns:
         ``(recommended, within)``: the recommended :class:`Candidate` and the tuple of the
@@ -42,6 +43,7 @@ def recommend(candidates: Sequence[Candidate]) -> tuple[Candidate, tuple]:
     Raises:
         ValueError: no candidates, or none with a finite held-out error.
     """
+    candidates = [c for c in candidates if getattr(c, "dropped", None) is None]
     if not candidates:
         raise ValueError("no candidates to choose from")
     failed = [c for c in candidates if not math.isfinite(c.cv_error_pct)]
@@ -70,6 +72,13 @@ def blocked_force_note(candidates, chosen: Candidate) -> str:
     mom, pap = next(a, None), next(b, None)
     if mom is None or pap is None:
         return "blocked force: not compared."
+    other = pap if chosen is mom else mom
+    if other.dropped is not None:
+        return (
+            f"blocked force ({chosen.model_name}): held-out error {chosen.cv_error_pct:.2f} % "
+            f"with {chosen.blocked_force!r}; {other.blocked_force!r} was dropped from the race "
+            f"after round {other.dropped.round} ({other.dropped.reason})."
+        )
     mean, se = _paired(pap, mom)
     verdict = (
         "the data support 'momentum' (the floor also takes the momentum flux (M/2R)δ̇² in "
