@@ -22,7 +22,7 @@ spent: 450 s, quick 125 s):
    --blocked-force momentum``, cold (an empty ``RBJAX_CACHE_DIR``) then warm (the same cache),
    per configuration (quick: ``cpu, all devices`` only);
 3. the full selection ``rbjax select src/rbjax/examples/emulated-rubber-ball``, cold then warm:
-   on the accelerator with ``--lanes`` (every fit a lane of one batched program per
+   on the accelerator with ``--batch-fits`` (every fit a lane of one batched program per
    structure, :mod:`rbjax.fit.lanes`), on the CPU with ``--workers N`` (N: the usable cores);
    quick: one candidate; a command line that fails is reported with its error.
 
@@ -302,8 +302,8 @@ def fit_step(config: str, budget: Budget, timeouts: dict) -> dict:
 
 def select_step(config: str, quick: bool, budget: Budget, timeouts: dict) -> dict:
     """The selection cold then warm: on the accelerator its fits as lanes of batched programs
-    (``--lanes``, the default there), on the CPU in one worker process per core."""
-    where = ["--lanes"] if config == "accelerator" else ["--workers", str(usable_cores())]
+    (``--batch-fits``, the default there), on the CPU in one worker process per core."""
+    where = ["--batch-fits"] if config == "accelerator" else ["--workers", str(usable_cores())]
     argv = ["select", str(EXAMPLE), *where, "--quiet"]
     argv += QUICK_CANDIDATES if quick else []
     with tempfile.TemporaryDirectory(prefix="rbjax-device-check-") as cache:

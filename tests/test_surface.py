@@ -20,6 +20,7 @@ import pytest
 import rbjax
 from rbjax.fit import FitOptions, fit
 from rbjax.solve.options import SHORTCUTS, EvaluationSpec, ModelShortcuts
+from rbjax.solve.parallel import Parallel
 from rbjax.studies.design import DesignSearch
 from rbjax.studies.sensitivity import (
     conformance_probability,
@@ -144,8 +145,10 @@ def test_the_studies_take_a_model_only_and_refuse_model_keywords(call):
     ("cls", "kwargs", "needle"),
     [
         (EvaluationSpec, {"path": "rk4"}, "path='rk4'"),
-        (EvaluationSpec, {"chunk_size": 0}, "chunk_size=0.*valid range"),
-        (EvaluationSpec, {"chunk_size": 2.5}, "chunk_size=2.5"),
+        (Parallel, {"chunk_size": 0}, "chunk_size=0.*valid range"),
+        (Parallel, {"chunk_size": 2.5}, "chunk_size=2.5"),
+        (Parallel, {"workers": 0}, "workers=0.*valid range"),
+        (Parallel, {"devices": 0}, "devices=0.*valid range"),
         (EvaluationSpec, {"rate_Hz": -1.0}, r"rate_Hz=-1.0.*valid range"),
         (EvaluationSpec, {"duration_s": float("nan")}, "duration_s=nan"),
         (EvaluationSpec, {"solver": "tsit5"}, "solver='tsit5'"),
@@ -173,12 +176,17 @@ def test_settings_objects_name_the_bad_value(cls, kwargs, needle):
 
 
 def test_settings_objects_are_frozen_and_replace_validates():
-    spec = EvaluationSpec(chunk_size=64)
+    spec = EvaluationSpec(path="ode")
     with pytest.raises(AttributeError):
-        spec.chunk_size = 8  # type: ignore[misc]
-    assert spec.replace(progress=True) == EvaluationSpec(chunk_size=64, progress=True)
+        spec.path = "auto"  # type: ignore[misc]
+    assert spec.replace(progress=True) == EvaluationSpec(path="ode", progress=True)
+    with pytest.raises(ValueError, match="path='rk4'"):
+        spec.replace(path="rk4")
+    parallel = Parallel(chunk_size=64)
+    with pytest.raises(AttributeError):
+        parallel.chunk_size = 8  # type: ignore[misc]
     with pytest.raises(ValueError, match="chunk_size=-3"):
-        spec.replace(chunk_size=-3)
+        parallel.replace(chunk_size=-3)
     options = FitOptions(poisson_prior=(0.3, 0.05))
     assert options.poisson_prior == (0.3, 0.05)
     assert options.replace(decimate=4).steps_budget(320) == 320

@@ -153,8 +153,9 @@ def engine_rows(quick: bool, devices) -> list[dict]:
             whole = lambda: one_call(h, b, m).contact_time_s  # noqa: E731
 
         def chunks(devs, path=path, heights=heights, model=model):
-            spec = EvaluationSpec(path=path, devices=devs)
-            return evaluate({"height_m": heights}, model=model, evaluation=spec)["contact_time_s"]
+            spec, where = EvaluationSpec(path=path), rbjax.Parallel(devices=devs)
+            out = evaluate({"height_m": heights}, model=model, evaluation=spec, parallel=where)
+            return out["contact_time_s"]
 
         variants = {
             "1 device, one call (before)": whole,

@@ -33,12 +33,13 @@ import time
 
 import numpy as np
 
+from rbjax import Parallel
 from rbjax.data import examples_dir
 from rbjax.fit import prepare_data
 from rbjax.fit.lanes import LaneExecutor
 from rbjax.fit.problem import STEPS_PER_ROUND
 from rbjax.fit.program import run_lanes
-from rbjax.studies import Parallel, select_model
+from rbjax.studies import select_model
 
 from _common import finish_machine_info, machine_info, table, write_json
 
@@ -88,7 +89,7 @@ def main(quick: bool = False) -> None:
         kwargs["blocked_forces"] = ("momentum",)
 
     def run(parallel):
-        return select_model(data, workers=parallel, **kwargs)
+        return select_model(data, parallel=parallel, **kwargs)
 
     t0 = time.perf_counter()
     seq, sequential_calls = calls_of(run, OneAtATime)

@@ -14,8 +14,8 @@ every data set the tests hold.
    exhaustive run's. Also the bound the race uses: the smallest ratio of a fold's held-out
    error to its full fit's in-sample error at that height, over every fold of the exhaustive
    run (≥ 1 where the bound holds), and the folds run.
-3. The race with ``workers=2`` against ``workers=1`` on the bundled recordings: the same
-   selection, bit for bit.
+3. The race with ``Parallel(workers=2)`` against ``Parallel(workers=1)`` on the bundled
+   recordings: the same selection, bit for bit.
 
 Prints the tables and writes ``results/selection_race.json``. ``--quick``: part 2 on three
 heights with four candidates, nothing else.
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Zener
+from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Parallel, Zener
 from rbjax.data import DataWarning, examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
@@ -209,8 +209,8 @@ def equality(quick: bool) -> dict:
 
 def workers() -> dict:
     data = prepare_data(load_data(examples_dir()))
-    one = select_model(data, workers=1, progress=False)
-    two = select_model(data, workers=2, progress=False)
+    one = select_model(data, parallel=Parallel(workers=1), progress=False)
+    two = select_model(data, parallel=Parallel(workers=2), progress=False)
     same = _text(one) == _text(two)
     print(f"race, workers 2 against 1: identical selection {same}", flush=True)
     return {"identical": same, "one_s": one.elapsed_s, "two_s": two.elapsed_s}

@@ -249,7 +249,7 @@ def part_convergence(out: dict, quick: bool) -> None:
                     second_order=False,
                     seed=rep,
                     n_bootstrap=100,
-                    evaluation=rbjax.EvaluationSpec(chunk_size=1024),
+                    parallel=rbjax.Parallel(chunk_size=1024),
                 )
                 for rep in range(replicates)
             ]

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
         Trajectory,
         impact_velocity_m_per_s,
     )
+    from .solve.parallel import Parallel
     from .solve.simulate import ImpactResult, simulate, trajectory
     from .solve.solver import Solver
     from .terms.arrest import WaveLimitedArrest
@@ -72,6 +73,7 @@ _WHERE = {
         "Trajectory",
         "impact_velocity_m_per_s",
     ),
+    "solve.parallel": ("Parallel",),
     "solve.simulate": ("ImpactResult", "simulate", "trajectory"),
     "solve.solver": ("Solver",),
     "terms.arrest": ("WaveLimitedArrest",),
@@ -130,6 +132,7 @@ __all__ = [
     "Model",
     "Solver",
     "EvaluationSpec",
+    "Parallel",
     "ImpactResult",
     "ImpactScalars",
     "Trajectory",

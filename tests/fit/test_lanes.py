@@ -17,9 +17,10 @@ import time
 import numpy as np
 import pytest
 
+from rbjax import Parallel
 from rbjax.fit import lanes as lanes_module
 from rbjax.fit.lanes import BATCH_SIZES, LaneExecutor, current_batcher, padded_size
-from rbjax.studies.parallel.executors import Parallel, Task, TaskError, run_tasks
+from rbjax.studies.parallel.executors import Task, TaskError, run_tasks
 
 
 def test_a_batch_runs_at_the_next_of_a_few_sizes():
@@ -110,7 +111,7 @@ def test_a_run_that_fails_stops_the_fits_still_running(monkeypatch):
         Task("a long fit", _gated_fit, (gate, record)),
     ]
     with pytest.raises(TaskError, match="a failing fit failed: ValueError: this program fails"):
-        run_tasks(Parallel(lanes=True), tasks)
+        run_tasks(Parallel(batch_fits=True), tasks)
     gate.set()  # the long fit's host work ends: its next call finds the executor closed
     for _ in range(300):
         if record:
@@ -131,10 +132,10 @@ def test_tasks_added_while_others_run_join_the_batches():
     assert len(out) == 4 and threading.active_count() < 50
 
 
-def test_lanes_run_in_this_process_only():
-    with pytest.raises(ValueError, match=r"lanes=True .* workers=2"):
-        Parallel(lanes=True, workers=2)
-    with pytest.raises(ValueError, match="lanes=True"):
-        Parallel(lanes=True, scheduler="tcp://127.0.0.1:1")
-    assert Parallel(lanes=True).use_lanes and not Parallel(lanes=True).in_process
-    assert not Parallel(workers=2).use_lanes  # a worker count given: processes, not lanes
+def test_batched_fits_run_in_this_process_only():
+    with pytest.raises(ValueError, match=r"batch_fits=True .* workers=2"):
+        Parallel(batch_fits=True, workers=2)
+    with pytest.raises(ValueError, match="batch_fits=True"):
+        Parallel(batch_fits=True, scheduler="tcp://127.0.0.1:1")
+    assert Parallel(batch_fits=True).batches_fits and not Parallel(batch_fits=True).in_process
+    assert not Parallel(workers=2).batches_fits  # a worker count given: processes

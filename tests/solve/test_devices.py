@@ -1,8 +1,9 @@
-"""Forward batches split over the local devices (``rbjax.solve.devices``): the plan (how many
-devices, chunks of what size), padding and trimming, and ``simulate`` / ``evaluate`` on two CPU
-devices (a subprocess: the device count is set before JAX starts) against this process's one
-device, bit for bit, flagged impacts and the ODE fallback included, with no collective in the
-per-device programs."""
+"""Forward batches split over the local devices (``rbjax.solve.devices``): the one planner of
+rows (``rbjax.solve.parallel.cut_rows``: device chunks, tasks, job-array parts), the device plan
+(how many devices, chunks of what size), padding and trimming, and ``simulate`` / ``evaluate``
+on two CPU devices (a subprocess: the device count is set before JAX starts) against this
+process's one device, bit for bit, flagged impacts and the ODE fallback included, with no
+collective in the per-device programs."""
 
 from __future__ import annotations
 
@@ -17,7 +18,51 @@ import pytest
 
 import rbjax
 from rbjax.solve.batch import evaluate
-from rbjax.solve.devices import default_chunk_size, device_map, local_devices, plan
+from rbjax.solve.devices import device_map
+from rbjax.solve.parallel import Parallel, cut_rows, default_chunk_size
+
+
+def plan(n: int, n_devices: int, chunk_size: int) -> tuple[int, int]:
+    """(devices used, rows per chunk) of ``Parallel.device_plan``, whose chunks are cut by
+    ``cut_rows`` into pieces of that many rows."""
+    used, chunks = Parallel.device_plan(n, n_devices, chunk_size)
+    size = chunks[0][1] - chunks[0][0]
+    assert chunks == cut_rows(0, n, size=size)
+    return used, size
+
+
+def test_one_planner_cuts_device_chunks_tasks_and_job_array_parts():
+    assert cut_rows(0, 10, size=4) == [(0, 4), (4, 8), (8, 10)]
+    assert cut_rows(5, 10, size=4) == [(5, 9), (9, 10)]
+    assert cut_rows(0, 10, parts=3) == [(0, 3), (3, 6), (6, 10)]  # sizes within one
+    assert cut_rows(0, 2, parts=3) == [(0, 0), (0, 1), (1, 2)]  # a part may be empty
+    with pytest.raises(ValueError, match="size or parts"):
+        cut_rows(0, 10)
+    # tasks: whole steps of chunk_size rows, about four tasks a worker, at most eight steps
+    assert Parallel(workers=2, chunk_size=64).task_rows(0, 1000) == cut_rows(0, 1000, size=64)
+    assert Parallel(workers=1, chunk_size=16).task_rows(0, 10_000) == cut_rows(0, 10_000, size=128)
+    assert Parallel(workers=2, chunk_size=64).task_rows(0, 1000, 2) == cut_rows(0, 1000, size=62)
+
+
+def test_parallel_names_a_bad_field():
+    for kwargs, needle in [
+        ({"devices": 0}, "devices=0"),
+        ({"devices": []}, r"devices=\[\]"),
+        ({"chunk_size": 0}, "chunk_size=0 is outside the valid range"),
+        ({"chunk_size": 2.5}, "chunk_size=2.5"),
+        ({"workers": 0}, "workers=0 is outside the valid range"),
+        ({"retries": -1}, "retries=-1"),
+        ({"scheduler": "tcp://h:1", "executor": object()}, "not both"),
+        ({"batch_fits": True, "workers": 2}, r"batch_fits=True .* workers=2"),
+        ({"host": "no"}, "host='no'"),
+    ]:
+        with pytest.raises(ValueError, match=needle):
+            Parallel(**kwargs)
+    with pytest.raises(ValueError, match="devices=64: JAX has"):
+        Parallel(devices=64).local_devices()
+    assert Parallel(devices=1).local_devices() == tuple(jax.local_devices()[:1])
+    with pytest.raises(ValueError, match="parallel=2 must be an rbjax Parallel"):
+        rbjax.simulate([1.0, 2.0], parallel=2)
 
 
 def test_plan_cuts_even_aligned_chunks_that_do_not_depend_on_the_devices():
@@ -33,13 +78,12 @@ def test_plan_cuts_even_aligned_chunks_that_do_not_depend_on_the_devices():
 
 
 def test_default_chunk_sizes_on_a_cpu():
-    assert local_devices()[0].platform == "cpu"
+    assert jax.local_devices()[0].platform == "cpu"
     assert default_chunk_size("quadrature") == 8192
     assert default_chunk_size("quadrature", width=4) == 2048  # a Jacobian of three parameters
     assert default_chunk_size("ode", width=3) == 128  # rounded down to a power of two
     assert default_chunk_size("sampled", width=100) == 32  # and at least 32
-    with pytest.raises(ValueError, match="devices is empty"):
-        local_devices([])
+    assert Parallel(chunk_size=100).chunk_rows("ode", jax.local_devices()) == 100
 
 
 def _chunk_and_sum(rows, shared):
@@ -48,11 +92,11 @@ def _chunk_and_sum(rows, shared):
 
 def test_device_map_pads_the_last_chunk_and_trims_the_padding():
     a = np.arange(10.0)
-    out = device_map(_chunk_and_sum, {"a": a}, np.float64(0.5), chunk_size=4)
+    out = device_map(_chunk_and_sum, {"a": a}, np.float64(0.5), parallel=Parallel(chunk_size=4))
     np.testing.assert_array_equal(out["y"], a + 0.5)
     np.testing.assert_array_equal(out["n"], 4.0)  # every call sees one shape
     with pytest.raises(ValueError, match="leading batch axis"):
-        device_map(_chunk_and_sum, {"a": np.float64(1.0)}, 0.0, chunk_size=4)
+        device_map(_chunk_and_sum, {"a": np.float64(1.0)}, 0.0, parallel=Parallel(chunk_size=4))
 
 
 def test_a_large_batch_in_chunks_agrees_with_one_call():

@@ -1,7 +1,7 @@
 """A real Dask cluster on localhost: a scheduler and two single-threaded worker processes, started
 by this module (``dask scheduler``, ``dask worker --nworkers 2``) and stopped by it.
 
-* a sweep sent to the cluster (``scheduler=``) equals the in-process sweep (rtol 1e-12);
+* a sweep sent to the cluster (``Parallel(scheduler=)``) equals the in-process sweep (rtol 1e-12);
 * a worker killed in the middle of a sweep costs time, not results;
 * a scheduler address that does not answer is a named error within seconds, nothing written;
 * a two-candidate model selection sent to the cluster equals the in-process one (rtol 1e-12);
@@ -30,6 +30,7 @@ import pytest
 distributed = pytest.importorskip("distributed")
 psutil = pytest.importorskip("psutil")
 
+from rbjax import Parallel  # noqa: E402
 from rbjax.cli import main  # noqa: E402
 from rbjax.studies.sweeps.sweep import run_sweep  # noqa: E402
 
@@ -171,7 +172,7 @@ def cluster(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def reference():
-    """The sweep in this process (``workers=1``): what every other way must give."""
+    """The sweep in this process (``Parallel(workers=1)``): what every other way must give."""
     return run_sweep(CONFIG)
 
 
@@ -192,9 +193,7 @@ def test_an_address_that_does_not_answer_is_a_named_error_within_seconds(tmp_pat
     out = tmp_path / "study.json"
     address = f"tcp://127.0.0.1:{_closed_port()}"
     start = time.monotonic()
-    code = main(
-        ["sweep", str(config), "--scheduler", address, "--out", str(out), "--cpu-devices", "1"]
-    )
+    code = main(["sweep", str(config), "--scheduler", address, "--out", str(out), "--devices", "1"])
     seconds = time.monotonic() - start
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
@@ -204,7 +203,7 @@ def test_an_address_that_does_not_answer_is_a_named_error_within_seconds(tmp_pat
 
 
 def test_a_sweep_on_the_cluster_equals_the_in_process_sweep(cluster, reference):
-    result = run_sweep(CONFIG, scheduler=cluster.address)
+    result = run_sweep(CONFIG, parallel=Parallel(scheduler=cluster.address))
     _assert_same(result, reference)
     ran = cluster.client.run(lambda: "rbjax.studies.sweeps.sweep" in sys.modules)
     assert any(ran.values()), "no chunk ran on a Dask worker"
@@ -217,7 +216,7 @@ def test_a_worker_killed_in_the_middle_of_a_sweep_costs_time_not_results(cluster
 
     def sweep():
         try:
-            box["result"] = run_sweep(CONFIG, scheduler=cluster.address)
+            box["result"] = run_sweep(CONFIG, parallel=Parallel(scheduler=cluster.address))
         except BaseException as err:  # noqa: BLE001  (reported by the test below)
             box["error"] = err
 
@@ -255,8 +254,10 @@ def test_a_two_candidate_selection_on_the_cluster_equals_the_in_process_one(clus
     files = [examples_dir() / f"h{h:03d}_d1.csv" for h in (10, 40, 100)]
     data = prepare_data(load_data(files))
     kwargs = dict(blocked_forces=("paper",), progress=False)
-    here = select_model(data, ["paper", "kelvin-voigt"], workers=1, **kwargs)
-    there = select_model(data, ["paper", "kelvin-voigt"], scheduler=cluster.address, **kwargs)
+    here = select_model(data, ["paper", "kelvin-voigt"], parallel=Parallel(workers=1), **kwargs)
+    there = select_model(
+        data, ["paper", "kelvin-voigt"], parallel=Parallel(scheduler=cluster.address), **kwargs
+    )
     assert there.recommended.label == here.recommended.label
     for a, b in zip(here.candidates, there.candidates, strict=True):
         assert b.label == a.label

@@ -2,9 +2,9 @@
 executor under it reruns the tasks of a worker that died and names a task that failed.
 
 The reference is the same selection run one fit after another in this process
-(``workers=1``, the code path every other test of the selection uses): the worker processes
-must give the same held-out errors, fitted parameters and recommendation exactly (same
-programs on the same inputs), not merely close ones.
+(``Parallel(workers=1)``, the code path every other test of the selection uses): the worker
+processes must give the same held-out errors, fitted parameters and recommendation exactly
+(same programs on the same inputs), not merely close ones.
 """
 
 from __future__ import annotations
@@ -15,10 +15,11 @@ import time
 import numpy as np
 import pytest
 
+from rbjax import Parallel
 from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
 from rbjax.studies import select_model
-from rbjax.studies.parallel.executors import Parallel, Task, TaskError, run_tasks
+from rbjax.studies.parallel.executors import Task, TaskError, run_tasks
 
 CANDIDATES = ["paper", "kelvin-voigt"]
 
@@ -32,12 +33,14 @@ def data():
 
 @pytest.fixture(scope="module")
 def in_process(data):
-    return select_model(data, CANDIDATES, blocked_forces=("paper",), workers=1, progress=False)
+    one = Parallel(workers=1)
+    return select_model(data, CANDIDATES, blocked_forces=("paper",), parallel=one, progress=False)
 
 
 @pytest.fixture(scope="module")
 def in_workers(data):
-    return select_model(data, CANDIDATES, blocked_forces=("paper",), workers=2, progress=False)
+    two = Parallel(workers=2)
+    return select_model(data, CANDIDATES, blocked_forces=("paper",), parallel=two, progress=False)
 
 
 def test_worker_processes_give_the_in_process_selection_bit_for_bit(in_process, in_workers):
@@ -54,27 +57,30 @@ def test_worker_processes_give_the_in_process_selection_bit_for_bit(in_process, 
 
 
 @pytest.fixture(scope="module")
-def in_lanes(data):
+def in_batches(data):
     # the way a GPU runs it (the default there): every fit of the shared structure in one
     # batched program a round; here on the CPU, where it is slower but must give the same fits
+    batched = Parallel(batch_fits=True)
     return select_model(
-        data, CANDIDATES, blocked_forces=("paper",), workers=Parallel(lanes=True), progress=False
+        data, CANDIDATES, blocked_forces=("paper",), parallel=batched, progress=False
     )
 
 
-def test_fits_as_lanes_of_one_program_give_the_in_process_selection(in_process, in_lanes):
+def test_fits_batched_in_one_program_give_the_in_process_selection(in_process, in_batches):
     # Each lane's arithmetic is its own, but a batch of 4 lanes is not compiled as 4 programs
     # of 1: the parameters agree to rounding (measured 1.9e-15 relative), the optimiser takes
     # the same steps and the selection is the same.
-    assert in_lanes.recommended.label == in_process.recommended.label
-    assert [c.label for c in in_lanes.within_noise] == [c.label for c in in_process.within_noise]
-    for a, b in zip(in_process.candidates, in_lanes.candidates):
+    assert in_batches.recommended.label == in_process.recommended.label
+    assert [c.label for c in in_batches.within_noise] == [c.label for c in in_process.within_noise]
+    for a, b in zip(in_process.candidates, in_batches.candidates):
         np.testing.assert_allclose(b.fit.theta, a.fit.theta, rtol=1e-10, atol=1e-14)
         np.testing.assert_allclose(b.fold_errors_pct, a.fold_errors_pct, rtol=1e-10)
         np.testing.assert_allclose(b.fit.predicted_N, a.fit.predicted_N, rtol=0, atol=1e-8)
         assert b.fit.iterations == a.fit.iterations
     base_a = [r.history_error_pct for r in in_process.baseline]
-    np.testing.assert_allclose([r.history_error_pct for r in in_lanes.baseline], base_a, rtol=1e-12)
+    np.testing.assert_allclose(
+        [r.history_error_pct for r in in_batches.baseline], base_a, rtol=1e-12
+    )
 
 
 def test_every_fold_of_every_candidate_is_there(in_workers, data):
@@ -86,8 +92,8 @@ def test_every_fold_of_every_candidate_is_there(in_workers, data):
 def test_a_bad_worker_count_is_named():
     with pytest.raises(ValueError, match=r"workers=0 .*valid range"):
         Parallel(workers=0)
-    with pytest.raises(ValueError, match=r"workers=-2"):
-        select_model(object(), workers=-2)
+    with pytest.raises(ValueError, match=r"parallel=-2 must be an rbjax Parallel"):
+        select_model(object(), parallel=-2)
 
 
 def _square(x):
@@ -140,8 +146,9 @@ def _pid(x):
 
 
 def test_this_process_runs_tasks_beside_its_workers():
-    """workers=2: one task at a time in this process, the others in one worker process (the
-    tasks' results in order either way); host=False: two worker processes, none here."""
+    """Parallel(workers=2): one task at a time in this process, the others in one worker
+    process (the tasks' results in order either way); host=False: two worker processes, none
+    here."""
     tasks = [Task(f"square {k}", _pid, (k,)) for k in range(6)]
     here = run_tasks(Parallel(workers=2), tasks)
     assert [x for _, x in here] == [k * k for k in range(6)]

@@ -20,6 +20,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rbjax import Parallel
 from rbjax.studies.selection.race import Race, RaceState
 from rbjax.studies.selection.rule import recommend
 
@@ -257,14 +258,15 @@ def small_data():
 def raced(small_data):
     from rbjax.studies import select_model
 
-    return select_model(small_data, SMALL, workers=1, progress=False)
+    return select_model(small_data, SMALL, parallel=Parallel(workers=1), progress=False)
 
 
 @pytest.fixture(scope="module")
 def every_fold(small_data):
     from rbjax.studies import select_model
 
-    return select_model(small_data, SMALL, workers=1, progress=False, exhaustive=True)
+    one = Parallel(workers=1)
+    return select_model(small_data, SMALL, parallel=one, progress=False, exhaustive=True)
 
 
 def test_the_race_recommends_what_every_fold_does_with_the_same_errors(raced, every_fold):
@@ -295,7 +297,7 @@ def test_the_race_recommends_what_every_fold_does_with_the_same_errors(raced, ev
 def raced_in_workers(small_data):
     from rbjax.studies import select_model
 
-    return select_model(small_data, SMALL, workers=2, progress=False)
+    return select_model(small_data, SMALL, parallel=Parallel(workers=2), progress=False)
 
 
 def test_the_race_in_worker_processes_is_the_in_process_race_bit_for_bit(raced, raced_in_workers):

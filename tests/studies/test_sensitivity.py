@@ -181,7 +181,7 @@ def test_conformance_probability_of_a_uniform_drop_height_against_analytic_fract
         {"height_m": ("uniform", lo_h, hi_h)},
         seed=5,
         confidence=0.999,
-        evaluation=rbjax.EvaluationSpec(chunk_size=64),
+        parallel=rbjax.Parallel(chunk_size=64),
     )
     assert res.n_valid == 2000
     for key, p in (("lfe_31.5_dB", p_band), ("restitution", p_rest)):

@@ -33,6 +33,8 @@ from rbjax.studies.sweeps.sweep import load_config, run_sweep
 
 import scipy_reference as ref
 
+CHUNKS_OF_4 = rbjax.Parallel(chunk_size=4)
+
 
 def _double_plus(batch, shared):
     return {"y": 2.0 * batch["a"] + shared, "n": batch["b"] * 0 + batch["a"].shape[0]}
@@ -40,11 +42,11 @@ def _double_plus(batch, shared):
 
 def test_device_map_pads_and_trims():
     a = np.arange(10.0)
-    out = device_map(_double_plus, {"a": a, "b": a}, np.float64(0.5), chunk_size=4)
+    out = device_map(_double_plus, {"a": a, "b": a}, np.float64(0.5), parallel=CHUNKS_OF_4)
     np.testing.assert_array_equal(out["y"], 2.0 * a + 0.5)
     np.testing.assert_array_equal(out["n"], 4.0)  # every call sees the same chunk shape
     with pytest.raises(ValueError, match="leading axis"):
-        device_map(_double_plus, {"a": a, "b": a[:3]}, 0.0, chunk_size=4)
+        device_map(_double_plus, {"a": a, "b": a[:3]}, 0.0, parallel=CHUNKS_OF_4)
 
 
 RATE = 44_100.0
@@ -90,8 +92,9 @@ def test_evaluate_matches_scipy_reference(references):
     assert evaluation_paths(rbjax.Model(damping=rbjax.KelvinVoigt(5.0))) == ("angle", "sampled")
     assert evaluation_paths(rbjax.Model(), rbjax.Solver()) == ("ode", "ode")
     for method, lfe in (("auto", True), ("ode", False)):  # quadrature + sampled history; the ODE
-        spec = rbjax.EvaluationSpec(path=method, chunk_size=64)  # as in the CLI test: one compile
-        out = evaluate(SAMPLES, lfe=lfe, evaluation=spec)
+        spec = rbjax.EvaluationSpec(path=method)
+        chunks = rbjax.Parallel(chunk_size=64)  # as in the CLI test: one compile
+        out = evaluate(SAMPLES, lfe=lfe, evaluation=spec, parallel=chunks)
         assert out["status"].tolist() == [0, 0, 0]
         for i, r in enumerate(references):
             for k in [
@@ -105,9 +108,7 @@ def test_evaluate_matches_scipy_reference(references):
 
 def test_exact_derivatives_match_central_differences_of_the_reference(references):
     wrt = ("height_m", "youngs_Pa", "mass_kg")
-    values, jac = evaluate_jacobian(
-        SAMPLES, wrt, lfe=True, evaluation=rbjax.EvaluationSpec(chunk_size=64)
-    )
+    values, jac = evaluate_jacobian(SAMPLES, wrt, lfe=True, parallel=rbjax.Parallel(chunk_size=64))
     names = [*rbjax.solve.batch.SCALAR_OUTPUTS, *rbjax.solve.batch.lfe_output_names()]
     i, r = 2, references[2]
     for k in names:
@@ -164,13 +165,15 @@ SHARDED_SCRIPT = textwrap.dedent(
     """
     import sys
     import jax, numpy as np
-    from rbjax import EvaluationSpec
+    from rbjax import EvaluationSpec, Parallel
     from rbjax.solve.batch import evaluate
     assert jax.device_count() == 4, jax.devices()
     samples = dict(np.load(sys.argv[1]))
     out = {}
     for method in ("quadrature", "ode"):  # chunks of 16 impacts, split over the 4 devices
-        run = evaluate(samples, evaluation=EvaluationSpec(path=method, chunk_size=16))
+        run = evaluate(
+            samples, evaluation=EvaluationSpec(path=method), parallel=Parallel(chunk_size=16)
+        )
         out.update({f"{method}:{k}": v for k, v in run.items()})
     np.savez(sys.argv[2], **out)
     """
@@ -205,7 +208,8 @@ def test_sharded_sweep_on_four_cpu_devices_equals_one_device(tmp_path):
     # diffrax ODE (a sweep with a solver, a ball mode or a floor), each against this process
     for method in ("quadrature", "ode"):
         # this process: one CPU device
-        one = evaluate(samples, evaluation=rbjax.EvaluationSpec(path=method, chunk_size=64))
+        spec, chunks = rbjax.EvaluationSpec(path=method), rbjax.Parallel(chunk_size=64)
+        one = evaluate(samples, evaluation=spec, parallel=chunks)
         assert four[f"{method}:status"].tolist() == one["status"].tolist() == [0] * n, method
         for k in ("contact_time_s", "peak_force_N", "restitution", "max_deflection_m"):
             # the partitioned program is compiled apart from the one-device one: equal to the
@@ -373,13 +377,13 @@ def test_parts_cover_the_rows_once():
 def test_a_sweep_on_local_worker_processes_equals_the_in_process_sweep(in_process):
     # 256 rows in chunks of 62 + the rows of the shortest and longest contact: 5 tasks, after a
     # first pass of contact times (L_FE)
-    result = run_sweep(CHUNKED, workers=2)
+    result = run_sweep(CHUNKED, parallel=rbjax.Parallel(workers=2))
     _same_samples(result, in_process)
     _same_summary(result.to_dict(), in_process.to_dict())
     with pytest.raises(ValueError, match="workers=0 is outside the valid range"):
-        run_sweep(CHUNKED, workers=0)
-    with pytest.raises(ValueError, match="workers=-2 is outside the valid range"):
-        run_sweep(CHUNKED, workers=-2)
+        rbjax.Parallel(workers=0)
+    with pytest.raises(ValueError, match="parallel=2 must be an rbjax Parallel"):
+        run_sweep(CHUNKED, parallel=2)
 
 
 class _FailingExecutor(cf.ThreadPoolExecutor):
@@ -402,7 +406,9 @@ def _broken_disk():
 
 def test_a_failed_chunk_is_named_with_its_rows_and_no_result_comes_back():
     with _FailingExecutor() as executor, pytest.raises(TaskError) as caught:
-        run_sweep({**CHUNKED, "outputs": ["contact_time_s"]}, executor=executor)
+        run_sweep(
+            {**CHUNKED, "outputs": ["contact_time_s"]}, parallel=rbjax.Parallel(executor=executor)
+        )
     message = str(caught.value)
     assert "OSError: the worker's disk is full" in message
     assert re.search(r"rows \d+–\d+ of 256 \(first: youngs_Pa=[\d.e+]+, height_m=[\d.]+\)", message)

@@ -76,58 +76,86 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 
 def add_parallel_options(
     parser: argparse.ArgumentParser,
-    what: str = "fits",
+    what: str | None = "fits",
     default: int | None = None,
-    lanes: bool = False,
+    fits: bool = False,
+    devices: bool = False,
 ) -> None:
-    """``--workers N`` or ``--scheduler ADDRESS``: where independent tasks run
-    (:mod:`rbjax.studies.parallel.executors`); ``default``: the worker count without ``--workers``
-    (``None``: the usable cores); ``lanes``: also ``--lanes`` (fits as lanes of batched
-    programs)."""
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument(
-        "--workers",
-        type=int,
-        default=default,
-        metavar="N",
-        help=f"worker processes to run the {what} in (default: "
-        + ("the cores this process may use" if default is None else str(default))
-        + "; 1: in this process; at most the usable cores)",
-    )
-    where.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help=f"send the {what} to the Dask scheduler at ADDRESS (tcp://host:port) instead; needs "
-        "pip install 'rbjax[cluster]' (dask-jobqueue starts such a cluster on SLURM/PBS)",
-    )
-    if lanes:
+    """The flags of an :class:`rbjax.Parallel`, one per field. ``what`` (the tasks, ``None``:
+    no task flags): ``--workers N`` (``workers``; ``default``: the worker count without it,
+    ``None``: the usable cores) or ``--scheduler ADDRESS`` (``scheduler``); ``fits``: also
+    ``--batch-fits`` (``batch_fits``); ``devices``: ``--devices N`` (``devices``: N JAX
+    devices, N CPU devices made before JAX starts) and ``--chunk-size N`` (``chunk_size``)."""
+    if what is not None:
+        where = parser.add_mutually_exclusive_group()
         where.add_argument(
-            "--lanes",
-            action="store_true",
+            "--workers",
+            type=int,
+            default=default,
+            metavar="N",
+            help=f"worker processes to run the {what} in (default: "
+            + ("the cores this process may use" if default is None else str(default))
+            + "; 1: in this process; at most the usable cores)",
+        )
+        where.add_argument(
+            "--scheduler",
             default=None,
-            help="run the fits in this process as lanes of one batched program per structure "
-            "(the default where JAX's default device is a GPU or TPU; on a CPU it is slower "
-            "than worker processes)",
+            metavar="ADDRESS",
+            help=f"send the {what} to the Dask scheduler at ADDRESS (tcp://host:port) instead; "
+            "needs pip install 'rbjax[cluster]' (dask-jobqueue starts such a cluster on SLURM/PBS)",
+        )
+        if fits:
+            where.add_argument(
+                "--batch-fits",
+                action="store_true",
+                default=None,
+                help="run the fits in this process, every call of a fit program gathered into "
+                "one batch of it (the default where JAX's default device is a GPU or TPU; on a "
+                "CPU it is slower than worker processes)",
+            )
+    if devices:
+        parser.add_argument(
+            "--devices",
+            type=int,
+            default=None,
+            metavar="N",
+            help="JAX devices a batch of impacts is split over (default: all; on a CPU, one "
+            "device per usable core is made before JAX starts, N with this flag)",
+        )
+        parser.add_argument(
+            "--chunk-size",
+            type=int,
+            default=None,
+            metavar="N",
+            help="impacts per device chunk (default: sized for the solve path and the platform)",
         )
 
 
 def parallel_of(args):
-    """The :class:`~rbjax.studies.parallel.executors.Parallel` of ``--workers`` and ``--scheduler``
-    (a worker count above the usable cores is clamped, and said so)."""
-    from ..studies.parallel.executors import Parallel, usable_cores
+    """The :class:`rbjax.Parallel` of the flags of :func:`add_parallel_options` (a worker count
+    above the usable cores is clamped, and said so); ``--devices`` also makes that many JAX CPU
+    devices before JAX starts (:func:`use_cpu_devices`)."""
+    from ..solve.parallel import Parallel, usable_cores
 
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers={args.workers!r} is outside the valid range: an integer ≥ 1")
-    if args.scheduler is not None:
-        return Parallel(scheduler=args.scheduler)
-    if getattr(args, "lanes", None):
-        return Parallel(lanes=True)
+    workers = getattr(args, "workers", None)
+    devices = getattr(args, "devices", None)
+    if hasattr(args, "devices"):
+        use_cpu_devices(devices)
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers={workers!r} is outside the valid range: an integer ≥ 1")
     cores = usable_cores()
-    if args.workers is not None and args.workers > cores:
-        progress(f"--workers={args.workers}: this process may use {cores} cores; using {cores}")
-        return Parallel(workers=cores)
-    return Parallel(workers=args.workers, scheduler=args.scheduler)
+    if workers is not None and workers > cores:
+        progress(f"--workers={workers}: this process may use {cores} cores; using {cores}")
+        workers = cores
+    if devices is not None and devices < 1:
+        raise ValueError(f"--devices={devices!r} is outside the valid range: an integer ≥ 1")
+    return Parallel(
+        devices=devices,
+        chunk_size=getattr(args, "chunk_size", None),
+        workers=None if getattr(args, "scheduler", None) else workers,
+        scheduler=getattr(args, "scheduler", None),
+        batch_fits=getattr(args, "batch_fits", None),
+    )
 
 
 def use_cpu_devices(count: int | None = None) -> None:
@@ -138,10 +166,10 @@ def use_cpu_devices(count: int | None = None) -> None:
     (a second command in one process): its devices are used as they are."""
     import jax
 
-    from ..studies.parallel.executors import usable_cores
+    from ..solve.parallel import usable_cores
 
     if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
-        raise ValueError(f"--cpu-devices={count!r} must be an integer ≥ 1")
+        raise ValueError(f"--devices={count!r} must be an integer ≥ 1")
     if "JAX_NUM_CPU_DEVICES" in os.environ or "xla_force_host_platform_device_count" in (
         os.environ.get("XLA_FLAGS", "")
     ):

@@ -175,7 +175,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p, paths="*")
-    add_parallel_options(p, what="fits of the model selection (without --model)", lanes=True)
+    add_parallel_options(p, what="fits of the model selection (without --model)", fits=True)
     add_race_options(p)
     p.add_argument(
         "--summary",
@@ -289,7 +289,7 @@ def run(args) -> int:
             gas=args.gas,
             fix=fix,
             options=options,
-            workers=parallel,
+            parallel=parallel,
             progress=not args.quiet,
             exhaustive=exhaustive,
             race=race,

@@ -39,7 +39,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p)
-    add_parallel_options(p, lanes=True)
+    add_parallel_options(p, fits=True)
     add_race_options(p)
     p.add_argument(
         "--candidates",
@@ -131,7 +131,7 @@ def run(args) -> int:
         data,
         candidates,
         blocked_forces=forces,
-        workers=parallel,
+        parallel=parallel,
         gas=args.gas,
         progress=not args.quiet,
         exhaustive=exhaustive,
@@ -149,7 +149,7 @@ def run(args) -> int:
             candidates,
             blocked_forces=forces,
             starts=starts,
-            workers=parallel,
+            parallel=parallel,
             gas=args.gas,
             progress=not args.quiet,
         )

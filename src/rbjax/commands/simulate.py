@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from . import add_command, emit_json, fmt, format_table, progress, use_cpu_devices
+from . import add_command, add_parallel_options, emit_json, fmt, format_table, parallel_of, progress
 
 if TYPE_CHECKING:
     import numpy as np
@@ -129,6 +129,7 @@ def register(subparsers) -> None:
             "above) or a .toml/.json floor file; default: rigid (the blocked force)"
         ),
     )
+    add_parallel_options(p, what=None, devices=True)
     p.set_defaults(func=run)
 
 
@@ -178,13 +179,12 @@ def _rebuilt(model, **changes):
     return Model(**(options | changes))
 
 
-def _simulate(heights, ball, model, path: str, floor=None):
+def _simulate(heights, ball, model, path: str, floor=None, parallel=None):
     """``rbjax.simulate`` of ``model`` (on ``floor`` if given, else on the model's floor)."""
     from ..solve import simulate
 
-    return simulate(
-        heights, ball, model if floor is None else _rebuilt(model, floor=floor), path=path
-    )
+    model = model if floor is None else _rebuilt(model, floor=floor)
+    return simulate(heights, ball, model, path=path, parallel=parallel)
 
 
 def _octave_lfe(result):
@@ -213,7 +213,7 @@ def _octave_lfe(result):
 
 
 def floor_outputs(
-    heights_m, ball, model, octave_dB, path: str = "auto"
+    heights_m, ball, model, octave_dB, path: str = "auto", parallel=None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(floor energy in J per height, octave L_FE on the floor less that of the blocked force on
     the rigid floor, per height and band) for a model on a moving floor."""
@@ -223,7 +223,7 @@ def floor_outputs(
     from ..terms.floors.kinds import Rigid
 
     heights = np.asarray(heights_m, dtype=float)
-    blocked = _simulate(heights, ball, model, path, floor=Rigid())
+    blocked = _simulate(heights, ball, model, path, floor=Rigid(), parallel=parallel)
     energy = np.asarray(energy_balance(heights, ball, model).floor_energy_J, dtype=float).reshape(
         -1
     )
@@ -231,10 +231,11 @@ def floor_outputs(
 
 
 def simulate_rows(
-    heights_m, ball, model, path: str = "auto", floor_name: str | None = None
+    heights_m, ball, model, path: str = "auto", floor_name: str | None = None, parallel=None
 ) -> list[dict]:
     """One dict per height with the keys of ``rbjax simulate --json`` (NaN where not ok);
-    ``path`` is ``simulate``'s, and each row's ``"path"`` the path that ran. On a floor
+    ``path`` and ``parallel`` are ``simulate``'s, and each row's ``"path"`` the path that ran.
+    On a floor
     that moves (``model.floor`` not rigid) each row adds ``floor`` (``floor_name``, default the
     floor's type), ``floor_energy_J`` and ``lfe_ratio_dB`` (``floor_outputs``)."""
     import numpy as np
@@ -243,11 +244,11 @@ def simulate_rows(
     from ..spectrum.standards import check_conformance
 
     heights = np.asarray(heights_m, dtype=float)
-    result = _simulate(heights, ball, model, path)
+    result = _simulate(heights, ball, model, path, parallel=parallel)
     total, octave, third = _octave_lfe(result)
     moving = not model.floor.rigid
     if moving:
-        floor_energy, ratio = floor_outputs(heights, ball, model, octave, path)
+        floor_energy, ratio = floor_outputs(heights, ball, model, octave, path, parallel)
     names = np.atleast_1d(result.status_name)
     rows = []
     for i, h in enumerate(heights):
@@ -372,7 +373,7 @@ def render_table(rows: list[dict]) -> str:
 
 
 def run(args) -> int:
-    use_cpu_devices()  # one JAX CPU device per core: the batch of heights split over them
+    parallel = parallel_of(args)  # one JAX CPU device per core: the heights split over them
     for i, h in enumerate(args.height_m):  # before any output, so bad input gives one line
         if not (math.isfinite(h) and h > 0.0):
             raise ValueError(
@@ -389,7 +390,9 @@ def run(args) -> int:
     progress(
         f"simulating {len(args.height_m)} drop height(s), model {model.name}, gas {model.gas}{on}"
     )
-    rows = simulate_rows(args.height_m, ball, model, path=args.path, floor_name=floor_name)
+    rows = simulate_rows(
+        args.height_m, ball, model, path=args.path, floor_name=floor_name, parallel=parallel
+    )
     if args.json:
         emit_json(rows)
     else:

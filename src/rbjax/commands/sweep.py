@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sys
 
-from . import add_command, add_parallel_options, emit_json, parallel_of, progress, use_cpu_devices
+from . import add_command, add_parallel_options, emit_json, parallel_of, progress
 
 DESCRIPTION = """\
 Run a batched study of the rubber-ball impact described by a TOML file: a SALib design,
@@ -27,8 +27,10 @@ rbjax/examples/sweeps/. A progress bar goes to stderr. With --out FILE.json the 
 written as JSON (plain text, readable anywhere) and every evaluated sample beside it as
 FILE.samples.npz (compact float64 arrays with their names, numpy.load).
 
-Where the impacts run: by default (--workers 1), in this process, split over its JAX devices
-(one CPU device per core, --cpu-devices); with --workers N, the design is cut into chunks run
+Where the impacts run (the flags are the fields of rbjax.Parallel): by default (--workers 1), in
+this process, split over its JAX devices (one CPU device per core, --devices N) in chunks of
+--chunk-size impacts (default: the config's chunk_size, else sized per solve path); with
+--workers N, the design is cut into chunks run
 by N worker processes (one JAX CPU device each); with --scheduler
 ADDRESS, the chunks run on a Dask distributed cluster (pip install 'rbjax[cluster]'; on
 SLURM, PBS, SGE or LSF, dask-jobqueue starts one:
@@ -67,15 +69,7 @@ def register(subparsers) -> None:
         "the part (default: CONFIG.part-I-of-P.npz)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    add_parallel_options(p, what="design's chunks", default=1)
-    p.add_argument(
-        "--cpu-devices",
-        type=int,
-        default=None,
-        metavar="N",
-        help="JAX CPU devices of this process's own evaluation (--workers 1, or a design of one "
-        "chunk; default: one per core)",
-    )
+    add_parallel_options(p, what="design's chunks", default=1, devices=True)
     split = p.add_mutually_exclusive_group()
     split.add_argument(
         "--shard",
@@ -101,10 +95,8 @@ def run(args) -> int:
     from ..studies.sweeps.parts import merge_parts, parse_part, run_part
     from ..studies.sweeps.sweep import load_config, run_sweep, write_outputs
 
-    use_cpu_devices(args.cpu_devices)
     parallel = parallel_of(args)
     config = load_config(args.config)
-    where = dict(workers=parallel.workers, scheduler=parallel.scheduler)
     show = not args.no_progress
     start = time.perf_counter()
     try:
@@ -112,7 +104,7 @@ def run(args) -> int:
             part, parts = parse_part(args.shard)
             out = args.out or f"{Path(args.config).stem}.part-{part}-of-{parts}.npz"
             progress(f"running part {part}/{parts} of the {config.get('kind')!r} sweep")
-            path = run_part(config, part, parts, out, progress=show, **where)
+            path = run_part(config, part, parts, out, progress=show, parallel=parallel)
             seconds = time.perf_counter() - start
             progress(f"wrote {path} in {seconds:.1f} s")
             if args.json:
@@ -123,7 +115,7 @@ def run(args) -> int:
             result = merge_parts(config, args.merge, progress=show)
         else:
             progress(f"running {config.get('kind')!r} sweep from {args.config}")
-            result = run_sweep(config, progress=show, **where)
+            result = run_sweep(config, progress=show, parallel=parallel)
     except TaskError as err:
         print(f"rbjax: error: {str(err).splitlines()[0]}", file=sys.stderr)
         return 1

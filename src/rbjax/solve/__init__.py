@@ -10,7 +10,9 @@ running the path chosen (:mod:`~rbjax.solve.path_runner`), the energy balance
 (:mod:`~rbjax.solve.energy`) and batched evaluation on the fastest path
 (:mod:`~rbjax.solve.batch`); how the ODE is integrated is a
 :class:`~rbjax.solve.solver.Solver`. Concrete batches of both are cut in chunks split over the
-local devices, each device running its own program (:mod:`~rbjax.solve.devices`)."""
+local devices, each device running its own program (:mod:`~rbjax.solve.devices`), where an
+:class:`~rbjax.solve.parallel.Parallel` says (:mod:`~rbjax.solve.parallel`: where work runs,
+and the one planner that cuts rows into device chunks, tasks and job-array parts)."""
 
 from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian
@@ -25,6 +27,7 @@ from .outcome import (
     Trajectory,
     impact_velocity_m_per_s,
 )
+from .parallel import Parallel
 from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
 from .sampled import sampled_history
@@ -36,6 +39,7 @@ __all__ = [
     "evaluate",
     "evaluate_jacobian",
     "EvaluationSpec",
+    "Parallel",
     "ModelShortcuts",
     "EnergyBalance",
     "energy_balance",

@@ -5,8 +5,8 @@ A sweep evaluates the impact model (paper §2, Eq. 7) for N parameter samples: d
 ball parameters (§2.1–2.2) and damping/stiffening parameters; :func:`evaluate` gives the
 outputs, :func:`evaluate_jacobian` the outputs and their exact derivatives with respect to the
 varied parameters (``jax.jacfwd`` per sample, vmapped). The batches are split over the local
-devices by :func:`rbjax.solve.devices.device_map`, each device running its own program (its
-docstrings say how to run on several CPU devices, GPUs or hosts).
+devices of an :class:`rbjax.Parallel` by :func:`rbjax.solve.devices.device_map`, each device
+running its own program (its docstrings say how to run on several CPU devices, GPUs or hosts).
 
 Only the varied parameters travel as columns; the others are scalars shared by every row.
 
@@ -48,11 +48,12 @@ from ..terms import parameters as params
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
 from .angle import impact_angle
-from .devices import default_chunk_size, device_map, local_devices
+from .devices import device_map
 from .inputs import PAPER_RATE_Hz, padded_rows
 from .ode import impact_ode, ode_trajectory
 from .options import EvaluationSpec, spec_or_default
 from .outcome import STATUS_CODES, nan_where
+from .parallel import Parallel, parallel_or_default
 from .path import resolve_path
 from .quadrature import impact_quadrature
 from .sampled import sampled_history_unsupported, sampled_impact, substeps_for_contact
@@ -181,7 +182,8 @@ def _impact_fn(spec: _Spec, wrt: tuple[str, ...]) -> Callable:
 
 def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, shared, run: Callable) -> None:
     """Compute the ``rows`` of ``out`` again with ``fn`` (the batch padded by
-    ``inputs.padded_rows``, so that few shapes compile) and write them in place."""
+    ``inputs.padded_rows``, so that few shapes compile, in one chunk) and write them in place;
+    ``run`` is called as :func:`rbjax.solve.devices.device_map`."""
     if rows.size == 0:
         return
     padded = padded_rows(rows)
@@ -190,16 +192,18 @@ def _redo(out: dict, rows: np.ndarray, fn: Callable, batch: dict, shared, run: C
         {k: v[padded] for k, v in batch.items()},
         shared,
         desc="ODE for flagged impacts",
-        chunk_size=len(padded),
+        parallel=Parallel(chunk_size=len(padded)),
     )
     for k in out:
         out[k][rows] = again[k][: rows.size]
 
 
-def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec) -> dict:
+def _evaluate(
+    samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec, parallel: Parallel
+) -> dict:
     require_x64()
     solver, path, rate_Hz, duration_s = spec.solver, spec.path, spec.rate_Hz, spec.duration_s
-    chunk_size, devices, progress = spec.chunk_size, spec.devices, spec.progress
+    progress = spec.progress
     model = Model() if model is None else model
     if not samples:
         raise ValueError("samples is empty: give at least one parameter with an array of values")
@@ -229,25 +233,18 @@ def _evaluate(samples, wrt, *, height_m, ball, model, lfe, spec: EvaluationSpec)
         if k not in named
     }
     shared = (nominal, model)
-    devices = local_devices(devices) if jax.process_count() == 1 else devices
 
     def run(path: str, fn: Callable, rows: dict, desc: str, chunk: int | None = None) -> dict:
-        """``fn`` over ``rows`` split over the devices, in chunks sized for ``path``."""
-        if chunk is None:
-            width = 1 + len(wrt)  # a forward Jacobian carries a tangent per parameter
-            chunk = default_chunk_size(path, devices, width) if chunk_size is None else chunk_size
+        """``fn`` over ``rows`` split over the devices, in chunks sized for ``path`` (or of
+        ``chunk`` rows)."""
+        where = parallel if chunk is None else parallel.replace(chunk_size=chunk)
+        width = 1 + len(wrt)  # a forward Jacobian carries a tangent per parameter
         return device_map(
-            fn,
-            rows,
-            shared,
-            chunk_size=chunk,
-            devices=devices,
-            progress=progress,
-            desc=desc,
+            fn, rows, shared, parallel=where, path=path, width=width, progress=progress, desc=desc
         )
 
-    def redo_ode(fn, rows, _shared, *, desc, chunk_size):  # _redo's runner: the ODE's rows
-        return run("ode", fn, rows, desc, chunk_size)
+    def redo_ode(fn, rows, _shared, *, desc, parallel):  # _redo's runner: the ODE's rows
+        return run("ode", fn, rows, desc, parallel.chunk_size)
 
     out = run(scalar_path, _impact_fn(_Spec(scalar_path, ode_solver), wrt), batch, "impacts")
     if scalar_path != "ode":
@@ -300,6 +297,7 @@ def evaluate(
     model: Model | None = None,
     lfe: bool = False,
     evaluation: EvaluationSpec | None = None,
+    parallel: Parallel | None = None,
 ) -> dict[str, np.ndarray]:
     """Impact outputs for N parameter samples, sharded over the devices.
 
@@ -313,15 +311,18 @@ def evaluate(
 
     ``evaluation`` (an ``rbjax.EvaluationSpec``, default ``EvaluationSpec()``) says how: its
     ``path`` (``"auto"``, ``"ode"``, ``"quadrature"``, ``"angle"``) and ``solver`` choose the
-    path as ``path`` and ``solver`` of ``rbjax.simulate`` (see the module docstring). The
-    samples are cut into chunks of ``chunk_size`` impacts (default: sized for the path and the
-    platform, ``rbjax.solve.devices.default_chunk_size``; 8192 for the fast paths on a CPU) and
-    the chunks split over the local ``devices`` (default: all; see ``rbjax.solve.devices`` for
-    how to give JAX one CPU device per core), each device running its own program: the results
-    are those of a one-device run, bit for bit.
+    path as ``path`` and ``solver`` of ``rbjax.simulate`` (see the module docstring).
+    ``parallel`` (an ``rbjax.Parallel``, default ``Parallel()``) says where: the samples are
+    cut into chunks of its ``chunk_size`` impacts (default: sized for the path and the
+    platform, ``rbjax.solve.parallel.default_chunk_size``; 8192 for the fast paths on a CPU) and
+    the chunks split over its ``devices`` (default: all local devices; see
+    ``rbjax.solve.devices`` for how to give JAX one CPU device per core), each device running
+    its own program: the results are those of a one-device run, bit for bit.
     """
-    spec = spec_or_default(evaluation)
-    return _evaluate(samples, (), height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec)
+    spec, where = spec_or_default(evaluation), parallel_or_default(parallel)
+    return _evaluate(
+        samples, (), height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec, parallel=where
+    )
 
 
 def evaluate_jacobian(
@@ -333,6 +334,7 @@ def evaluate_jacobian(
     model: Model | None = None,
     lfe: bool = False,
     evaluation: EvaluationSpec | None = None,
+    parallel: Parallel | None = None,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """``evaluate`` and the exact derivatives of every float output with respect to ``wrt``
     (default: the parameters of ``samples``), by ``jax.jacfwd`` per sample, vmapped and sharded.
@@ -340,13 +342,15 @@ def evaluate_jacobian(
     Returns ``(values, jacobian)``: ``values`` as ``evaluate``; ``jacobian`` maps each output to
     an (N, len(wrt)) array of ∂output/∂parameter in output units per parameter unit (NaN where
     the solve was flagged). The ODE path runs with ``Solver(adjoint="forward")``. ``evaluation``
-    as in ``evaluate``.
+    and ``parallel`` as in ``evaluate``.
     """
-    spec = spec_or_default(evaluation)
+    spec, where = spec_or_default(evaluation), parallel_or_default(parallel)
     wrt = tuple(samples) if wrt is None else tuple(wrt)
     if not wrt:
         raise ValueError("wrt=() names no parameter; give the parameters to differentiate against")
-    out = _evaluate(samples, wrt, height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec)
+    out = _evaluate(
+        samples, wrt, height_m=height_m, ball=ball, model=model, lfe=lfe, spec=spec, parallel=where
+    )
     jacobian = {k[2:]: out.pop(k) for k in [k for k in out if k.startswith("d:")]}
     jacobian.pop("lfe_dB", None)
     return out, jacobian

@@ -1,9 +1,10 @@
 """Forward batches split over the local devices, each device running its own program: the engine
 under ``simulate`` (concrete inputs) and ``rbjax.solve.batch.evaluate``.
 
-A batch of N independent impacts is cut into chunks of at most ``chunk_size`` rows (``plan``:
-even chunks, a multiple of ``ALIGN`` rows where there are several, the last one padded with
-copies of the last row, so that every call has one shape: one compiled program); the chunks go
+A batch of N independent impacts is cut into chunks of at most ``Parallel.chunk_size`` rows
+(:meth:`rbjax.solve.parallel.Parallel.device_plan`: even chunks, a multiple of ``ALIGN`` rows
+where there are several, the last one padded with copies of the last row, so that every call
+has one shape: one compiled program); the chunks go
 round-robin to the devices, each chunk put on its device with ``jax.device_put`` and given to
 the same ``jax.jit`` function. JAX dispatches asynchronously, so the devices run at once, each
 its own program: no collective operation and no lockstep (a while loop of the ODE on one device
@@ -19,7 +20,8 @@ never waits for another device's rows). The outputs come back to the host in ord
   first chunk of each device is dispatched from a thread of its own, so those compiles run at
   once; the command line's persistent compilation cache keeps each of them for the next run.
 * The chunks also keep a CPU's working set in its caches: on one CPU device the quadrature
-  runs about twice as fast in chunks of 8192 impacts as in one call of 2¹⁸ (``CPU_CHUNK_SIZE``).
+  runs about twice as fast in chunks of 8192 impacts as in one call of 2¹⁸
+  (``rbjax.solve.parallel.CPU_CHUNK_SIZE``).
 
 (``jax.jit`` with a ``NamedSharding`` of the batch would compile one program for all devices,
 but its partitioner turns a vmapped while loop's condition into an all-reduce over the devices,
@@ -41,75 +43,27 @@ or first thing in the script (before any JAX computation)::
     jax.config.update("jax_num_cpu_devices", 16)  # or rbjax.commands.use_cpu_devices()
 
 The command line (``rbjax simulate``, ``sweep``, ``sensitivity``, ``room``, ``design``) does it
-for you: one CPU device per usable core (``--cpu-devices`` where offered). GPUs are used as JAX
-lists them (``jax.local_devices()``).
+for you: one CPU device per usable core (``--devices N`` where offered: N of them, and a batch
+split over them, ``Parallel(devices=N)``). GPUs are used as JAX lists them
+(``jax.local_devices()``; ``Parallel(devices=...)`` chooses among them).
 """
 
 from __future__ import annotations
 
 import functools
-import math
 import sys
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import numpy as np
 from tqdm import tqdm  # a text bar on stderr, also inside notebooks
 
-from .._validate import check_range
+from .parallel import Parallel, parallel_or_default
 
-#: Rows per chunk on a CPU device, per path, below the size where the working set leaves the
-#: caches (one core, 2¹⁸ rows in chunks: the quadrature runs 2.3 M/s at 4096–8192 rows a chunk,
-#: 1.1 M/s at 65 536 or in one call; the phase-angle path 0.20 M/s up to 16 384, 0.15 M/s at
-#: 32 768; the sampled L_FE history is best at 128–512). An ODE chunk is small, since a vmapped
-#: while loop runs until its slowest row is done, and so that a batch of a few thousand splits
-#: over many devices (one core: 34 000/s at 256 rows a chunk, 39 000/s at 1024, 28 000/s at 64).
-CPU_CHUNK_SIZE = {"quadrature": 8192, "angle": 8192, "sampled": 256, "ode": 512}
-#: Rows per chunk on an accelerator (a GPU wants wide launches; one call below this size).
-ACCELERATOR_CHUNK_SIZE = {
-    "quadrature": 1 << 20,
-    "angle": 1 << 20,
-    "sampled": 1 << 14,
-    "ode": 1 << 16,
-}
-#: A batch of several chunks has chunks of a multiple of this many rows (XLA:CPU's loops run
-#: whole vectors; a chunk of 6667 rows of the phase-angle path ran 3× slower than one of 6672).
-ALIGN = 128
 #: Chunks each device may have dispatched and not yet collected.
 IN_FLIGHT_PER_DEVICE = 2
-
-
-def local_devices(devices: Sequence | None = None) -> tuple:
-    """The devices a batch is split over: ``devices`` as given, else ``jax.local_devices()``."""
-    devices = tuple(jax.local_devices() if devices is None else devices)
-    if not devices:
-        raise ValueError("devices is empty: give at least one JAX device")
-    return devices
-
-
-def default_chunk_size(path: str, devices: Sequence | None = None, width: int = 1) -> int:
-    """Rows per chunk of ``path`` (``"quadrature"``, ``"angle"``, ``"sampled"``, ``"ode"``) on
-    ``devices``' platform: ``CPU_CHUNK_SIZE`` on a CPU, ``ACCELERATOR_CHUNK_SIZE`` elsewhere,
-    divided by ``width`` (a row carrying that many values: 1 + the parameters of a forward
-    Jacobian) and rounded down to a power of two (at least 32)."""
-    cpu = local_devices(devices)[0].platform == "cpu"
-    size = (CPU_CHUNK_SIZE if cpu else ACCELERATOR_CHUNK_SIZE)[path] // max(1, width)
-    return max(32, 1 << (max(1, size).bit_length() - 1))
-
-
-def plan(n: int, n_devices: int, chunk_size: int) -> tuple[int, int]:
-    """(devices used, rows per chunk) for a batch of ``n`` rows: one chunk of ``n`` rows where
-    ``n ≤ chunk_size``, else even chunks of a multiple of ``ALIGN`` rows (at most
-    ``chunk_size``), as many devices as chunks at most. The chunks do not depend on
-    ``n_devices``."""
-    chunk_size = max(1, int(chunk_size))
-    if n <= chunk_size:
-        return 1, max(1, n)
-    even = math.ceil(n / math.ceil(n / chunk_size))
-    chunk = min(chunk_size, math.ceil(even / ALIGN) * ALIGN)
-    return min(n_devices, math.ceil(n / chunk)), chunk
 
 
 @functools.lru_cache(maxsize=64)
@@ -135,20 +89,22 @@ def device_map(
     inputs,
     shared=(),
     *,
-    chunk_size: int,
-    devices: Sequence | None = None,
+    parallel: Parallel | None = None,
+    path: str = "ode",
+    width: int = 1,
     progress: bool = False,
     desc: str | None = None,
 ):
     """Apply a batched ``fn(inputs_chunk, shared)`` over the leading axis of ``inputs``, split
-    over the local ``devices`` (default: ``jax.local_devices()``), each running its own program.
+    over the local devices of ``parallel`` (default ``Parallel()``: all of them), each running
+    its own program.
 
     ``inputs`` is a pytree of arrays with a common leading length N; ``shared`` a pytree of
     arrays given whole to every device. ``fn`` must be a pure JAX function of any batch length
     (e.g. vmapped) whose outputs all have the leading batch axis; it is jitted here (pass the
-    same object again to reuse its compiled programs). Chunks of at most ``chunk_size`` rows
-    (``plan``) go round-robin to the devices. Returns ``fn``'s output pytree as NumPy arrays of
-    length N.
+    same object again to reuse its compiled programs). Chunks of at most
+    ``parallel.chunk_rows(path, devices, width)`` rows (:meth:`Parallel.device_plan`) go
+    round-robin to the devices. Returns ``fn``'s output pytree as NumPy arrays of length N.
 
     Raises:
         RuntimeError: in a multi-process JAX runtime (``jax.distributed``): hosts share a study
@@ -163,12 +119,13 @@ def device_map(
             "runs a batch on one process's devices; share a study between hosts with "
             "`rbjax sweep --scheduler ADDRESS` (a Dask cluster) or `--shard I/P` and `--merge`"
         )
-    devices = local_devices(devices)
-    check_range("chunk_size", chunk_size, lower=0.0)
+    parallel = parallel_or_default(parallel)
+    devices = parallel.local_devices()
     leaves, treedef, n = _host_leaves(inputs)
-    used, chunk = plan(n, len(devices), int(chunk_size))
+    used, chunks = Parallel.device_plan(n, len(devices), parallel.chunk_rows(path, devices, width))
+    chunk = chunks[0][1] - chunks[0][0]
     devices = devices[:used]
-    n_chunks = math.ceil(n / chunk)
+    n_chunks = len(chunks)
     program = cached_jit(fn)
     shared_leaves, shared_def = jax.tree_util.tree_flatten(shared)
     on_device = [
@@ -179,7 +136,7 @@ def device_map(
     ]
 
     def dispatch(k: int):
-        lo, hi = k * chunk, min((k + 1) * chunk, n)
+        lo, hi = chunks[k]
         pad = chunk - (hi - lo)
         piece = [
             np.concatenate([x[lo:hi], np.repeat(x[hi - 1 : hi], pad, axis=0)]) if pad else x[lo:hi]
@@ -197,7 +154,7 @@ def device_map(
         got, out_def = jax.tree_util.tree_flatten(result)
         if not outs:
             outs.extend(np.empty((n, *np.shape(x)[1:]), dtype=x.dtype) for x in got)
-        lo, hi = k * chunk, min((k + 1) * chunk, n)
+        lo, hi = chunks[k]
         for full, part in zip(outs, got):
             full[lo:hi] = np.asarray(part)[: hi - lo]
 
@@ -210,7 +167,7 @@ def device_map(
             while len(pending) > keep:
                 k, result = pending.popleft()
                 collect(k, result)
-                bar.update(min(chunk, n - k * chunk))
+                bar.update(chunks[k][1] - chunks[k][0])
 
         # the first chunk traces (and compiles for device 0) here; the other devices' first
         # chunks compile their own programs at once, one thread each

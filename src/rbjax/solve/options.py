@@ -1,9 +1,10 @@
 """Settings objects of the solve layer, and the one way to give a model.
 
 :class:`EvaluationSpec`: how a batch of impacts is evaluated (the solve path and its ``Solver``,
-the force record of the L_FE, the chunks, the devices, progress bars), the settings that
+the force record of the L_FE, progress bars), the settings that
 :func:`rbjax.solve.batch.evaluate`, :func:`~rbjax.solve.batch.evaluate_jacobian` and the studies
 pass along as one object instead of relaying each keyword (as diffrax passes a ``SaveAt``).
+Where the batch runs (devices, chunks, worker processes) is an :class:`rbjax.Parallel`.
 
 :class:`ModelShortcuts`: the keyword shortcuts of :func:`rbjax.simulate` that build a
 :class:`~rbjax.terms.model.Model`; :func:`model_from_shortcuts` builds it, and refuses a mix of
@@ -42,23 +43,18 @@ class EvaluationSpec:
             ``rbjax.simulate``).
         solver: an ``rbjax.Solver``: asks for the diffrax ODE with it (default: none given).
         rate_Hz, duration_s: the force record of the L_FE (default the paper's 44.1 kHz × 1 s).
-        chunk_size: impacts per chunk (default: sized for the path and the platform,
-            ``rbjax.solve.devices.default_chunk_size``).
-        devices: the local JAX devices the chunks are split over (default: all).
         progress: progress bars on stderr.
 
     Raises:
         ValueError: an unknown ``path``; a ``solver`` that is not an ``rbjax.Solver``;
-            ``rate_Hz`` or ``duration_s`` not finite and > 0; a ``chunk_size`` that is not an
-            integer ≥ 1; a ``progress`` that is not a bool. The message names the field.
+            ``rate_Hz`` or ``duration_s`` not finite and > 0; a ``progress`` that is not a
+            bool. The message names the field.
     """
 
     path: str = "auto"
     solver: Solver | None = None
     rate_Hz: float = PAPER_RATE_Hz
     duration_s: float = PAPER_DURATION_S
-    chunk_size: int | None = None
-    devices: Sequence | None = None
     progress: bool = False
 
     def __post_init__(self):
@@ -67,11 +63,6 @@ class EvaluationSpec:
             raise ValueError(f"solver={self.solver!r} must be an rbjax.Solver or None")
         check_range("rate_Hz", self.rate_Hz, lower=0.0)
         check_range("duration_s", self.duration_s, lower=0.0)
-        chunk = self.chunk_size
-        if chunk is not None and not (isinstance(chunk, int) and not isinstance(chunk, bool)):
-            raise ValueError(f"chunk_size={chunk!r} is outside the valid range: an integer ≥ 1")
-        if chunk is not None and chunk < 1:
-            raise ValueError(f"chunk_size={chunk!r} is outside the valid range: an integer ≥ 1")
         if not isinstance(self.progress, bool):
             raise ValueError(f"progress={self.progress!r} must be True or False")
 

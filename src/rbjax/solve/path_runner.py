@@ -21,23 +21,28 @@ import numpy as np
 
 from .._validate import is_traced
 from .angle import impact_angle
-from .devices import cached_jit, default_chunk_size, device_map
+from .devices import cached_jit, device_map
 from .inputs import as_arrays, broadcast_inputs, padded_rows
 from .ode import impact_batch
 from .outcome import STATUS_CODES
+from .parallel import Parallel, parallel_or_default
 from .quadrature import DEFAULT_NODES, check_quadrature, impact_quadrature
 from .solver import Solver
 
 
-def scalar_outputs(path: str, height_m, ball, model, solver, fallback: bool):
+def scalar_outputs(
+    path: str, height_m, ball, model, solver, fallback: bool, parallel: Parallel | None = None
+):
     """(broadcast height, outputs, path) of the impacts of ``height_m``, ``ball`` and ``model``
     on ``path``: one staged program where the inputs are traced (or inside ``jax.jit``; no
-    fallback, the path returned as given), else the concrete batch split over the local devices
-    (``path + "+ode"`` where the fallback solved some impacts again)."""
+    fallback, the path returned as given), else the concrete batch split over the devices of
+    ``parallel`` (default ``Parallel()``: all local devices; ``path + "+ode"`` where the
+    fallback solved some impacts again)."""
     if is_traced((height_m, ball, model)) or _staged():
         height, out = _traced_scalars(path, height_m, ball, model, solver)
         return height, out, path
-    return _concrete_scalars(path, height_m, ball, model, solver, fallback)
+    parallel = parallel_or_default(parallel)
+    return _concrete_scalars(path, height_m, ball, model, solver, fallback, parallel)
 
 
 def _staged() -> bool:
@@ -125,20 +130,18 @@ def rows_program(path: str, spec: tuple, solver: Solver):
     return run
 
 
-def run_rows(path: str, batch: Rows, solver: Solver, devices=None):
+def run_rows(path: str, batch: Rows, solver: Solver, parallel: Parallel):
     """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
-    batch fits one chunk of one device (JAX arrays), else chunks split over the local
-    ``devices`` (default: all; NumPy arrays)."""
+    batch fits one chunk of one device (JAX arrays), else chunks split over the devices of
+    ``parallel`` (NumPy arrays)."""
 
     fn = rows_program(path, batch.spec, solver)
-    devices = jax.local_devices() if devices is None else list(devices)
-    chunk_size = default_chunk_size(path, devices)
-    if batch.size <= chunk_size:  # one chunk, whatever the number of devices
+    if batch.size <= parallel.chunk_rows(path, parallel.local_devices()):  # one chunk
         return cached_jit(fn)(batch.rows, batch.shared)
-    return device_map(fn, batch.rows, batch.shared, chunk_size=chunk_size, devices=devices)
+    return device_map(fn, batch.rows, batch.shared, parallel=parallel, path=path)
 
 
-def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
+def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool, parallel):
     """(broadcast height, outputs, path) of concrete inputs, split over the local devices
     (``rbjax.solve.devices``: every row as on one device, bit for bit). On a fast path with
     ``fallback``, the impacts it flags ``solver_failed`` are solved again by the ODE (the rows
@@ -149,10 +152,10 @@ def _concrete_scalars(path: str, height_m, ball, model, solver, fallback: bool):
     height_m = np.asarray(height_m, dtype=np.float64)
     batch = Rows.of(*as_arrays((height_m, ball, model)))
     reshape = lambda x: np.reshape(x, batch.shape)  # noqa: E731
-    out = run_rows(path, batch, solver)
+    out = run_rows(path, batch, solver, parallel)
     failed = np.flatnonzero(np.asarray(out.status) == STATUS_CODES["solver_failed"])
     if path != "ode" and fallback and failed.size:
-        redo = run_rows("ode", batch.take(padded_rows(failed)), solver)
+        redo = run_rows("ode", batch.take(padded_rows(failed)), solver, parallel)
         columns = {f.name: np.array(getattr(out, f.name)) for f in dataclasses.fields(out)}
         for name, column in columns.items():
             column[failed] = np.asarray(getattr(redo, name))[: failed.size]

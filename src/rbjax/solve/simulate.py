@@ -24,6 +24,7 @@ from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, broadcast_inputs, check_inp
 from .ode import trajectory_batch
 from .options import ModelShortcuts, model_from_shortcuts
 from .outcome import STATUS_CODES, STATUS_NAMES, Trajectory
+from .parallel import Parallel, parallel_or_default
 from .path import resolve_path
 from .path_runner import scalar_outputs
 from .sampled import pad_record, sampled_history_unsupported, sampled_solve, substeps_for_contact
@@ -168,6 +169,7 @@ def simulate(
     path: str = "auto",
     rate_Hz: float = PAPER_RATE_Hz,
     duration_s: float = PAPER_DURATION_S,
+    parallel: Parallel | None = None,
     **shortcuts: Unpack[ModelShortcuts],
 ) -> ImpactResult:
     """Impact of ``ball`` dropped from ``height_m`` on a rigid floor (paper §2), or on the
@@ -201,7 +203,8 @@ def simulate(
 
     Every core: concrete inputs (outside ``jax.jit``) are solved as one batch of impacts, cut in
     chunks sized for the device and split over the local devices, each device running its own
-    program (``rbjax.solve.devices``); the results are those of one device, bit for bit. JAX
+    program (``rbjax.solve.devices``; ``parallel`` chooses the devices and the chunks); the
+    results are those of one device, bit for bit. JAX
     gives a Python process one CPU device, so set the count before JAX starts to use them all:
     ``JAX_NUM_CPU_DEVICES=16 python script.py``, or first thing in the script
     ``jax.config.update("jax_num_cpu_devices", 16)`` (``rbjax.commands.use_cpu_devices()``: one
@@ -220,6 +223,8 @@ def simulate(
         rate_Hz: sample rate (Hz) of the force record of ``force_N``, ``history()`` and the L_FE
             (default the paper's 44.1 kHz).
         duration_s: length of that record (s; default 1 s).
+        parallel: where a concrete batch runs: an ``rbjax.Parallel`` (its ``devices`` and
+            ``chunk_size``; default ``Parallel()``: every local device, chunks sized per path).
         **shortcuts: the keyword shortcuts that build the ``Model`` when ``model`` is not given
             (see above).
 
@@ -250,6 +255,7 @@ def simulate(
         duration_s=duration_s,
         path=chosen,
         fallback=path == "auto",
+        parallel=parallel_or_default(parallel),
     )
 
 
@@ -263,8 +269,9 @@ def simulate_model(
     duration_s=PAPER_DURATION_S,
     path="ode",
     fallback=False,
+    parallel: Parallel | None = None,
 ) -> ImpactResult:
-    height, out, path = scalar_outputs(path, height_m, ball, model, solver, fallback)
+    height, out, path = scalar_outputs(path, height_m, ball, model, solver, fallback, parallel)
     return ImpactResult(
         height_m=height,
         contact_time_s=out.contact_time_s,

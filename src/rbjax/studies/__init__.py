@@ -1,9 +1,9 @@
 """Studies built on the solve and the fit: model selection by held-out error
 (:mod:`~rbjax.studies.selection.select`), the growth of L_FE per doubling of drop height
 (:mod:`~rbjax.studies.growth`), sensitivities (:mod:`rbjax.studies.sensitivity`) and TOML
-sweeps (:mod:`~rbjax.studies.sweeps.sweep`), their independent tasks run where
-:class:`~rbjax.studies.parallel.executors.Parallel` says (in process, worker processes, a Dask
-cluster)."""
+sweeps (:mod:`~rbjax.studies.sweeps.sweep`), their independent tasks run where an
+:class:`rbjax.Parallel` says (in process, worker processes, a Dask cluster;
+:mod:`rbjax.studies.parallel`)."""
 
 from .growth import (
     Growth,
@@ -13,7 +13,7 @@ from .growth import (
     model_growth,
     recording_growth,
 )
-from .parallel.executors import Parallel, Task, TaskError, run_tasks
+from .parallel.executors import Task, TaskError, run_tasks
 from .selection.cross_validation import cross_validate
 from .selection.hold_out_comparison import held_out_comparison
 from .selection.race import Race
@@ -24,7 +24,6 @@ from .sweeps.parts import merge_parts, run_part
 from .sweeps.sweep import load_config, run_sweep, write_outputs
 
 __all__ = [
-    "Parallel",
     "Task",
     "TaskError",
     "run_tasks",

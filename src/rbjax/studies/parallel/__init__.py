@@ -1,7 +1,8 @@
-"""Where a study's independent tasks run (:mod:`~rbjax.studies.parallel.executors`: in process,
-worker processes, a Dask cluster) and the local worker pools
-(:mod:`~rbjax.studies.parallel.worker_pool`)."""
+"""Where a study's independent tasks run, as an :class:`rbjax.Parallel` says
+(:mod:`~rbjax.studies.parallel.executors`: in process, worker processes, a Dask cluster), the
+local worker pools (:mod:`~rbjax.studies.parallel.worker_pool`) and a design's rows evaluated
+in this process or as tasks (:mod:`~rbjax.studies.parallel.rows`)."""
 
-from .executors import Parallel, Task, TaskError, run_tasks
+from .executors import Task, TaskError, run_tasks
 
-__all__ = ["Parallel", "Task", "TaskError", "run_tasks"]
+__all__ = ["Task", "TaskError", "run_tasks"]

@@ -18,7 +18,8 @@ import numpy as np
 from ..._progress import progress as say
 from ...fit import FitResult, fit, prepare_data
 from ...fit.options import options_or_default
-from ..parallel.executors import Parallel, Task, run_tasks
+from ...solve.parallel import Parallel, parallel_or_default
+from ..parallel.executors import Task, run_tasks
 
 __all__ = [
     "HeldOut",
@@ -130,13 +131,13 @@ def cross_validate(
     blocked_force: str = "paper",
     base: FitResult | None = None,
     heights: Sequence[float] | None = None,
-    workers: int | Parallel | None = 1,
+    parallel: Parallel | None = None,
     progress: bool = True,
     **fit_kwargs,
 ) -> tuple[HeldOut, ...]:
     """Leave-one-height-out: refit without each height (warm start from ``base``), predict it.
 
-    The folds are independent tasks, run where ``workers`` says.
+    The folds are independent tasks, run where ``parallel`` says.
 
     Args:
         data: a :class:`~rbjax.fit.FitData`, recordings or paths (see
@@ -146,8 +147,8 @@ def cross_validate(
         base: the full fit the folds start from (default: fitted here to every height, with
             ``fit_kwargs``).
         heights: the heights held out in turn, m (default: every height in the data).
-        workers: where the folds run: 1 (default: in this process), a worker count, ``None``
-            (every usable core) or a :class:`~rbjax.studies.parallel.executors.Parallel`.
+        parallel: where the folds run, an :class:`rbjax.Parallel` (default
+            ``Parallel(workers=1)``: one after another in this process).
         progress: one line per fold on stderr.
         fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
@@ -171,5 +172,6 @@ def cross_validate(
     if base is None:
         base = fit(data, model, blocked_force=blocked_force, progress=False, **fit_kwargs)
     tasks = fold_tasks(data, model, blocked_force, base, folds, fit_kwargs)
-    results = run_tasks(workers, tasks, label=f"cv {model}/{blocked_force}")
+    where = parallel_or_default(parallel, Parallel(workers=1))
+    results = run_tasks(where, tasks, label=f"cv {model}/{blocked_force}")
     return tuple(fold_row(model, blocked_force, h, res, progress) for h, res in zip(folds, results))

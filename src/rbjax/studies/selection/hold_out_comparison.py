@@ -10,10 +10,11 @@ from collections.abc import Sequence
 
 from ..._progress import progress as say
 from ...fit import MODEL_NAMES, FitResult, predict, prepare_data
+from ...solve.parallel import Parallel
 from ...spectrum.bands import OCTAVE_BANDS
 from ...terms.model import BLOCKED_FORCE_OPTIONS
 from ...text import fmt, format_table
-from ..parallel.executors import Parallel, Task, run_tasks
+from ..parallel.executors import Task, run_tasks
 from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import fit_task, held_out_rows
 
@@ -67,7 +68,7 @@ def held_out_comparison(
     *,
     blocked_forces: Sequence[str] = BLOCKED_FORCE_OPTIONS,
     starts: dict | None = None,
-    workers: int | Parallel | None = None,
+    parallel: Parallel | None = None,
     progress: bool = True,
     **fit_kwargs,
 ) -> HoldOutComparison:
@@ -82,8 +83,9 @@ def held_out_comparison(
         blocked_forces: the blocked-force definitions each name is tried with, as in
             :func:`~rbjax.studies.selection.select.select_model`.
         starts: optional warm starts, {(model, blocked_force): FitResult}.
-        workers: as in :func:`~rbjax.studies.selection.select.select_model` (each candidate's
-            fit is a task).
+        parallel: an :class:`rbjax.Parallel`, as in
+            :func:`~rbjax.studies.selection.select.select_model` (each candidate's fit is a
+            task; default ``Parallel()``).
         progress: one line per fit on stderr.
         fit_kwargs: to :func:`rbjax.fit.fit` (``gas``, ``fix``, ``options``, …).
 
@@ -131,7 +133,7 @@ def held_out_comparison(
             say(f"held-out: {tasks[i].name} ({res.message})", enabled=progress)
         return []
 
-    results = run_tasks(workers, tasks, then=then, label="held-out comparison")
+    results = run_tasks(parallel, tasks, then=then, label="held-out comparison")
     rows = {f"{name}/{bf}": tuple(held_out_rows(r, rest)) for (name, bf), r in zip(pairs, results)}
     rows["paper (unfitted)"] = tuple(
         held_out_rows(predict(data, structure=structures[pairs[0][0]]), rest)

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..._progress import progress as say
 from ...fit.options import options_or_default
-from ..parallel.executors import Parallel, Task, run_tasks
+from ...solve.parallel import Parallel
+from ..parallel.executors import Task, run_tasks
 from .candidates import structure_cost
 from .cross_validation import HeldOut, fold_row, fold_tasks, held_out_rows
 from .race import (
@@ -54,7 +55,7 @@ def _slots(parallel: Parallel) -> int | None:
     executor or lanes take every task given at once)."""
     if parallel.in_process:
         return 1
-    if parallel.scheduler is not None or parallel.executor is not None or parallel.use_lanes:
+    if parallel.scheduler is not None or parallel.executor is not None or parallel.batches_fits:
         return None
     return parallel.local_workers
 

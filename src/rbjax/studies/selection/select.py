@@ -32,8 +32,9 @@ from ..._progress import progress as say
 from ..._validate import settings_or_default
 from ..._x64 import require_x64
 from ...fit import MODEL_NAMES, predict, prepare_data
+from ...solve.parallel import Parallel, parallel_or_default
 from ...terms.model import BLOCKED_FORCE_OPTIONS, Model
-from ..parallel.executors import Parallel, Task, run_tasks
+from ..parallel.executors import Task, run_tasks
 from .candidates import candidate_pairs, shared_structures, structure_cost
 from .cross_validation import (
     check_folds,
@@ -60,8 +61,7 @@ def select_model(
     candidates: Sequence[str] = MODEL_NAMES,
     *,
     blocked_forces: Sequence[str] = BLOCKED_FORCE_OPTIONS,
-    workers: int | Parallel | None = None,
-    scheduler: str | None = None,
+    parallel: Parallel | None = None,
     progress: bool = True,
     exhaustive: bool = False,
     race: Race | None = None,
@@ -76,14 +76,14 @@ def select_model(
         candidates: model names of :mod:`rbjax.fit`, each tried with every one of
             ``blocked_forces`` (``paper``, ``momentum``), or ``"name/paper"``,
             ``"name/momentum"`` for one pairing.
-        workers: worker processes the fits run in (default: every core this process may use;
-            1: one fit after another in this process; or a
-            :class:`~rbjax.studies.parallel.executors.Parallel`). The full fits are tasks, and each
+        parallel: where the fits run, an :class:`rbjax.Parallel` (default ``Parallel()``: worker
+            processes on every core this process may use, or one batch per fit program where
+            JAX's default device is not a CPU; ``Parallel(workers=1)``: one fit after another in
+            this process; ``Parallel(scheduler=ADDRESS)``: a Dask cluster, ``rbjax[cluster]``,
+            see :mod:`rbjax.studies.parallel.executors`). The full fits are tasks, and each
             fold, warm-started from its candidate's full fit, is a task of its own as soon as
-            that fit is done, the costliest first; the results are those of ``workers=1``,
-            bit for bit (the same programs on the same inputs).
-        scheduler: address of a Dask scheduler to send the fits to instead (``rbjax[cluster]``;
-            see :mod:`rbjax.studies.parallel.executors`).
+            that fit is done, the costliest first; the results are those of
+            ``Parallel(workers=1)``, bit for bit (the same programs on the same inputs).
         progress: one line per full fit and per fold on stderr, and per round of the race:
             what is still in it, what was dropped and why, an estimate of the time left.
         exhaustive: run every fold of every candidate (default ``False``: race, see the module
@@ -97,9 +97,9 @@ def select_model(
         the folds it ran, its partial held-out error and why it left).
 
     Raises:
-        ValueError: bad candidates, data or worker count; ``exhaustive`` not a bool, or
-            ``exhaustive=True`` with ``race`` settings (they would not apply); ``race`` not a
-            :class:`~rbjax.studies.selection.race.Race`.
+        ValueError: bad candidates or data; ``parallel`` not an ``rbjax.Parallel``;
+            ``exhaustive`` not a bool, or ``exhaustive=True`` with ``race`` settings (they would
+            not apply); ``race`` not a :class:`~rbjax.studies.selection.race.Race`.
         rbjax.studies.parallel.executors.TaskError: a fit failed on a worker (named: candidate,
             fold).
     """
@@ -113,7 +113,7 @@ def select_model(
             "race's settings would not apply; give one or the other"
         )
     race = None if exhaustive else settings_or_default("race", Race, race)
-    parallel = workers if isinstance(workers, Parallel) else Parallel(workers, scheduler)
+    parallel = parallel_or_default(parallel)
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
     check_folds(data)

@@ -26,7 +26,6 @@
   contact time, restitution, mass, drop height), with Wilson score confidence intervals.
 """
 
-from ._common import batch_evaluator
 from .conformance import (
     DISTRIBUTION_KINDS,
     ConformanceProbability,
@@ -61,7 +60,6 @@ __all__ = [
     "analysis_options",
     "size_name",
     "global_sensitivity",
-    "batch_evaluator",
     "DISTRIBUTION_KINDS",
     "draw_samples",
     "wilson_interval",

@@ -1,6 +1,6 @@
 """Small helpers shared by the sensitivity modules: output names, uniform ranges as a SALib
 problem, inputs and outputs as dicts, the dropping of failed evaluations, and the fields every
-result shares, and the default evaluator of the impact studies."""
+result shares."""
 
 from __future__ import annotations
 
@@ -10,27 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ...solve.batch import evaluate, evaluate_jacobian
 from ...solve.options import EvaluationSpec, model_from_shortcuts, spec_or_default
 from ...terms.model import Model
-
-
-def batch_evaluator(samples: Mapping, gradients: bool = False, **settings):
-    """The default ``evaluator`` of :func:`~rbjax.studies.sensitivity.global_sensitivity` and
-    :func:`~rbjax.studies.sensitivity.conformance_probability`: ``rbjax.solve.batch.evaluate``
-    (output → (N,) array) or, with ``gradients``, ``evaluate_jacobian`` (``(values,
-    jacobian)``), on every row of ``samples`` in this process, with ``settings`` as their
-    keyword arguments.
-
-    An evaluator given in its place is called the same way, once per design (DGSM: once more
-    for the gradients at the base points), and must return the same; e.g.
-    ``rbjax.studies.sweeps.sweep`` splits the rows into tasks for worker processes or a Dask
-    cluster.
-    """
-
-    if gradients:
-        return evaluate_jacobian(samples, **settings)
-    return evaluate(samples, **settings)
 
 
 def study_settings(

@@ -20,10 +20,12 @@ import numpy as np
 from ..._validate import as_float, check_range
 from ...solve.batch import canonical_name
 from ...solve.options import EvaluationSpec
+from ...solve.parallel import Parallel
 from ...spectrum.standards import CLAUSE, RUBBER_BALL_TOLERANCES, TOLERANCED_OCTAVE_BANDS
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model
-from ._common import batch_evaluator, study_settings
+from ..parallel.rows import row_evaluator
+from ._common import study_settings
 
 DISTRIBUTION_KINDS = {
     "uniform": ("low", "high"),
@@ -191,7 +193,7 @@ def conformance_probability(
     model: Model | None = None,
     confidence: float = 0.95,
     evaluation: EvaluationSpec | None = None,
-    evaluator: Callable | None = None,
+    parallel: Parallel | Callable | None = None,
 ) -> ConformanceProbability:
     """Probability that the ball meets the rubber-ball tolerances when its parameters vary.
 
@@ -207,9 +209,10 @@ def conformance_probability(
     ISO 10140-5 Table F.1 = JIS A 1418-2 Table A.2), and the pass fractions come with Wilson score
     intervals. The L_FE limits hold for the standard drop height, so vary ``height_m`` around 1 m.
     Draws whose solve is flagged (status ≠ 0) are left out and counted (``n_valid``).
-    ``evaluation`` (an ``rbjax.EvaluationSpec``: solve path, ``Solver``, chunks, devices,
-    progress) and ``evaluator``: as in :func:`~rbjax.studies.sensitivity.global_sensitivity`
-    (default: ``rbjax.solve.batch.evaluate`` in this process).
+    ``evaluation`` (an ``rbjax.EvaluationSpec``: solve path, ``Solver``, the L_FE record,
+    progress) and ``parallel`` (where the draws run): as in
+    :func:`~rbjax.studies.sensitivity.global_sensitivity` (default: every draw in this process,
+    split over its devices).
     """
     model, evaluation = study_settings("conformance_probability", model, evaluation)
     check_range("n_samples", n_samples, lower=1.0, upper=math.inf, lower_open=False)
@@ -222,7 +225,7 @@ def conformance_probability(
     distributions = {canonical_name(k, model): v for k, v in distributions.items()}
     parsed = {k: _distribution(k, v) for k, v in distributions.items()}
     samples = draw_samples(distributions, int(n_samples), seed)
-    out = (batch_evaluator if evaluator is None else evaluator)(
+    out = row_evaluator(parallel, evaluation.progress)(
         samples,
         False,
         height_m=height_m,

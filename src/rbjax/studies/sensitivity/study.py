@@ -20,9 +20,11 @@ from ...solve.batch import (
     lfe_output_names,
 )
 from ...solve.options import EvaluationSpec
+from ...solve.parallel import Parallel
 from ...terms.ball import JIS_RUBBER_BALL, Ball
 from ...terms.model import Model
-from ._common import batch_evaluator, check_ranges, is_lfe, study_settings
+from ..parallel.rows import row_evaluator
+from ._common import check_ranges, is_lfe, study_settings
 from .dgsm import DGSMResult, dgsm_measures
 from .indices import fast_indices, morris_screening, pawn_indices, sobol_indices
 from .results import FastResult, MorrisResult, PawnResult, SobolResult
@@ -88,7 +90,7 @@ def global_sensitivity(
     ball: Ball = JIS_RUBBER_BALL,
     model: Model | None = None,
     evaluation: EvaluationSpec | None = None,
-    evaluator: Callable | None = None,
+    parallel: Parallel | Callable | None = None,
     **options,
 ) -> SobolResult | MorrisResult | FastResult | PawnResult | DGSMResult:
     """Global sensitivity of the impact outputs over uniform parameter ranges (SALib).
@@ -106,13 +108,13 @@ def global_sensitivity(
         height_m, ball, model: the nominal impact (an ``rbjax.Model``, default ``Model()``);
             parameters not in ``ranges`` keep these values.
         evaluation: an ``rbjax.EvaluationSpec``: the solve path and ``Solver`` (default: the
-            fastest exact path the model allows), the L_FE record, the batching over the
-            devices (``rbjax.solve.devices``; ``chunk_size`` default: a size per solve path),
-            progress bars.
-        evaluator: evaluates the design's rows, called as ``evaluator(samples, gradients,
-            **settings)`` (default :func:`~rbjax.studies.sensitivity.batch_evaluator`:
-            ``rbjax.solve.batch.evaluate`` in this process); ``rbjax.studies.sweeps.sweep`` passes
-            one that splits the rows into tasks for worker processes or a Dask cluster.
+            fastest exact path the model allows), the L_FE record, progress bars.
+        parallel: where the design's rows run: an ``rbjax.Parallel`` (default
+            ``Parallel(workers=1)``: every row in this process, split over its ``devices`` in
+            chunks of ``chunk_size``; with ``workers``, ``scheduler`` or ``executor``: the rows
+            as tasks, :func:`rbjax.studies.parallel.rows.evaluate_rows`), or an evaluator called
+            as ``evaluator(samples, gradients, **settings)`` (a sweep's job-array parts,
+            :mod:`rbjax.studies.sweeps.parts`).
         options: ``seed`` (default 0: of the design and of SALib's bootstrap; every analysis has
             it) and the analysis's keyword options (``analysis_options(analysis)``), e.g.
             ``second_order``, ``design``, ``n_bootstrap``, ``confidence``, ``n_levels``,
@@ -147,7 +149,7 @@ def global_sensitivity(
         evaluation=evaluation,
     )
 
-    evaluator = batch_evaluator if evaluator is None else evaluator
+    evaluator = row_evaluator(parallel, evaluation.progress)
 
     def func(inputs):
         out = evaluator(inputs, False, **common)

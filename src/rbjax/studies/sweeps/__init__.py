@@ -1,5 +1,5 @@
-"""TOML sweeps (:mod:`~rbjax.studies.sweeps.sweep`): a study's rows cut into tasks
-(:mod:`~rbjax.studies.sweeps.chunks`) and a job array's parts
+"""TOML sweeps (:mod:`~rbjax.studies.sweeps.sweep`; a study's rows run as
+:mod:`rbjax.studies.parallel.rows` says) and a job array's parts
 (:mod:`~rbjax.studies.sweeps.parts`)."""
 
 from .parts import merge_parts, run_part

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from ... import __version__
-from ..parallel.executors import Parallel
-from .chunks import evaluate_rows, on_devices, row_count, unflatten
-from .sweep import run_study
+from ...solve.parallel import Parallel, cut_rows
+from ..parallel.rows import evaluate_rows, row_count, unflatten
+from .sweep import run_study, sweep_parallel
 
 #: The marker of a part file (``run_part``), and its format's version.
 PART_FORMAT = "rbjax-sweep-part/1"
@@ -73,7 +73,7 @@ def design_plan(config: dict) -> list[_Call]:
         raise _Planned
 
     try:
-        run_study(config, evaluator=plan, progress=False, devices=None)
+        run_study(config, parallel=plan, progress=False)
     except _Planned:
         pass
     return calls
@@ -94,8 +94,8 @@ def design_digest(config: dict, plan: list[_Call] | None = None) -> str:
 
 def part_rows(n: int, part: int, parts: int) -> tuple[int, int]:
     """Rows [a, b) of part ``part`` (1 … ``parts``) of ``n`` rows: consecutive, sizes within
-    one of each other."""
-    return n * (part - 1) // parts, n * part // parts
+    one of each other (:func:`rbjax.solve.parallel.cut_rows`)."""
+    return cut_rows(0, n, parts=parts)[part - 1]
 
 
 def parse_part(text: str) -> tuple[int, int]:
@@ -126,18 +126,15 @@ def run_part(
     path,
     *,
     progress: bool = False,
-    devices=None,
-    workers: int | None = 1,
-    scheduler: str | None = None,
-    executor=None,
+    parallel: Parallel | None = None,
 ) -> Path:
     """Evaluate part ``part`` of ``parts`` of ``config``'s design and write it to ``path``.
 
     The rows of each evaluation (``design_plan``) are cut into ``parts`` consecutive slices
-    (``part_rows``); this runs slice ``part`` where ``workers``/``scheduler``/``executor``
-    say (as :func:`run_sweep`), with the whole design's L_FE window (with L_FE outputs, the
-    contact times of every row are computed first: ~1 % of the work on the fast paths, but
-    every part repeats it).
+    (``part_rows``); this runs slice ``part`` where ``parallel`` says (as in
+    :func:`~rbjax.studies.sweeps.sweep.run_sweep`), with the whole design's L_FE window (with
+    L_FE outputs, the contact times of every row are computed first: ~1 % of the work on the
+    fast paths, but every part repeats it).
 
     Args:
         config: the sweep configuration (:func:`~rbjax.studies.sweeps.sweep.load_config`).
@@ -147,23 +144,20 @@ def run_part(
             outputs, its rows and the design's digest (``design_digest``), for
             :func:`merge_parts`.
         progress: progress bars on stderr.
-        devices: the JAX devices of the in-process evaluation (default: all of them).
-        workers: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
-        scheduler: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
-        executor: as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
+        parallel: an ``rbjax.Parallel``, as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`
+            (default ``Parallel(workers=1)``).
 
     Returns:
         ``path``, as a :class:`~pathlib.Path`.
 
     Raises:
         ValueError: ``part``/``parts`` not integers with 1 ≤ part ≤ parts, a bad
-            configuration, or ``workers``/``scheduler``/``executor`` as in
-            :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
+            configuration, or ``parallel`` as in :func:`~rbjax.studies.sweeps.sweep.run_sweep`.
         rbjax.studies.parallel.executors.TaskError: a chunk failed, or its local worker died more
             often than allowed.
     """
     part, parts = _check_part(part, parts)
-    parallel = Parallel(workers=workers, scheduler=scheduler, executor=executor)
+    parallel = sweep_parallel(config, parallel)
     plan = design_plan(config)
     arrays: dict[str, Any] = {}  # key "<evaluation>/<output>" → the part's rows
     calls = []
@@ -172,7 +166,8 @@ def run_part(
         a, b = part_rows(n, part, parts)
         calls.append({"rows": [a, b], "n": n, "gradients": call.gradients})
         if b > a:
-            settings = on_devices(call.settings, devices, progress)
+            spec = call.settings["evaluation"].replace(progress=progress)
+            settings = {**call.settings, "evaluation": spec}
             label = f"part {part}/{parts}" + (" gradients" if call.gradients else "")
             flat = evaluate_rows(
                 parallel,
@@ -322,4 +317,4 @@ def merge_parts(config: dict, paths: Sequence, *, progress: bool = False):
         served.append(k)
         return unflatten(outputs[k], bool(gradients))
 
-    return run_study(config, evaluator=replay, progress=progress, devices=None)
+    return run_study(config, parallel=replay, progress=progress)

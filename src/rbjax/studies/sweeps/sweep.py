@@ -10,7 +10,7 @@ Configuration files (TOML, read with ``tomllib``; see ``rbjax/examples/sweeps/*.
     seed = 0
     height_m = 1.0            # the nominal drop height (also a parameter: see below)
     outputs = ["contact_time_s", "peak_force_N", "restitution", "lfe"]
-    chunk_size = 8192         # impacts per device per step (default: sized per solve path)
+    chunk_size = 8192         # impacts per device chunk and per task step (Parallel.chunk_size)
 
     [ball]                    # nominal ball (defaults: rbjax.JIS_RUBBER_BALL)
     youngs_Pa = 1.6e6
@@ -60,14 +60,15 @@ A method's table holds its sample size and any of its options
 Where the impacts run
 ---------------------
 A sweep is design → evaluation → analysis: SALib draws the design (or the conformance draws),
-the rows are evaluated, SALib analyses the outputs. :func:`run_sweep` runs the evaluation
+the rows are evaluated, SALib analyses the outputs. :func:`run_sweep` runs the evaluation where
+its ``parallel`` (an ``rbjax.Parallel``) says:
 
-* in this process (``workers=1``, the Python default): ``rbjax.solve.batch.evaluate`` on every
-  row at once, sharded over this process's JAX devices (``rbjax.commands.use_cpu_devices``
-  gives one CPU device per core; GPUs as they are);
-* as tasks (``workers=N``, ``scheduler=ADDRESS`` or ``executor=``; the command line's default
-  is one worker per usable core): the rows are cut into chunks of whole ``chunk_size`` steps,
-  each chunk is a task (``rbjax.studies.sweeps.chunks.evaluate_chunk``, a picklable call) of
+* in this process (``Parallel(workers=1)``, the Python default): ``rbjax.solve.batch.evaluate``
+  on every row at once, split over this process's JAX ``devices``
+  (``rbjax.commands.use_cpu_devices`` gives one CPU device per core; GPUs as they are);
+* as tasks (``workers=N``, ``scheduler=ADDRESS`` or ``executor=``): the rows are cut into
+  chunks of whole ``chunk_size`` steps (:meth:`rbjax.Parallel.task_rows`), each chunk is a
+  task (``rbjax.studies.parallel.rows.evaluate_chunk``, a picklable call) of
   :func:`rbjax.studies.parallel.executors.run_tasks` — a local pool of worker processes with one JAX
   CPU device each, or a Dask distributed cluster — and the chunks' outputs are joined here, in
   order, before the analysis. A task that fails names its rows and their first values; a
@@ -92,7 +93,8 @@ alike)::
 
     rbjax sweep cfg.toml --scheduler tcp://10.0.0.5:8786 --out result.json
 
-(or ``run_sweep(config, scheduler=cluster.scheduler_address)``); the workers must be able to
+(or ``run_sweep(config, parallel=Parallel(scheduler=cluster.scheduler_address))``); the
+workers must be able to
 import rbjax, in the same version. Without a scheduler, a plain job array runs one part each
 (:func:`~rbjax.studies.sweeps.parts.run_part`, ``rbjax sweep cfg.toml --shard I/P``: rows cut
 deterministically, each part written with the digest of the design) and
@@ -113,12 +115,11 @@ from ...solve.batch import (
     BALL_PARAMETERS,
 )
 from ...solve.options import EvaluationSpec
+from ...solve.parallel import Parallel, parallel_or_default
 from ...solve.solver import Solver
 from ...terms.ball import JIS_RUBBER_BALL
 from ...terms.serialize import model_from_dict, to_json
 from .. import sensitivity as sens
-from ..parallel.executors import Parallel
-from .chunks import task_evaluator
 
 SWEEP_KINDS = (*sens.ANALYSES, "conformance")
 CONFIG_KEYS = (
@@ -181,9 +182,19 @@ def _base(config: dict):
     return float(config.get("height_m", 1.0)), ball, model, Solver(**solver_fields)
 
 
-def run_study(config: dict, *, evaluator: Callable | None, progress: bool, devices):
-    """Check ``config`` and run its study, the design's rows evaluated by ``evaluator``
-    (``None``: :func:`rbjax.solve.batch.evaluate` in this process)."""
+def sweep_parallel(config: dict, parallel: Parallel | None) -> Parallel:
+    """``parallel`` (default ``Parallel(workers=1)``) with the ``chunk_size`` of ``config``
+    where it gives none itself."""
+    parallel = parallel_or_default(parallel, Parallel(workers=1))
+    if parallel.chunk_size is None and config.get("chunk_size") is not None:
+        return parallel.replace(chunk_size=int(config["chunk_size"]))
+    return parallel
+
+
+def run_study(config: dict, *, parallel: Parallel | Callable, progress: bool):
+    """Check ``config`` and run its study, the design's rows evaluated where ``parallel``
+    says (an ``rbjax.Parallel``, or an evaluator: see
+    :func:`rbjax.studies.sensitivity.global_sensitivity`)."""
     unknown = set(config) - set(CONFIG_KEYS)
     if unknown:
         raise ValueError(
@@ -198,13 +209,8 @@ def run_study(config: dict, *, evaluator: Callable | None, progress: bool, devic
         ball=ball,
         model=model,
         seed=int(config.get("seed", 0)),
-        evaluation=EvaluationSpec(
-            solver=solver,
-            chunk_size=None if config.get("chunk_size") is None else int(config["chunk_size"]),
-            devices=devices,
-            progress=progress,
-        ),
-        evaluator=evaluator,
+        evaluation=EvaluationSpec(solver=solver, progress=progress),
+        parallel=parallel,
     )
     if kind == "conformance":
         section = config.get("conformance", {})
@@ -241,29 +247,24 @@ def run_sweep(
     config: dict,
     *,
     progress: bool = False,
-    devices=None,
-    workers: int | None = 1,
-    scheduler: str | None = None,
-    executor=None,
+    parallel: Parallel | None = None,
 ):
     """Run a sweep configuration (see the module docstring); returns the study's result object.
 
     Args:
         config: the configuration (``load_config``).
         progress: progress bars on stderr.
-        devices: the JAX devices of the in-process evaluation (default: all of them).
-        workers: ``1`` (the default here: a library call starts no processes, and the
-            in-process evaluation already spreads over this process's devices): every row in
-            this process, exactly as ``rbjax.solve.batch.evaluate``; ``N > 1``: chunks on a
-            pool of N local worker processes (at most the usable cores), one JAX CPU device
-            each; ``None``: one worker per usable core (the command line's default). A count
-            below 1 is a ``ValueError``.
-        scheduler: the address of a Dask scheduler (``"tcp://host:8786"``, e.g. a
-            dask-jobqueue cluster's ``scheduler_address``: module docstring): the chunks run
-            on its workers. A scheduler that does not answer within
-            ``rbjax.studies.parallel.executors.CONNECT_TIMEOUT_S`` is a ``ValueError``.
-        executor: a ``concurrent.futures.Executor`` of the caller's for the chunks (not
-            closed here).
+        parallel: where the rows run, an ``rbjax.Parallel`` (its ``chunk_size`` default: the
+            configuration's). Default ``Parallel(workers=1)`` (a library call starts no
+            processes, and the in-process evaluation already spreads over this process's
+            ``devices``): every row in this process, exactly as ``rbjax.solve.batch.evaluate``;
+            ``workers=N > 1``: chunks on a pool of N local worker processes (at most the usable
+            cores), one JAX CPU device each; ``workers=None``: one worker per usable core (the
+            command line's default); ``scheduler``: the address of a Dask scheduler
+            (``"tcp://host:8786"``, e.g. a dask-jobqueue cluster's ``scheduler_address``:
+            module docstring), the chunks run on its workers (one that does not answer within
+            ``rbjax.studies.parallel.executors.CONNECT_TIMEOUT_S`` is a ``ValueError``);
+            ``executor``: a ``concurrent.futures.Executor`` of the caller's (not closed here).
 
     Returns:
         The study's result, by ``kind``: ``"sobol"`` → ``rbjax.studies.sensitivity.SobolResult``,
@@ -275,14 +276,12 @@ def run_sweep(
     Raises:
         ValueError: a configuration with unknown keys or tables, an unknown ``kind``, a
             missing ``[ranges]`` (or ``[distributions]``) table, a bad ``outputs`` list or
-            method option; a worker count below 1, both ``scheduler`` and ``executor``, or a
-            scheduler that does not answer.
+            analysis option; ``parallel`` not an ``rbjax.Parallel``, or a scheduler that does
+            not answer.
         rbjax.studies.parallel.executors.TaskError: a chunk failed (the message names its rows and
             their first values), or its local worker died more often than allowed.
     """
-    parallel = Parallel(workers=workers, scheduler=scheduler, executor=executor)
-    evaluator = None if parallel.in_process else task_evaluator(parallel, progress)
-    return run_study(config, evaluator=evaluator, progress=progress, devices=devices)
+    return run_study(config, parallel=sweep_parallel(config, parallel), progress=progress)
 
 
 def write_outputs(result, path, config: dict | None = None) -> list[Path]:

@@ -1,6 +1,10 @@
-"""The rows of a design evaluated as tasks: chunks of whole ``chunk_size`` steps, each a
-picklable call (:func:`evaluate_chunk`) run by :func:`rbjax.studies.parallel.executors.run_tasks`
-on local worker processes, a Dask cluster or a given executor, joined in order here.
+"""The rows of a study's design evaluated where an :class:`rbjax.Parallel` says: in this process
+(:func:`batch_evaluator`: ``rbjax.solve.batch.evaluate`` split over its devices), or as tasks of
+whole ``chunk_size`` steps (:meth:`rbjax.Parallel.task_rows`), each a picklable call
+(:func:`evaluate_chunk`) run by :func:`rbjax.studies.parallel.executors.run_tasks` on local
+worker processes, a Dask cluster or a given executor, joined in order here.
+:func:`row_evaluator` is the evaluator a study of ``rbjax.studies.sensitivity`` runs its design
+with.
 
 Every impact is computed by itself, so the outputs do not depend on the split, but for the one
 choice ``rbjax.solve.batch.evaluate`` makes for a whole batch: the L_FE history's window and
@@ -8,8 +12,7 @@ sub-steps, from the longest and the shortest contact. With L_FE, a first pass of
 (:func:`contact_times`) gives the contact time of every row, and every chunk is evaluated with
 the rows of the design's shortest and longest contact beside its own (and dropped after): the
 whole design's window in every chunk. :func:`evaluate_rows` also evaluates one slice of the
-rows that way (a part of a job array, ``rbjax.studies.sweeps.parts.run_part``);
-:func:`task_evaluator` is the ``evaluator`` the studies of ``rbjax.studies.sensitivity`` take.
+rows that way (a part of a job array, ``rbjax.studies.sweeps.parts.run_part``).
 """
 
 from __future__ import annotations
@@ -19,11 +22,14 @@ from collections.abc import Callable, Mapping
 import numpy as np
 from tqdm import tqdm
 
+from ...solve.batch import evaluate, evaluate_jacobian
 from ...solve.options import EvaluationSpec
-from ..parallel.executors import Parallel, Task, run_tasks
-from ..sensitivity import batch_evaluator
+from ...solve.parallel import Parallel, parallel_or_default
+from .executors import Task, run_tasks
 
 __all__ = [
+    "batch_evaluator",
+    "row_evaluator",
     "evaluate_chunk",
     "contact_times",
     "evaluate_rows",
@@ -33,14 +39,37 @@ __all__ = [
     "row_count",
 ]
 
-#: Chunks per worker a design is cut into (fewer where the rows run short: a chunk is at
-#: least one ``chunk_size`` step), and the most steps one chunk holds.
-CHUNKS_PER_WORKER = 4
-MAX_STEPS_PER_CHUNK = 8
-#: Workers assumed for a Dask cluster or a given executor when cutting the design.
-CLUSTER_WIDTH = 16
 #: Prefix of a derivative's key in a chunk's flat outputs.
 _D = "d:"
+
+
+def batch_evaluator(samples: Mapping, gradients: bool = False, **settings):
+    """Every row of ``samples`` in this process: ``rbjax.solve.batch.evaluate`` (output → (N,)
+    array) or, with ``gradients``, ``evaluate_jacobian`` (``(values, jacobian)``), with
+    ``settings`` as their keyword arguments (``parallel``: the devices and chunks)."""
+
+    if gradients:
+        return evaluate_jacobian(samples, **settings)
+    return evaluate(samples, **settings)
+
+
+def row_evaluator(parallel: Parallel | Callable | None, progress: bool = False) -> Callable:
+    """The evaluator of a study's design, called as ``evaluator(samples, gradients,
+    **settings)`` once per design (DGSM: once more for the gradients at the base points) and
+    returning what :func:`batch_evaluator` returns: ``parallel`` itself where it is a callable
+    (a sweep's planning or replaying evaluator); for a :class:`~rbjax.Parallel` (default
+    ``Parallel(workers=1)``), every row in this process on its devices where its tasks run in
+    this process, else the rows as tasks (:func:`evaluate_rows`)."""
+    if callable(parallel) and not isinstance(parallel, Parallel):
+        return parallel
+    where = parallel_or_default(parallel, Parallel(workers=1))
+    if where.in_process:
+
+        def on_devices(samples, gradients, **settings):
+            return batch_evaluator(samples, gradients, parallel=where, **settings)
+
+        return on_devices
+    return task_evaluator(where, progress)
 
 
 def spec_of(settings: Mapping) -> EvaluationSpec:
@@ -48,11 +77,11 @@ def spec_of(settings: Mapping) -> EvaluationSpec:
     return settings.get("evaluation") or EvaluationSpec()
 
 
-def on_devices(settings: Mapping, devices, progress: bool) -> dict:
-    """``settings`` evaluated on ``devices`` (``None``: all of the process that runs them), with
-    or without progress bars."""
-    spec = spec_of(settings).replace(devices=devices, progress=progress)
-    return {**settings, "evaluation": spec}
+def task_settings(settings: Mapping, parallel: Parallel) -> dict:
+    """``settings`` of a task: no progress bars, on every device of the process that runs it,
+    in chunks of ``parallel.chunk_size``."""
+    spec = spec_of(settings).replace(progress=False)
+    return {**settings, "evaluation": spec, "parallel": Parallel(chunk_size=parallel.chunk_size)}
 
 
 def evaluate_chunk(rows: dict, gradients: bool, settings: dict, n_rows: int) -> dict:
@@ -101,14 +130,6 @@ def _describe(samples: Mapping, a: int, b: int, n: int) -> str:
     return f"rows {a}–{b - 1} of {n} (first: {first})"
 
 
-def _pieces(a: int, b: int, chunk_size: int, width: int, extra: int) -> list[tuple[int, int]]:
-    """Rows [a, b) cut into chunks of whole ``chunk_size`` steps (less ``extra`` rows added to
-    each), about ``CHUNKS_PER_WORKER`` per worker and at most ``MAX_STEPS_PER_CHUNK`` steps."""
-    steps = (b - a) // (chunk_size * CHUNKS_PER_WORKER * max(width, 1))
-    size = max(1, chunk_size * min(max(steps, 1), MAX_STEPS_PER_CHUNK) - extra)
-    return [(s, min(s + size, b)) for s in range(a, b, size)]
-
-
 def _extremes(tc: np.ndarray) -> np.ndarray:
     """Rows of the shortest and the longest finite contact (none if no contact is finite)."""
     ok = np.flatnonzero(np.isfinite(tc) & (tc > 0.0))
@@ -136,27 +157,27 @@ def evaluate_rows(
     label: str = "impacts",
 ) -> dict:
     """The flat outputs of rows ``span`` (default: all) of ``samples``, evaluated where
-    ``parallel`` says (module docstring: chunks, and the first pass with L_FE)."""
+    ``parallel`` says (module docstring: chunks, and the first pass with L_FE); ``settings``:
+    ``evaluate``'s keywords but ``parallel``."""
     n = row_count(samples)
     a, b = (0, n) if span is None else span
     lfe = bool(settings.get("lfe"))
-    chunk = max(int(spec_of(settings).chunk_size or 1024), 1)  # a task: whole steps of this
     local = parallel.scheduler is None and parallel.executor is None
-    width = parallel.local_workers if local else CLUSTER_WIDTH
-    pieces = [(a, b)] if parallel.in_process else _pieces(a, b, chunk, width, 2 * lfe)
-    least = min(chunk, n)  # a chunk of at least one step: the whole design's compiled shape
+    pieces = [(a, b)] if parallel.in_process else parallel.task_rows(a, b, 2 * lfe)
+    least = min(parallel.task_step, n)  # a task of one step at least: one compiled shape
+    here = {**settings, "parallel": parallel}
     if local and len(pieces) == 1:  # one chunk: in this process, on its devices
         if (a, b) == (0, n):  # every row: exactly the in-process path
-            return flatten(batch_evaluator(samples, gradients, **settings), gradients)
+            return flatten(batch_evaluator(samples, gradients, **here), gradients)
         extra = np.array([], dtype=int)
         if lfe:
-            scalars = batch_evaluator(samples, False, **(settings | {"lfe": False}))
+            scalars = batch_evaluator(samples, False, **(here | {"lfe": False}))
             extra = _extremes(scalars["contact_time_s"])
         rows = _with_extra(samples, a, b, extra, least)
-        out = flatten(batch_evaluator(rows, gradients, **settings), gradients)
+        out = flatten(batch_evaluator(rows, gradients, **here), gradients)
         return {k: v[: b - a] for k, v in out.items()}
 
-    remote = on_devices(settings, None, False)
+    remote = task_settings(settings, parallel)
 
     def second_pass(extra: np.ndarray) -> list[Task]:
         return [
@@ -178,7 +199,7 @@ def evaluate_rows(
                 (_with_extra(samples, p, q, np.array([], dtype=int), least), remote, q - p),
                 cost=q - p,
             )
-            for p, q in _pieces(0, n, chunk, width, 0)
+            for p, q in parallel.task_rows(0, n)
         ]
     tasks = first or second_pass(np.array([], dtype=int))
     bar = tqdm(
