@@ -23,7 +23,7 @@ spent: 450 s, quick 125 s):
    per configuration (quick: ``cpu, all devices`` only);
 3. the full selection ``rbjax select src/rbjax/examples/emulated-rubber-ball``, cold then warm:
    on the accelerator with ``--batch-fits`` (every fit a lane of one batched program per
-   structure, :mod:`rbjax.fit.lanes`), on the CPU with ``--workers N`` (N: the usable cores);
+   structure, :mod:`rbjax.fit.batching`), on the CPU with ``--workers N`` (N: the usable cores);
    quick: one candidate; a command line that fails is reported with its error.
 
 Prints a table and writes ``$OUT/device_check.json`` where ``OUT`` is set, else

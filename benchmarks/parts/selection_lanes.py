@@ -1,4 +1,4 @@
-"""The model selection as lanes of batched programs (:mod:`rbjax.fit.lanes`): how much shorter
+"""The model selection as batched fits (:mod:`rbjax.fit.batching`): how much shorter
 the chain of optimiser steps gets when every fit of a structure steps in one batch.
 
 On an accelerator one Levenberg–Marquardt step costs about the same for 1 lane as for 64 (an
@@ -6,7 +6,7 @@ H100 measured ~110 ms a step, 64 lanes 1.2× 3 lanes: the sample loop's sequenti
 the selection's time there is set by the steps walked one after another, not by the work.
 This script runs the full default selection on the bundled recordings on this machine's CPU
 twice — one fit after another (each fit's starts in one call, as an accelerator runs
-them without lanes) and as lanes (``Parallel(lanes=True)``) — and
+them without batching) and batched (``Parallel(batch_fits=True)``) — and
 counts, from every call of the fit program:
 
 * the **sequential depth**: the steps walked one after another (a call costs as many steps as
@@ -22,9 +22,9 @@ lanes are compute-bound there); that time is reported too.
 Prints a table and writes ``results/selection_lanes.json``. ``--quick``: one candidate
 (hunt-crossley/momentum: its six folds as lanes).
 
-It counts the calls of the fit program through :class:`rbjax.fit.lanes.LaneExecutor`'s ``run``
-hook and :func:`rbjax.fit.program.run_lanes`, internals that no public name exposes: the count is
-the measurement.
+It counts the calls of the fit program through the ``run`` hook of
+:class:`rbjax.fit.batching.BatchedFitExecutor` and :func:`rbjax.fit.program.run_lanes`,
+internals that no public name exposes: the count is the measurement.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ import numpy as np
 from rbjax import Parallel
 from rbjax.data import examples_dir
 from rbjax.fit import prepare_data
-from rbjax.fit.lanes import LaneExecutor
+from rbjax.fit.batching import BatchedFitExecutor
 from rbjax.fit.problem import STEPS_PER_ROUND
 from rbjax.fit.program import run_lanes
 from rbjax.studies import select_model
@@ -49,7 +49,7 @@ QUICK = ["hunt-crossley"]
 H100_STEP_S = 0.110
 
 
-class OneAtATime(LaneExecutor):
+class OneAtATime(BatchedFitExecutor):
     """A lane executor that runs one fit at a time (each returns before the next starts): the
     calls of one fit after another, as an accelerator would run them without lanes."""
 
@@ -59,7 +59,7 @@ class OneAtATime(LaneExecutor):
         return future
 
 
-def calls_of(run_selection, executor_type=LaneExecutor):
+def calls_of(run_selection, executor_type=BatchedFitExecutor):
     """Run ``run_selection(parallel)`` with a lane executor recording every program call."""
     calls = []
 

@@ -37,9 +37,10 @@ PENDING = {
     # one LM evaluation of the fit's compiled program against the forward histories alone: the
     # program (Problem, fit_solver) and the sampled forward (record_forces) are the fit's insides
     "parts/fit_time.py": {"rbjax.fit.problem", "rbjax.fit.record_forces"},
-    # counts every call of the fit program through the lane executor's run hook: the count is
-    # the measurement (LaneExecutor, run_lanes, STEPS_PER_ROUND are the fit's insides)
-    "parts/selection_lanes.py": {"rbjax.fit.lanes", "rbjax.fit.problem", "rbjax.fit.program"},
+    # counts every call of the fit program through the batched-fit executor's run hook: the
+    # count is the measurement (BatchedFitExecutor, run_lanes, STEPS_PER_ROUND are the fit's
+    # insides)
+    "parts/selection_lanes.py": {"rbjax.fit.batching", "rbjax.fit.problem", "rbjax.fit.program"},
     # times the summary fit itself: fit_summary and summary_table are not in rbjax.fit.__all__
     # (`rbjax fit --summary FILE` is their public face, with a process and a file around them)
     "parts/summary_fit.py": {"rbjax.fit.summary", "rbjax.fit.summary_table"},

@@ -17,6 +17,7 @@ import numpy as np
 from .._validate import check_choice, check_range, settings_or_default
 from ..solve.solver import Solver
 from ..terms.model import Model
+from .batching import FitBatcher
 from .problem import FIT_PATHS
 from .program import OPTIMIZERS
 
@@ -53,6 +54,10 @@ class FitOptions:
             ``rbjax.terms.model.structure_model``): the fit runs in its compiled program with the
             terms the model lacks held at their values, so fits of different models share one
             program (model selection does this).
+        batcher: the :class:`~rbjax.fit.batching.FitBatcher` the fit's program calls go to,
+            gathered with those of other fits into one batch per program (what
+            ``rbjax.Parallel(batch_fits=True)`` gives each fit of a study; default ``None``:
+            each call runs at once).
 
     Raises:
         ValueError: ``optimizer``, ``scale`` or ``path`` is not an option; ``decimate`` is
@@ -60,8 +65,8 @@ class FitOptions:
             not a (mean, std) with −1 < mean < 0.5, std > 0; ``extra_weights`` names an
             unknown term or gives a negative or non-finite weight; ``max_steps`` is not an
             integer ≥ 0; ``solver`` is not an ``rbjax.Solver``; ``structure`` is not an
-            ``rbjax.Model``; ``height_error`` is not a bool; ``fit_heights`` is not a
-            sequence of finite heights.
+            ``rbjax.Model``; ``batcher`` is not a ``FitBatcher``; ``height_error`` is not a
+            bool; ``fit_heights`` is not a sequence of finite heights.
     """
 
     optimizer: str = "lm"
@@ -76,6 +81,7 @@ class FitOptions:
     height_error: bool = False
     fit_heights: Sequence[float] | None = None
     structure: Model | None = None
+    batcher: FitBatcher | None = None
 
     def __post_init__(self):
         check_choice("optimizer", self.optimizer, OPTIMIZERS)
@@ -117,6 +123,8 @@ class FitOptions:
             raise ValueError(f"solver={self.solver!r} must be an rbjax.Solver")
         if self.structure is not None and not isinstance(self.structure, Model):
             raise ValueError(f"structure={self.structure!r} must be an rbjax.Model or None")
+        if self.batcher is not None and not isinstance(self.batcher, FitBatcher):
+            raise ValueError(f"batcher={self.batcher!r} must be an rbjax.fit.batching.FitBatcher")
         if not isinstance(self.height_error, bool):
             raise ValueError(f"height_error={self.height_error!r} must be True or False")
         if self.fit_heights is not None:

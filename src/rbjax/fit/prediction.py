@@ -11,6 +11,7 @@ from ..solve.solver import Solver
 from ..terms.ball import JIS_RUBBER_BALL, Ball
 from ..terms.model import Model
 from ..terms.parameters import replace
+from .batching import FitBatcher
 from .layout import fitted_parameter_names
 from .problem import Problem, aligned, candidate_model, fit_path, fit_solver, per_height_rows
 from .records import prepare_data
@@ -24,6 +25,7 @@ def predict(
     *,
     solver: Solver | None = None,
     structure: Model | None = None,
+    batcher: FitBatcher | None = None,
 ) -> Prediction:
     """Compare a given (unfitted) model with the records; nothing is fitted.
 
@@ -39,6 +41,8 @@ def predict(
         solver: an ``rbjax.Solver`` (forced to ``adjoint="forward"``): the prediction then
             runs on the diffrax ODE; default: the fit's path for the model.
         structure: run in that model's compiled program (see :func:`fit`).
+        batcher: the :class:`~rbjax.fit.batching.FitBatcher` the program's calls go to (as
+            ``FitOptions.batcher``; default: they run at once).
 
     Returns:
         The :class:`Prediction`: ``per_height`` rows as in :class:`FitResult` (all held
@@ -54,7 +58,7 @@ def predict(
     """
     require_x64()
     model = Model() if model is None else model
-    problem, _, out = aligned(data, ball, model, solver, structure)
+    problem, _, out = aligned(data, ball, model, solver, structure, batcher)
     d = problem.data
     rows = per_height_rows(
         problem, out["force"], out["features"], np.zeros(d.n_records, dtype=bool)

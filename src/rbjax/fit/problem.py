@@ -22,7 +22,7 @@ from ..terms.ball import Ball
 from ..terms.model import Model
 from ..terms.parameters import parameter_names, parameter_table, replace
 from . import uncertainty as unc
-from .lanes import current_batcher
+from .batching import FitBatcher
 from .layout import FASTEST_AT_LOWER, FIT_RANGES, FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program
 from .records import FitData, prepare_data, record_features
@@ -102,6 +102,9 @@ class Problem:
         feature_rows: bool = False,
     ):
         self.data = data
+        #: where the program calls go (``None``: run at once; see :meth:`run_batch`): the fit's
+        #: ``FitOptions.batcher``, set by whoever builds the problem
+        self.batcher: FitBatcher | None = None
         self.ball = ball
         self.structure_model = structure_model
         self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
@@ -198,8 +201,9 @@ class Problem:
         dicts or one for all; ``phi_c``, ``w``, ``atol`` per lane, or none of them: an
         evaluation at θ, one Jacobian and no optimiser step): one output dict per lane.
 
-        In a thread of a :class:`~rbjax.fit.lanes.LaneExecutor` the lanes join those of the
-        other fits there (one batch on the accelerator). Otherwise, on a CPU the lanes go
+        With a ``batcher`` (:class:`~rbjax.fit.batching.FitBatcher`) the lanes join those of
+        the other fits that share it (one batch on the accelerator). Otherwise, on a CPU the
+        lanes go
         through the program one at a time: it is compute-bound, so B lanes in lockstep cost B
         lanes' work, and each would run as many steps as the slowest (measured in
         ``benchmarks/fitting.py --only fit_time``); on an accelerator they go in one call."""
@@ -216,10 +220,9 @@ class Problem:
             "weights": _stacked(weights if isinstance(weights, list) else [weights] * b),
             "atol": np.full(b, math.inf) if atol is None else np.asarray(atol, dtype=float),
         }
-        batcher = current_batcher()
-        if batcher is not None:
+        if self.batcher is not None:
             key = (self.structure, optimizer, STEPS_PER_ROUND, evaluate_only, self.data_digest)
-            out = batcher.call(key, lanes, self.arrays)
+            out = self.batcher.call(key, lanes, self.arrays)
         else:
             per_call = 1 if jax.default_backend() == "cpu" else b
             parts = [
@@ -354,8 +357,9 @@ def embed(model: Model, structure: Model | None, ball: Ball) -> Model:
     return replace(values, 1.0, ball, structure)[2]
 
 
-def aligned(data, ball: Ball, model: Model, solver, structure=None):
-    """The problem and the onset-aligned evaluation of a given model (nothing fitted)."""
+def aligned(data, ball: Ball, model: Model, solver, structure=None, batcher=None):
+    """The problem and the onset-aligned evaluation of a given model (nothing fitted; the
+    program's calls go to ``batcher`` where one is given)."""
     data = prepare_data(data)
     model = embed(model, structure, ball)
     problem = Problem(
@@ -368,6 +372,7 @@ def aligned(data, ball: Ball, model: Model, solver, structure=None):
         scale="noise",
         path=fit_path("auto", model, solver)[0],
     )
+    problem.batcher = batcher
     lay = problem.layout
     delay = 2.613 / (2 * math.pi * data.lowpass_Hz) if data.lowpass_Hz else 0.0
     theta = lay.theta(ball, model, data.onset_s - delay)

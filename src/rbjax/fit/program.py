@@ -24,7 +24,7 @@ sampled path (:mod:`rbjax.fit.record_forces`: fixed steps at the records' own sa
 physical columns carried through the solve) or, with ``Structure.path == "ode"``, from the
 diffrax ODE with its events (:func:`sample_force`). The optimiser is vmapped over a batch of
 lanes, each with its own free mask, constants and weights (the starts of a fit; or the fits of
-a model selection, gathered by :mod:`rbjax.fit.lanes`; :meth:`rbjax.fit.problem.Problem.
+a model selection, gathered by :mod:`rbjax.fit.batching`; :meth:`rbjax.fit.problem.Problem.
 run_batch` sends one lane a call on a CPU); an evaluate-only flag, shared by the lanes, skips
 the optimiser (one Jacobian).
 """
@@ -307,7 +307,7 @@ def run_program(
 
 
 def run_lanes(key, lanes: dict, data) -> ProgramOutput:
-    """One batch of a :class:`rbjax.fit.lanes.LaneBatcher`: ``key`` is (structure, optimiser,
+    """One batch of a :class:`rbjax.fit.batching.FitBatcher`: ``key`` is (structure, optimiser,
     step budget, evaluate-only, the data's digest) (see :meth:`rbjax.fit.problem.Problem.
     run_batch`)."""
     s, optimizer, max_steps, evaluate_only = key[:4]

@@ -130,6 +130,7 @@ def set_up(
         path=path,
         feature_rows=any(w > 0 for w in (extra_weights or {}).values()),
     )
+    problem.batcher = options.batcher
     return FitSetup(
         model_name=model_name,
         candidate=candidate,

@@ -24,8 +24,10 @@ batch):
 * ``Parallel(executor=ex)``: any executor the caller made (closed by the caller).
 * ``Parallel(batch_fits=True)`` (the default where JAX's default device is not a CPU): the fits
   run in threads of this process and every call of the fit program is gathered into one batch
-  per program (:mod:`rbjax.fit.lanes`): an accelerator steps 64 lanes of it for about the cost
-  of one.
+  per program (:mod:`rbjax.fit.batching`): an accelerator steps 64 lanes of it for about the
+  cost of one. Each task is called with the keyword ``batcher=`` (the
+  :class:`~rbjax.fit.batching.FitBatcher` its fits are given, ``FitOptions(batcher=...)``), so
+  a task run this way takes it.
 
 A task that raises is reported with its name (the candidate and fold, the chunk's rows); a
 local worker that dies has its unfinished tasks run again in a new pool (``retries`` times),
@@ -123,16 +125,16 @@ def open_executor(parallel: Parallel) -> Iterator[cf.Executor]:
     if parallel.executor is not None:
         yield parallel.executor
     elif parallel.batches_fits:
-        # lazy: the fit package only where its fits run as lanes (sweeps use this module too)
-        from ...fit.lanes import LaneExecutor
+        # lazy: the fit package only where fits run batched (sweeps use this module too)
+        from ...fit.batching import BatchedFitExecutor
 
-        lanes = LaneExecutor()
+        batched = BatchedFitExecutor()
         try:
-            yield lanes
+            yield batched
         except BaseException:
-            lanes.shutdown(wait=False, cancel_futures=True)  # a failed run: the others stop
+            batched.shutdown(wait=False, cancel_futures=True)  # a failed run: the others stop
             raise
-        lanes.shutdown(wait=False)
+        batched.shutdown(wait=False)
     elif parallel.scheduler is not None:
         client = _dask_client(parallel.scheduler)
         try:
@@ -234,7 +236,7 @@ def _drive(executor, parallel, all_tasks, results, then, label) -> None:
     add the tasks ``then`` makes; the tasks already in ``results`` are not run again."""
     width = 1 if parallel.in_process else max(parallel.local_workers, 1)
     if parallel.scheduler is not None or parallel.executor is not None or parallel.batches_fits:
-        width = 1 << 30  # a cluster has its own queue; lanes step together: all at once
+        width = 1 << 30  # a cluster has its own queue; batched fits step together: all at once
     ready: list[tuple[float, int]] = []
     for i, task in enumerate(all_tasks):
         if i not in results:

@@ -62,7 +62,7 @@ def row_evaluator(parallel: Parallel | Callable | None, progress: bool = False) 
     this process, else the rows as tasks (:func:`evaluate_rows`)."""
     if callable(parallel) and not isinstance(parallel, Parallel):
         return parallel
-    where = parallel_or_default(parallel, Parallel(workers=1))
+    where = rows_parallel(parallel_or_default(parallel, Parallel(workers=1)))
     if where.in_process:
 
         def on_devices(samples, gradients, **settings):
@@ -70,6 +70,12 @@ def row_evaluator(parallel: Parallel | Callable | None, progress: bool = False) 
 
         return on_devices
     return task_evaluator(where, progress)
+
+
+def rows_parallel(parallel: Parallel) -> Parallel:
+    """``parallel`` for a design's rows: without ``batch_fits`` (it gathers fits' program calls;
+    rows run in this process or as tasks on worker processes)."""
+    return parallel.replace(batch_fits=False) if parallel.batches_fits else parallel
 
 
 def spec_of(settings: Mapping) -> EvaluationSpec:
@@ -159,6 +165,7 @@ def evaluate_rows(
     """The flat outputs of rows ``span`` (default: all) of ``samples``, evaluated where
     ``parallel`` says (module docstring: chunks, and the first pass with L_FE); ``settings``:
     ``evaluate``'s keywords but ``parallel``."""
+    parallel = rows_parallel(parallel)
     n = row_count(samples)
     a, b = (0, n) if span is None else span
     lfe = bool(settings.get("lfe"))

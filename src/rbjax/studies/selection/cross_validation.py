@@ -68,14 +68,17 @@ def held_out_rows(result, heights) -> list[HeldOut]:
     return rows
 
 
-def fit_task(data, model, blocked_force, fit_heights, start, fit_kwargs) -> FitResult:
+def fit_task(
+    data, model, blocked_force, fit_heights, start, fit_kwargs, *, batcher=None
+) -> FitResult:
     """One fit of a selection as a task of its own (a module-level function, so that a worker
     process or a Dask worker can run it): :func:`rbjax.fit.fit` without progress lines, its
-    ``options`` (in ``fit_kwargs``) with ``fit_heights`` and the ``structure`` of ``fit_kwargs``."""
+    ``options`` (in ``fit_kwargs``) with ``fit_heights``, the ``structure`` of ``fit_kwargs``
+    and ``batcher`` (given by ``rbjax.Parallel(batch_fits=True)``'s executor)."""
     kwargs = dict(fit_kwargs)
     structure = kwargs.pop("structure", None)
     options = options_or_default(kwargs.pop("options", None))
-    options = options.replace(fit_heights=fit_heights, structure=structure)
+    options = options.replace(fit_heights=fit_heights, structure=structure, batcher=batcher)
     return fit(
         data,
         model,

@@ -30,10 +30,11 @@ from .race import (
 __all__ = ["RaceOutcome", "run_race", "timed"]
 
 
-def timed(fn, *args):
-    """``(fn(*args), seconds)``: a task's result with its run time (module level: picklable)."""
+def timed(fn, *args, **kwargs):
+    """``(fn(*args, **kwargs), seconds)``: a task's result with its run time (module level:
+    picklable; ``kwargs``: the ``batcher=`` of batched fits)."""
     start = time.perf_counter()
-    result = fn(*args)
+    result = fn(*args, **kwargs)
     return result, time.perf_counter() - start
 
 

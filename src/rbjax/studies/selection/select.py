@@ -51,9 +51,10 @@ from .rule import RULE, blocked_force_note, recommend
 __all__ = ["select_model"]
 
 
-def _baseline_task(data, structure: Model):
+def _baseline_task(data, structure: Model, *, batcher=None):
     """The unfitted paper model's held-out rows at every height (a task, see :func:`fit_task`)."""
-    return tuple(held_out_rows(predict(data, structure=structure), data.heights_m))
+    prediction = predict(data, structure=structure, batcher=batcher)
+    return tuple(held_out_rows(prediction, data.heights_m))
 
 
 def select_model(

@@ -1,4 +1,4 @@
-"""The lane batcher (:mod:`rbjax.fit.lanes`): the calls of fits running in threads are gathered
+"""Batched fits (:mod:`rbjax.fit.batching`): the calls of fits running in threads are gathered
 into one batch per program once every fit waits, padded to a few sizes, and split again;
 each call gets back its own lanes' outputs, and an error reaches only the fits of its batch.
 
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from rbjax import Parallel
-from rbjax.fit import lanes as lanes_module
-from rbjax.fit.lanes import BATCH_SIZES, LaneExecutor, current_batcher, padded_size
+from rbjax.fit import batching as batching_module
+from rbjax.fit.batching import BATCH_SIZES, BatchedFitExecutor, padded_size
 from rbjax.studies.parallel.executors import Task, TaskError, run_tasks
 
 
@@ -29,7 +29,8 @@ def test_a_batch_runs_at_the_next_of_a_few_sizes():
 
 
 def _executor():
-    """A lane executor whose 'program' is elementwise: lane x → 10·x + key, with the data."""
+    """A batched-fit executor whose 'program' is elementwise: lane x → 10·x + key, with the
+    data."""
     seen = []
 
     def run(key, lanes, shared):
@@ -38,17 +39,18 @@ def _executor():
             raise ValueError("this program fails")
         return {"y": 10 * lanes["x"] + key + shared, "n": np.full(len(lanes["x"]), len(seen))}
 
-    return LaneExecutor(run), seen
+    return BatchedFitExecutor(run), seen
 
 
-def _fit(rounds, key, lanes0, started=None):
+def _fit(rounds, key, lanes0, started=None, *, batcher):
     """A toy fit: ``rounds`` calls, each of its lanes, each feeding the next (after every fit
-    of ``started`` has started, if given: all have joined the batcher then)."""
+    of ``started`` has started, if given: all have joined the batcher then), to the
+    ``batcher`` the executor gives it."""
     if started is not None:
         started.wait(timeout=30)
     x = np.asarray(lanes0, dtype=float)
     for _ in range(rounds):
-        out = current_batcher().call(key, {"x": x}, 0.5)
+        out = batcher.call(key, {"x": x}, 0.5)
         x = out["y"]
     return x
 
@@ -82,12 +84,12 @@ def test_an_error_in_a_batch_reaches_only_the_fits_in_it():
     np.testing.assert_array_equal(good.result(timeout=30), [10 * (10 * 1 + 1.5) + 1.5])
 
 
-def _gated_fit(gate, record):
+def _gated_fit(gate, record, *, batcher):
     """A toy fit that does host work (waits for ``gate``) after its first call."""
     x = np.zeros(1)
     try:
         for i in range(3):
-            x = current_batcher().call(1, {"x": x}, 0.5)["y"]
+            x = batcher.call(1, {"x": x}, 0.5)["y"]
             if i == 0:
                 gate.wait(timeout=30)
     except cf.CancelledError as err:
@@ -104,7 +106,7 @@ def _toy_run(key, lanes, shared):
 
 
 def test_a_run_that_fails_stops_the_fits_still_running(monkeypatch):
-    monkeypatch.setattr(lanes_module, "run_lanes", _toy_run)
+    monkeypatch.setattr(batching_module, "run_lanes", _toy_run)
     gate, record = threading.Event(), []
     tasks = [
         Task("a failing fit", _fit, (1, "bad", [1.0])),

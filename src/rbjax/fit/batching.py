@@ -1,4 +1,5 @@
-"""Many fits as lanes of one batched program: the way independent fits share an accelerator.
+"""Batched fits: the program calls of many fits gathered into one batch, the way independent
+fits share an accelerator.
 
 On a GPU one Levenberg–Marquardt step costs about the same for 1 lane as for 64 (its time is
 the sample loop's sequential depth, not arithmetic), so the fits of a model selection — every
@@ -6,7 +7,8 @@ candidate, fold and start of one shared structure — should go through the comp
 together, not one after another. Their drivers (:func:`rbjax.fit.fit`: starts, rounds,
 alignment, all on the host between program calls) stay as they are: each fit runs in a thread
 of its own, and every call it makes of the fit program (:meth:`rbjax.fit.problem.Problem.
-run_batch`) is handed to a :class:`LaneBatcher` instead of being run. When every fit taking
+run_batch`, its lanes: one per start) is handed to the :class:`FitBatcher` given to it
+(``FitOptions.batcher``, passed explicitly) instead of being run. When every fit taking
 part waits for a call, the batcher runs them: the calls of one program (same structure,
 optimiser, step budget, data and evaluate-only flag) are stacked into one batch, padded to the
 next of a few sizes (:data:`BATCH_SIZES`, so that only a few shapes are compiled) by repeating
@@ -14,11 +16,12 @@ its last lane, run once, and split again. A fit that has converged makes no more
 lanes leave the batch; the rest are re-packed at the next call.
 
 Each lane's arithmetic is that lane's alone (the program is ``vmap``-ped over the lanes), so a
-fit run as lanes gives the results it gives alone, to rounding.
+batched fit gives the results it gives alone, to rounding.
 
-:class:`LaneExecutor` is the :class:`concurrent.futures.Executor` that runs tasks this way (one
-thread a task, all in one batcher); :class:`rbjax.studies.parallel.executors.Parallel` chooses
-it with ``lanes=True``, and by default where JAX's default device is not a CPU.
+:class:`BatchedFitExecutor` is the :class:`concurrent.futures.Executor` that runs tasks this way:
+one thread a task, each called with the keyword ``batcher=`` (its one :class:`FitBatcher`),
+which the task hands to its fits; :class:`rbjax.Parallel` chooses it with ``batch_fits=True``,
+and by default where JAX's default device is not a CPU.
 """
 
 from __future__ import annotations
@@ -34,18 +37,11 @@ import numpy as np
 
 from .program import run_lanes
 
-__all__ = ["BATCH_SIZES", "LaneBatcher", "LaneExecutor", "current_batcher", "padded_size"]
+__all__ = ["BATCH_SIZES", "FitBatcher", "BatchedFitExecutor", "padded_size"]
 
 #: The batch sizes a program is compiled for: a batch of B lanes runs at the smallest size ≥ B
 #: (beyond the largest, in multiples of it).
 BATCH_SIZES = (1, 2, 4, 8, 16, 32, 64)
-
-_LOCAL = threading.local()
-
-
-def current_batcher() -> LaneBatcher | None:
-    """The batcher this thread's fit calls go to (``None``: they run at once)."""
-    return getattr(_LOCAL, "batcher", None)
 
 
 def padded_size(n: int) -> int:
@@ -69,7 +65,7 @@ class _Call:
     done: bool = False
 
 
-class LaneBatcher:
+class FitBatcher:
     """Gathers the program calls of the fits taking part and runs them as batches.
 
     ``run(key, lanes, shared)`` runs one batch: ``lanes`` (a pytree of arrays whose leading
@@ -97,7 +93,7 @@ class LaneBatcher:
         with self._cond:
             self._closed = True
             for item in self._pending:
-                item.error, item.done = cf.CancelledError("the lane executor was shut down"), True
+                item.error, item.done = cf.CancelledError("the fit executor was shut down"), True
             self._pending = []
             self._cond.notify_all()
 
@@ -115,7 +111,7 @@ class LaneBatcher:
         item = _Call(key, lanes, shared)
         with self._cond:
             if self._closed:
-                raise cf.CancelledError("the lane executor was shut down")
+                raise cf.CancelledError("the fit executor was shut down")
             self._pending.append(item)
         self._flush_when_all_wait()
         with self._cond:
@@ -170,9 +166,10 @@ class LaneBatcher:
                 lo += n
 
 
-class LaneExecutor(cf.Executor):
-    """Runs each submitted task in a thread of its own, every fit call of every task going
-    through one :class:`LaneBatcher` (see the module docstring).
+class BatchedFitExecutor(cf.Executor):
+    """Runs each submitted task in a thread of its own, called with ``batcher=`` this executor's
+    :class:`FitBatcher`, which every fit of the task gets (``FitOptions(batcher=...)``): every
+    fit call of every task goes through it (see the module docstring).
 
     Args:
         run: how a batch runs (default: the fit program, :func:`rbjax.fit.program.run_lanes`).
@@ -181,7 +178,7 @@ class LaneExecutor(cf.Executor):
     def __init__(self, run: Callable[[Any, Any, Any], Any] | None = None):
         if run is None:
             run = run_lanes
-        self.batcher = LaneBatcher(run)
+        self.batcher = FitBatcher(run)
         self._threads: list[threading.Thread] = []
 
     def submit(self, fn, /, *args, **kwargs):
@@ -189,25 +186,23 @@ class LaneExecutor(cf.Executor):
         self.batcher.join()
 
         def work():
-            _LOCAL.batcher = self.batcher
             try:
                 if future.set_running_or_notify_cancel():
                     try:
-                        future.set_result(fn(*args, **kwargs))
+                        future.set_result(fn(*args, batcher=self.batcher, **kwargs))
                     except BaseException as err:  # noqa: BLE001  (to the caller by the future)
                         future.set_exception(err)
             finally:
-                _LOCAL.batcher = None
                 self.batcher.leave()
 
-        thread = threading.Thread(target=work, daemon=True, name="rbjax-lane")
+        thread = threading.Thread(target=work, daemon=True, name="rbjax-fit")
         self._threads.append(thread)
         thread.start()
         return future
 
     def shutdown(self, wait=True, *, cancel_futures=False):
         """With ``cancel_futures``, the fits still running stop at their next program call
-        (:meth:`LaneBatcher.close`)."""
+        (:meth:`FitBatcher.close`)."""
         if cancel_futures:
             self.batcher.close()
         if wait:
