@@ -78,14 +78,15 @@ def add_parallel_options(
     parser: argparse.ArgumentParser,
     what: str | None = "fits",
     default: int | None = None,
-    fits: bool = False,
-    devices: bool = False,
+    fit_flags: bool = False,
+    device_flags: bool = False,
 ) -> None:
     """The flags of an :class:`rbjax.Parallel`, one per field. ``what`` (the tasks, ``None``:
     no task flags): ``--workers N`` (``workers``; ``default``: the worker count without it,
-    ``None``: the usable cores) or ``--scheduler ADDRESS`` (``scheduler``); ``fits``: also
-    ``--batch-fits`` (``batch_fits``); ``devices``: ``--devices N`` (``devices``: N JAX
-    devices, N CPU devices made before JAX starts) and ``--chunk-size N`` (``chunk_size``)."""
+    ``None``: the usable cores) or ``--scheduler ADDRESS`` (``scheduler``); ``fit_flags``:
+    also ``--batch-fits`` (``batch_fits``); ``device_flags``: ``--devices N`` (``devices``: N
+    JAX devices, N CPU devices made before JAX starts) and ``--chunk-size N``
+    (``chunk_size``)."""
     if what is not None:
         where = parser.add_mutually_exclusive_group()
         where.add_argument(
@@ -104,7 +105,7 @@ def add_parallel_options(
             help=f"send the {what} to the Dask scheduler at ADDRESS (tcp://host:port) instead; "
             "needs pip install 'rbjax[cluster]' (dask-jobqueue starts such a cluster on SLURM/PBS)",
         )
-        if fits:
+        if fit_flags:
             where.add_argument(
                 "--batch-fits",
                 action="store_true",
@@ -113,7 +114,7 @@ def add_parallel_options(
                 "one batch of it (the default where JAX's default device is a GPU or TPU; on a "
                 "CPU it is slower than worker processes)",
             )
-    if devices:
+    if device_flags:
         parser.add_argument(
             "--devices",
             type=int,

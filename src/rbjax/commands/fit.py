@@ -175,7 +175,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p, paths="*")
-    add_parallel_options(p, what="fits of the model selection (without --model)", fits=True)
+    add_parallel_options(p, what="fits of the model selection (without --model)", fit_flags=True)
     add_race_options(p)
     p.add_argument(
         "--summary",

@@ -39,7 +39,7 @@ def register(subparsers) -> None:
         description=DESCRIPTION,
     )
     add_data_options(p)
-    add_parallel_options(p, fits=True)
+    add_parallel_options(p, fit_flags=True)
     add_race_options(p)
     p.add_argument(
         "--candidates",

@@ -129,7 +129,7 @@ def register(subparsers) -> None:
             "above) or a .toml/.json floor file; default: rigid (the blocked force)"
         ),
     )
-    add_parallel_options(p, what=None, devices=True)
+    add_parallel_options(p, what=None, device_flags=True)
     p.set_defaults(func=run)
 
 

@@ -69,7 +69,7 @@ def register(subparsers) -> None:
         "the part (default: CONFIG.part-I-of-P.npz)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    add_parallel_options(p, what="design's chunks", default=1, devices=True)
+    add_parallel_options(p, what="design's chunks", default=1, device_flags=True)
     split = p.add_mutually_exclusive_group()
     split.add_argument(
         "--shard",

@@ -88,13 +88,13 @@ def cut_rows(a: int, b: int, *, size: int | None = None, parts: int | None = Non
     return [(a + n * k // parts, a + n * (k + 1) // parts) for k in range(parts)]
 
 
-def default_chunk_size(path: str, devices: Sequence | None = None, width: int = 1) -> int:
+def default_chunk_size(path: str, platform: str | None = None, width: int = 1) -> int:
     """Rows per chunk of ``path`` (``"quadrature"``, ``"angle"``, ``"sampled"``, ``"ode"``) on
-    ``devices``' platform (default: ``jax.local_devices()``): ``CPU_CHUNK_SIZE`` on a CPU,
+    ``platform`` (default: JAX's default backend): ``CPU_CHUNK_SIZE`` on ``"cpu"``,
     ``ACCELERATOR_CHUNK_SIZE`` elsewhere, divided by ``width`` (a row carrying that many values:
     1 + the parameters of a forward Jacobian) and rounded down to a power of two (at least
     32)."""
-    cpu = (jax.local_devices() if devices is None else devices)[0].platform == "cpu"
+    cpu = (jax.default_backend() if platform is None else platform) == "cpu"
     size = (CPU_CHUNK_SIZE if cpu else ACCELERATOR_CHUNK_SIZE)[path] // max(1, width)
     return max(32, 1 << (max(1, size).bit_length() - 1))
 
@@ -205,7 +205,7 @@ class Parallel:
         """Rows per device chunk of ``path``: ``chunk_size``, else :func:`default_chunk_size`."""
         if self.chunk_size is not None:
             return self.chunk_size
-        return default_chunk_size(path, devices, width)
+        return default_chunk_size(path, devices[0].platform, width)
 
     @staticmethod
     def device_plan(n: int, n_devices: int, chunk_size: int) -> tuple[int, list]:
