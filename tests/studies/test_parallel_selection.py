@@ -120,7 +120,8 @@ def test_follow_up_tasks_come_after_the_given_ones_in_order():
     def then(i, result):
         return [Task(f"child of {i}", _square, (result,))] if i < 2 else []
 
-    out = run_tasks(1, [Task("a", _square, (2,)), Task("b", _square, (3,), cost=5)], then=then)
+    tasks = [Task("a", _square, (2,)), Task("b", _square, (3,), cost=5)]
+    out = run_tasks(Parallel(workers=1), tasks, then=then)
     assert out == [4, 9, 81, 16]  # b runs first (costlier): its child is added first
 
 
