@@ -265,7 +265,7 @@ def main(quick: bool = False) -> None:
     cost = cost_per_impact(fits, quick)
     for name, c in cost.items():
         print(
-            f"cost {name}: {c['per_impact_us']:.0f} µs/impact (batch 1000, median "
+            f"cost {name}: {c['per_impact_us']:.0f} µs/impact (batch {c['batch']}, median "
             f"{c['median_s']:.2f} s, {c['mean_steps']:.0f} steps)"
         )
     out = {
