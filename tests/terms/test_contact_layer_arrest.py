@@ -228,15 +228,6 @@ def test_jacfwd_matches_central_differences(impacts):
     assert np.all(np.abs(fd[0, 2:]) < 1e-8 * scale), fd[0, 2:] / scale
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "reverse mode through ContactLayer.series_force_N at δ = 0 (the ODE's first state) gives "
-        "NaN: its starting guess's secant stiffness F_e(δ)/max(δ, 1e-300) and (k_s δ)^(1/p) "
-        "have infinite partials there, which the final jnp.where multiplies by 0; jax.jacfwd "
-        "gives 0"
-    ),
-)
 def test_reverse_mode_at_first_contact_is_finite():
     """At δ = 0 the force is 0 whatever y_ref and p: its reverse-mode gradient is 0 (finite)."""
 

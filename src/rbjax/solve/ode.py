@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import diffrax as dfx
+import optimistix as optx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -75,8 +76,10 @@ def _solve(
     dense=False,
     steps=False,
     max_steps=None,
+    root_finder=None,
 ):
-    event = dfx.Event(conds, solver.root_finder(), direction=directions)
+    root_finder = solver.root_finder() if root_finder is None else root_finder
+    event = dfx.Event(conds, root_finder, direction=directions)
     return dfx.diffeqsolve(
         dfx.ODETerm(rhs),
         solver.diffrax_solver(),
@@ -193,18 +196,38 @@ def solve_phases(
 
     conds3: Callable | tuple[Callable, ...]
     dirs3: bool | tuple[bool, ...]
+    end_root_finder = None
     if model.velocity_dependent:
 
         def contact(t, y, args, **kw):
             return contact_force(y, *args) / force_scale
 
         conds3, dirs3 = (contact, deflection), (False, False)
+        if model.layer is not None:
+            # With a contact layer (F ≈ Kδ^p near δ = 0) a damping law that vanishes with δ
+            # (Hunt–Crossley's αkδδ̇) ends the contact at δ* > 0, where Kδ^(p−1) = αk|δ̇|, and
+            # the force touches 0 again at δ = 0 from below: a step across both would ask the
+            # root finder for both events' roots at once, and a Newton step from the step's end
+            # (near that turn, where the slope is small) can leave the step. The contact event
+            # alone (the force is negative for δ < 0, the shell's law continued) and bisection
+            # on the step, which keeps the sign change from + to −, find δ*.
+            conds3, dirs3 = contact, False
+            end_root_finder = optx.Bisection(rtol=1e-12, atol=1e-13)
     else:
         conds3, dirs3 = deflection, False
     # Restitution starts from rest; a tiny negative velocity keeps the Heaviside side exact.
     y_start = y_max.at[1].set(jnp.minimum(y_max[1], 0.0))
     sol3 = _solve(
-        restitution, t_max, y_start, args, conds3, dirs3, solver, dense=dense, steps=steps
+        restitution,
+        t_max,
+        y_start,
+        args,
+        conds3,
+        dirs3,
+        solver,
+        dense=dense,
+        steps=steps,
+        root_finder=end_root_finder,
     )
     return v0, (sol1, sol2, sol3), (t_peak, y_peak), (t_max, y_max)
 

@@ -10,7 +10,7 @@ idealised:
   thick (h/R = 0.36): the column of wall above the contact area 2πRδ has the mass 2πRhρ per unit
   deflection, with ρ = M / (4π(R³ − (R−h)³)/3), i.e. a mass rate
 
-      μ δ̇,     μ = 3 M R h / (2 (R³ − (R − h)³))          (20.6 kg/m for the JIS ball)
+      μ δ̇,     μ = 3 M R h / (2 (R³ − (R − h)³))          (20.5 kg/m for the JIS ball)
 
   1.46 times the paper's M/2R = 14.0 kg/m.
 - **How abruptly it stops.** The column stops at once only while the contact's edge outruns the

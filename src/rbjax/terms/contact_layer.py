@@ -46,8 +46,7 @@ class ContactLayer(eqx.Module):
     """A massless layer F = K y^p in series with the shell (see the module docstring).
 
     Attributes:
-        layer_deflection_m: y_ref > 0, the layer's compression under 1 kN (m); at most the
-            wall thickness in a ball (checked with the ball).
+        layer_deflection_m: y_ref, 0 < y_ref ≤ 50 mm, the layer's compression under 1 kN (m).
         layer_exponent: p, 1 ≤ p ≤ 6 (1: a linear spring; 3/2: Hertz; felt hammers 2–5).
 
     Raises:
@@ -90,8 +89,12 @@ class ContactLayer(eqx.Module):
 
     def series_force_N(self, deflection_m, elastic_force_N):
         """F(δ) of the layer in series with ``elastic_force_N`` (u ↦ F_B(u) + F_G(u), increasing,
-        0 at 0): the root of F_e(u) = K (δ − u)^p on 0 ≤ u ≤ δ, F = F_e(u)."""
-        d = jnp.maximum(jnp.asarray(deflection_m), 0.0)
+        0 at 0): the root of F_e(u) = K (δ − u)^p on 0 ≤ u ≤ δ, F = F_e(u); for δ ≤ 0 (no
+        contact) F_e(δ), the shell's law continued."""
+        raw = jnp.asarray(deflection_m)
+        # the solve runs on δ > 0 only (elsewhere on y_ref, its result unused), so that no
+        # infinite derivative at δ = 0 turns into NaN in reverse mode
+        d = jnp.where(raw > 0.0, raw, self.layer_deflection_m)
         p = jnp.asarray(self.layer_exponent)
         scale = jnp.asarray(self.layer_deflection_m)
 
@@ -106,7 +109,7 @@ class ContactLayer(eqx.Module):
             return u + y - d, 1.0 + dy
 
         # start from the softer spring's share at the shell's secant stiffness k_s = F_e(δ)/δ
-        k_s = elastic_force_N(d) / jnp.maximum(d, 1e-300)
+        k_s = elastic_force_N(d) / d
         layer_alone = REFERENCE_FORCE_N * (d / scale) ** p
         u = jnp.where(
             layer_alone < k_s * d,
@@ -123,4 +126,5 @@ class ContactLayer(eqx.Module):
             return jnp.where((step >= lo) & (step <= hi), step, 0.5 * (lo + hi)), lo, hi
 
         u, _, _ = jax.lax.fori_loop(0, NEWTON_STEPS, newton, (u, jnp.zeros_like(d), d))
-        return jnp.where(d > 0.0, elastic_force_N(u), 0.0)
+        # past the end of contact (δ ≤ 0) the shell's own law goes on (negative for δ < 0)
+        return jnp.where(raw > 0.0, elastic_force_N(u), elastic_force_N(jnp.minimum(raw, 0.0)))
