@@ -24,10 +24,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import diffrax as dfx
-import optimistix as optx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import optimistix as optx
 
 from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m
