@@ -4,7 +4,9 @@ every data set the tests hold.
 
 1. ``rbjax fit src/rbjax/examples/emulated-rubber-ball --quiet --json`` in subprocesses sharing
    one fresh ``RBJAX_CACHE_DIR``: cold (every program traced and compiled), then warm (best of
-   2), and ``--exhaustive`` warm, every usable core; the load average around each run.
+   2), and ``--exhaustive`` warm, every usable core; ``rbjax select`` warm with the default
+   candidates and with two more (zener+ball-mode, both blocked forces); the load average
+   around each run.
 2. ``select_model(data)`` (the race) against ``select_model(data, exhaustive=True)`` with the
    default candidates on: the bundled recordings (per-height averages, and every drop as its
    own record), three of their heights, the simulated drops of the tests (Kelvin–Voigt,
@@ -53,6 +55,12 @@ from synthetic_records import (  # noqa: E402
 from test_fit_faults import recordings, write_faulty_set  # noqa: E402
 
 QUICK_CANDIDATES = ["paper", "kelvin-voigt"]
+#: the default candidates and one more model (two candidates: both blocked forces) of the same
+#: shared structure (nothing more to compile)
+MORE = (
+    "paper,kelvin-voigt,hunt-crossley,zener,hunt-crossley+ball-mode,"
+    "hunt-crossley+series-kelvin-voigt,zener+ball-mode"
+)
 
 
 def fit_command(argv, cache) -> tuple[float, dict, list]:
@@ -72,14 +80,16 @@ def timings() -> list[dict]:
     data = str(examples_dir())
     rows = []
     with tempfile.TemporaryDirectory() as cache:
-        for label, extra, runs in (
-            ("race, cold", [], 1),
-            ("race, warm", [], 2),
-            ("--exhaustive, warm", ["--exhaustive"], 1),
+        for label, argv, runs in (
+            ("race, cold", ["fit"], 1),
+            ("race, warm", ["fit"], 2),
+            ("--exhaustive, warm", ["fit", "--exhaustive"], 1),
+            ("select, warm", ["select"], 2),
+            ("select, two more candidates, warm", ["select", "--candidates", MORE], 2),
         ):
             best = None
             for _ in range(runs):
-                elapsed, out, load = fit_command(["fit", data, "--quiet", "--json", *extra], cache)
+                elapsed, out, load = fit_command([*argv, data, "--quiet", "--json"], cache)
                 if best is None or elapsed < best[0]:
                     best = (elapsed, out, load)
             assert best is not None

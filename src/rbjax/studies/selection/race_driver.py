@@ -105,6 +105,11 @@ class _Driver:
         run_tasks(self.parallel, self.tasks, then=self.then, label="select")
         state = self.state
         assert state is not None  # every full fit ran
+        if state.live():  # never silently: a candidate neither complete nor dropped
+            raise RuntimeError(
+                "select: the race ended with folds still to run for "
+                + ", ".join(state.labels[k] for k in state.live())
+            )
         folds = [
             tuple(self.cache[(k, j)][0] for j in sorted(state.obs[k])) for k in range(self.n_pairs)
         ]
