@@ -184,6 +184,9 @@ def _fig11_increase_per_doubling(sc: _Scene):
     series = {f"rbjax, {GAS[g]}": sc.runs[g]["increase_per_doubling_dB"] for g in GAS}
     if sc.growth and "recordings" in sc.growth:
         series["emulated recordings (bundled)"] = sc.growth["recordings"].slope_dB
+    across = (sc.growth or {}).get("measured_ball")
+    if across is not None:
+        series["measured-ball model (layer + arrest)"] = across["growth_dB"]
     sc.plot.plot_increase_per_doubling(
         OCTAVE_BANDS,
         series,
@@ -191,6 +194,14 @@ def _fig11_increase_per_doubling(sc: _Scene):
         paper=[PAPER["increase_per_doubling_dB"][b] for b in OCTAVE_BANDS],
         title="Fig. 11: L_FE increase per doubling of drop height",
     )
+    if across is not None:  # what the paper states of its measured ball (read off Fig. 11)
+        for band, (value, low, high) in across["paper_growth_dB"].items():
+            x = list(OCTAVE_BANDS).index(band)
+            ax.errorbar(
+                [x], [value], yerr=[[value - low], [high - value]], fmt="s", color="C3", capsize=4
+            )
+        ax.plot([], [], "s", color="C3", label="paper, measured ball (§4.2, as stated)")
+        ax.legend(fontsize=7)
     ax.axhline(10 * math.log10(2), color="0.6", lw=0.8, ls=":")
     return fig, "fig11_increase_per_doubling.png"
 

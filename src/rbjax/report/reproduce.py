@@ -33,6 +33,8 @@ from ..terms.serialize import jsonable
 from .figures import draw_figures
 from .markdown import report_markdown
 from .measured_ball import measured_ball, report_section
+from .measured_ball_heights import measured_ball_across_heights
+from .measured_ball_heights import report_section as heights_section
 from .paper import DEFAULT_HEIGHTS_M, GAS, PAPER, comparison_rows, explain_comparison
 from .predictions import (
     conformance_at_standard_height,
@@ -75,6 +77,8 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
     modes = shell_mode_fundamentals()
 
     measured = measured_ball(out, progress=progress)
+    across = measured_ball_across_heights(out, progress=progress)
+    growth["measured_ball"] = across
     say("reproduce: [3/4] drawing figures 3-12", enabled=progress)
     files = draw_figures(out, runs, heights, comparison, growth) + [measured["figure"]]
     say("reproduce: [4/4] writing report.md and results.json", enabled=progress)
@@ -115,7 +119,10 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             "comparison": comparison,
             "explanations": explanations,
             "conformance_1m": conformance,
-            "growth_per_doubling": {k: v for k, v in growth.items() if k != "recordings_error"},
+            "growth_per_doubling": {
+                k: v for k, v in growth.items() if k not in ("recordings_error", "measured_ball")
+            },
+            "measured_ball_across_heights": across,
             "shell_modes_fundamental_Hz": modes,
             "measured_ball": measured,
             "figures": files,
@@ -128,6 +135,7 @@ def reproduce(out_dir, *, heights_m=DEFAULT_HEIGHTS_M, progress: bool = True) ->
             runs, heights, comparison, explanations, conformance, files, elapsed, growth, modes
         )
         + "\n".join(report_section(measured))
+        + "\n".join(heights_section(across))
         + "\n"
     )
     (out / "results.json").write_text(json.dumps(results, indent=2, allow_nan=False))
