@@ -169,13 +169,16 @@ def _rebuilt(model, **changes):
 
     options = dict(
         gas=model.gas,
-        blocked_force=model.blocked_force,
         damping=model.damping,
         stiffening=model.stiffening,
         max_deflection_ratio=model.max_deflection_ratio,
         floor=model.floor,
         series_elements=model.series_elements,
+        layer=model.layer,
+        arrest=model.arrest,
     )
+    if "blocked_force" not in changes:  # keep the file's weight, fractional ones too
+        options["momentum_flux_weight"] = model.momentum_flux_weight
     return Model(**(options | changes))
 
 
