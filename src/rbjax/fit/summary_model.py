@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..solve.angle import angle_unsupported
 from ..solve.inputs import PAPER_DURATION_S, PAPER_RATE_Hz, as_arrays
 from ..solve.sampled import sampled_history_unsupported, sampled_solve, substeps_for_contact
 from ..solve.simulate import simulate, trajectory
@@ -51,8 +52,10 @@ def figures_of(
     heights_m, ball, model: Model, figures: tuple[str, ...], num_samples: int, substeps: int = 1
 ):
     """(len(heights), len(figures)) array of the figures of ``(ball, model)`` (traceable)."""
-    coupled = model.coupling is not None
-    solver = Solver(adjoint="forward") if coupled else None
+    # the ODE (no fast path: coupled models, a contact layer, an arrest law) with the adjoint
+    # that jax.jacfwd can differentiate
+    on_ode = angle_unsupported(model) is not None
+    solver = Solver(adjoint="forward") if on_ode else None
     columns: dict = {}
     if any(f in SCALAR_FIGURES for f in figures):
         res = simulate(heights_m, ball, model, solver=solver)
