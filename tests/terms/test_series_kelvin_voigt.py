@@ -16,7 +16,9 @@ from rbjax import JIS_RUBBER_BALL as BALL
 from rbjax import BallMode, HuntCrossley, SeriesKelvinVoigt
 from rbjax.fit import all_model_names, model_from_name, parse_model_terms
 from rbjax.fit.layout import (
+    ARREST_SUFFIX,
     BALL_MODE_SUFFIX,
+    LAYER_SUFFIX,
     SERIES_SUFFIX,
     STIFFENING_SUFFIX,
     fitted_parameter_names,
@@ -143,7 +145,14 @@ def test_names_files_and_the_fit_layer():
     name = "hunt-crossley+series-kelvin-voigt"
     assert name in all_model_names() and "zener+stiffening+series-kelvin-voigt" in all_model_names()
     assert parse_model_terms(name) == ((HuntCrossley,), False, False, True, False, False)
-    assert parse_model_terms("hunt-crossley+ball-mode") == ((HuntCrossley,), False, True, False, False, False)
+    assert parse_model_terms("hunt-crossley+ball-mode") == (
+        (HuntCrossley,),
+        False,
+        True,
+        False,
+        False,
+        False,
+    )
     model = model_from_name(
         name, blocked_force="momentum", values={"series_compliance_m_per_N": 3e-6}
     )
@@ -180,12 +189,12 @@ def test_names_files_and_the_fit_layer():
 
 
 def test_every_name_the_parser_accepts_is_listed_and_builds_its_model():
-    # the grammar: a base, then up to three suffixes in any order, repeats included
-    suffixes = (STIFFENING_SUFFIX, BALL_MODE_SUFFIX, SERIES_SUFFIX)
+    # the grammar: a base, then up to five suffixes in any order, repeats included
+    suffixes = (STIFFENING_SUFFIX, LAYER_SUFFIX, ARREST_SUFFIX, BALL_MODE_SUFFIX, SERIES_SUFFIX)
     bases = ("paper", *DAMPING_MODELS, "maxwell", "")
     accepted = set()
     for base in bases:
-        for count in range(4):
+        for count in range(6):
             for tail in itertools.product(suffixes, repeat=count):
                 name = base + "".join(tail)
                 try:
@@ -196,6 +205,13 @@ def test_every_name_the_parser_accepts_is_listed_and_builds_its_model():
     listed = all_model_names()
     assert len(listed) == len(set(listed)) and set(listed) == accepted
     both = "hunt-crossley+stiffening+ball-mode+series-kelvin-voigt"
-    assert both in listed and parse_model_terms(both) == ((HuntCrossley,), True, True, True, False, False)
+    assert both in listed and parse_model_terms(both) == (
+        (HuntCrossley,),
+        True,
+        True,
+        True,
+        False,
+        False,
+    )
     for name in listed:  # each builds the model that Model.name writes back as the name
         assert model_from_name(name).name == name
