@@ -280,7 +280,14 @@ def test_contact_ends_at_the_first_return_of_the_deflection_to_zero():
 
 
 def test_model_names_with_the_ball_mode():
-    assert parse_model_terms("hunt-crossley+ball-mode") == ((HuntCrossley,), False, True, False, False, False)
+    assert parse_model_terms("hunt-crossley+ball-mode") == (
+        (HuntCrossley,),
+        False,
+        True,
+        False,
+        False,
+        False,
+    )
     assert parse_model_terms("zener+stiffening+ball-mode").stiffening
     assert parse_model_name("paper+ball-mode") == ((), False)
     assert "hunt-crossley+ball-mode" in all_model_names()
