@@ -166,11 +166,19 @@ def compare(race, full) -> dict:
         theirs = {f.height_m: f.history_error_pct for f in ref.folds}
         same_folds &= all(mine[h] == theirs[h] for h in mine)
     heights = [f.height_m for f in full.recommended.folds]
-    ratios = [
-        np.array([f.history_error_pct for f in c.folds]) / in_sample(c, heights)
-        for c in full.candidates
-        if c.fit.converged
-    ]
+    ratios, one_start, below = [], [], []
+    for c in full.candidates:
+        if not c.fit.converged:
+            continue
+        r = np.array([f.history_error_pct for f in c.folds]) / in_sample(c, heights)
+        ratios.append(r)
+        if c.fit.n_starts == 1:
+            one_start.append(r)
+        below += [
+            {"candidate": c.label, "height_m": h, "ratio": float(x), "starts": c.fit.n_starts}
+            for h, x in zip(heights, r)
+            if x < 1.0
+        ]
     return {
         "recommended_race": race.recommended.label,
         "recommended_exhaustive": full.recommended.label,
@@ -189,6 +197,11 @@ def compare(race, full) -> dict:
             if c.dropped is not None
         },
         "smallest_held_out_over_in_sample": float(np.nanmin(np.concatenate(ratios))),
+        "smallest_held_out_over_in_sample_one_start": float(np.nanmin(np.concatenate(one_start))),
+        "folds_below_their_bound": below,
+        "folds_of_fits_from_several_starts": int(
+            sum(len(c.folds) for c in full.candidates if c.fit.converged and c.fit.n_starts > 1)
+        ),
         "race_s": race.elapsed_s,
         "exhaustive_s": full.elapsed_s,
     }

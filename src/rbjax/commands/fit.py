@@ -96,7 +96,7 @@ def add_race_options(p: argparse.ArgumentParser) -> None:
         metavar="X",
         help=(
             "how far (relatively, >= 0) a candidate's in-sample error at a height whose fold has "
-            "not run must exceed a contender's held-out error to count as beaten (default 0.25)"
+            "not run must exceed a contender's held-out error to count as beaten (default 0.6)"
         ),
     )
 

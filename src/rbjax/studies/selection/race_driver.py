@@ -100,6 +100,7 @@ class _Driver:
         self.rounds: list[RaceRound] = []
         self.baseline = None
         self.t0 = time.perf_counter()
+        self._said_bound = False
 
     def run(self) -> RaceOutcome:
         run_tasks(self.parallel, self.tasks, then=self.then, label="select")
@@ -119,6 +120,7 @@ class _Driver:
             tuple(self.rounds),
             sum(len(o) for o in state.obs),
             state.n * self.n_pairs,
+            state.bound_failed,
         )
         return RaceOutcome(self.fits, folds, list(state.dropped), self.baseline, summary)
 
@@ -194,6 +196,12 @@ class _Driver:
             return
         what = "the full fits" if self.round_no == 0 else f"round {self.round_no}"
         say(f"select: race: {what} done ({time.perf_counter() - self.t0:.1f} s)")
+        if state.bound_failed is not None and not self._said_bound:
+            self._said_bound = True
+            say(
+                f"select: race: the bound failed ({state.bound_failed}): no bound from here on; "
+                "the candidates dropped on it run their folds"
+            )
         for k in dropped:
             say(f"select: race: dropped {state.labels[k]}: {_reason(state, k)}")
         if not self.requested:
