@@ -35,6 +35,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from rbjax import JIS_RUBBER_BALL, HuntCrossley, KelvinVoigt, Parallel, Zener
 from rbjax.data import DataWarning, examples_dir
@@ -208,6 +209,13 @@ def compare(race, full) -> dict:
 
 
 def equality(quick: bool) -> dict:
+    # BLAS on one thread here, as in the worker processes and as the command line sets it: the
+    # fit's host-side linear algebra then gives the same bits wherever a task runs
+    with threadpool_limits(limits=1):
+        return _equality(quick)
+
+
+def _equality(quick: bool) -> dict:
     out = {}
     for label, make in data_sets(quick).items():
         data = make()
@@ -232,8 +240,9 @@ def equality(quick: bool) -> dict:
 
 def workers() -> dict:
     data = prepare_data(load_data(examples_dir()))
-    one = select_model(data, parallel=Parallel(workers=1), progress=False)
-    two = select_model(data, parallel=Parallel(workers=2), progress=False)
+    with threadpool_limits(limits=1):
+        one = select_model(data, parallel=Parallel(workers=1), progress=False)
+        two = select_model(data, parallel=Parallel(workers=2), progress=False)
     same = _text(one) == _text(two)
     print(f"race, workers 2 against 1: identical selection {same}", flush=True)
     return {"identical": same, "one_s": one.elapsed_s, "two_s": two.elapsed_s}
