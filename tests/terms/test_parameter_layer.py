@@ -22,26 +22,34 @@ from scipy_reference import reference_impact
 from synthetic_records import synthetic_data
 
 
-class ToyViscous(AbstractDamping):
-    """F_d = b·δ̇ (a viscous law under a new name, for the test)."""
+@pytest.fixture(scope="module")
+def ToyViscous():  # noqa: N802 - a class, named as one
+    """The toy law, registered for this module's tests only (taken out of the registry after:
+    the registry is global, and other tests on the same worker list every registered law)."""
 
-    toy_Ns_per_m: float
-    name = "toy-viscous"
-    PARAMETERS: ClassVar = {
-        "toy_Ns_per_m": Parameter(
-            "N s/m", lower=0.0, lower_open=False, transform="log", description="toy b"
-        )
-    }
+    class ToyViscous(AbstractDamping):
+        """F_d = b·δ̇ (a viscous law under a new name, for the test)."""
 
-    def force_N(self, deflection_m, velocity_m_per_s, internal, ball):
-        return self.toy_Ns_per_m * velocity_m_per_s
+        toy_Ns_per_m: float
+        name = "toy-viscous"
+        PARAMETERS: ClassVar = {
+            "toy_Ns_per_m": Parameter(
+                "N s/m", lower=0.0, lower_open=False, transform="log", description="toy b"
+            )
+        }
 
-    @classmethod
-    def start(cls, stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s):
-        return {"toy_Ns_per_m": 10.0}
+        def force_N(self, deflection_m, velocity_m_per_s, internal, ball):
+            return self.toy_Ns_per_m * velocity_m_per_s
+
+        @classmethod
+        def start(cls, stiffness_N_per_m, mass_kg, restitution, contact_time_s, speed_m_per_s):
+            return {"toy_Ns_per_m": 10.0}
+
+    yield ToyViscous
+    rbjax.DAMPING_MODELS.pop(ToyViscous.name, None)
 
 
-def test_a_new_law_is_registered_named_and_validated():
+def test_a_new_law_is_registered_named_and_validated(ToyViscous):
     assert rbjax.DAMPING_MODELS["toy-viscous"] is ToyViscous
     model = Model(damping=ToyViscous(5.0))
     assert "toy_Ns_per_m" in params.parameter_names(1.0, JIS_RUBBER_BALL, model)
@@ -49,7 +57,7 @@ def test_a_new_law_is_registered_named_and_validated():
         ToyViscous(-1.0)
 
 
-def test_a_new_law_is_fitted_through_the_public_api():
+def test_a_new_law_is_fitted_through_the_public_api(ToyViscous):
     true_c = 40.0
     ball = JIS_RUBBER_BALL.replace(youngs_Pa=1.9e6)
     data = synthetic_data(ball, KelvinVoigt(true_c), "momentum", seed=7)
