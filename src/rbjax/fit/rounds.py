@@ -86,10 +86,6 @@ def optimise(
             phi = lay.to_phi(lane.theta)
             r = lane.out["r"]
             jac_phi = lane.out["jac_theta"][:, free_idx] * lay.from_phi(phi)[1][free_idx][None, :]
-            tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
-            # a parameter pressed onto a bound of its fit range: the remaining step is judged
-            # on the others
-            inside = ~pressed_on_bound(lay, phi, free_idx, jac_phi, r)
             values = ", ".join(f"{k}={lane.theta[lay.index(k)]:.5g}" for k in shown)
             start = f" start {i}" if len(lanes) > 1 else ""
             say(
@@ -97,12 +93,17 @@ def optimise(
                 f"{problem.history_rms_N(lane.out['force'], fit_mask):.3g} N, {values}",
                 enabled=progress,
             )
-            if not np.all(np.isfinite(r)):
+            if not (np.all(np.isfinite(r)) and np.all(np.isfinite(jac_phi))):
                 lane.done, lane.message = (
                     True,
-                    "the model's prediction is not finite at these parameters (a failed solve)",
+                    "the model's prediction or its Jacobian is not finite at these parameters "
+                    "(a failed solve)",
                 )
                 continue
+            tau = unc.integrated_autocorrelation(problem.history_rows(r, fit_mask))
+            # a parameter pressed onto a bound of its fit range: the remaining step is judged
+            # on the others
+            inside = ~pressed_on_bound(lay, phi, free_idx, jac_phi, r)
             remaining = unc.step_in_sigma(r, jac_phi[:, inside], tau)
             if remaining < unc.STEP_TOLERANCE_SIGMA:
                 lane.done, lane.converged = True, True

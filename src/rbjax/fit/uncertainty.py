@@ -62,6 +62,8 @@ def integrated_autocorrelation(res) -> float:
 
 
 def conditioning_note(jac_phi, free_names, physical_free, corr) -> str:
+    if not np.all(np.isfinite(jac_phi)):
+        return "(The Jacobian is not finite at the fitted parameters: a failed solve.)"
     j = jac_phi / np.maximum(np.linalg.norm(jac_phi, axis=0), 1e-300)
     sv = np.linalg.svd(j, compute_uv=False)
     cond = float(sv[0] / max(sv[-1], 1e-300))
@@ -98,8 +100,12 @@ def identifiability(jac_hist, i_e: int, i_nu: int, columns) -> tuple[str, bool, 
 def covariance(
     jac_phi, r, tau: float, prior_index=None, prior_precision: float = 0.0
 ) -> np.ndarray:
-    """Scaled-inverse Gauss–Newton covariance of φ, τσ̂²(JᵀJ)⁻¹ (plus a prior's precision)."""
+    """Scaled-inverse Gauss–Newton covariance of φ, τσ̂²(JᵀJ)⁻¹ (plus a prior's precision);
+    all NaN where the Jacobian or the residuals are not finite (a failed solve: no uncertainty
+    to report, and the fit says it did not converge)."""
     p = jac_phi.shape[1]
+    if not (np.all(np.isfinite(jac_phi)) and np.all(np.isfinite(r))):
+        return np.full((p, p), np.nan)
     sigma2 = float(r @ r) / max(r.size - p, 1)
     info = jac_phi.T @ jac_phi / (tau * sigma2)
     if prior_index is not None:
