@@ -40,7 +40,7 @@ CODE_LANGUAGES = {"bash", "sh", "shell", "console", "python", "py", "toml", "jso
 _SPACE = "[ \u00a0\u2009\u202f]"
 _NUMBER = r"[+−-]?\d+(?:[\u00a0\u2009\u202f ,]\d{3})*(?:\.\d+)?(?:e[+−-]?\d+)?"
 _JOIN = r"\s*(?:–|—|-|±|/|to)\s*"
-_UNIT = r"(?:impacts/s|dB|ms|%|×(?!\s?[\d(])|x(?=\W|$)|s|N(?!\s?s/m)|/s)"
+_UNIT = r"(?:impacts/s|dB|ms|%|(?<=\d)×|×(?!\s?[\d(])|x(?=\W|$)|s|N(?!\s?s/m)|/s)"
 #: A number (or a range, ± or /-list of numbers) with a unit, or a factor written ×1.44.
 FIGURE = re.compile(
     rf"(?<![\w.]){_NUMBER}(?:{_JOIN}{_NUMBER})*{_SPACE}?{_UNIT}(?![\w/^·])"
