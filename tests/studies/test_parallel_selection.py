@@ -1,5 +1,6 @@
-"""A model selection in worker processes equals the one in this process, bit for bit; the
-executor under it reruns the tasks of a worker that died and names a task that failed.
+"""A model selection in worker processes equals the one in this process, bit for bit, and ran
+in more than one process (its record of the process of each fit); the executor under it reruns
+the tasks of a worker that died and names a task that failed.
 
 The reference is the same selection run one fit after another in this process
 (``Parallel(workers=1)``, the code path every other test of the selection uses): the worker
@@ -18,6 +19,7 @@ import pytest
 from rbjax import Parallel
 from rbjax.data import examples_dir
 from rbjax.fit import load_data, prepare_data
+from rbjax.solve.parallel import usable_cores
 from rbjax.studies import select_model
 from rbjax.studies.parallel.executors import Task, TaskError, run_tasks
 
@@ -54,6 +56,23 @@ def test_worker_processes_give_the_in_process_selection_bit_for_bit(in_process, 
         assert b.fit.iterations == a.fit.iterations
     base_a = [r.history_error_pct for r in in_process.baseline]
     assert [r.history_error_pct for r in in_workers.baseline] == base_a
+    # ... and the work was spread (Selection.ran_in: each task's process): every full fit, every
+    # fold kept and the unfitted model's predictions ran once (the race may run a fold ahead
+    # of its round that it then does not need), with workers=1 in this process alone; with
+    # workers=2 in this process (its host thread) and a worker process, both running fits (the
+    # two full fits start first, one each; one process where only one core is usable)
+    baseline = "the unfitted paper model"
+    kept = {baseline} | {f"{c.label} (all heights)" for c in in_process.candidates}
+    kept |= {f"{c.label} without {f.height_m:g} m" for c in in_process.candidates for f in c.folds}
+    for selection in (in_process, in_workers):
+        names = [name for name, _ in selection.ran_in]
+        assert len(set(names)) == len(names) and kept <= set(names), names
+    assert {pid for _, pid in in_process.ran_in} == {os.getpid()}
+    fits_by: dict[int, list[str]] = {}
+    for name, pid in in_workers.ran_in:
+        if name != baseline:
+            fits_by.setdefault(pid, []).append(name)
+    assert os.getpid() in fits_by and len(fits_by) == min(2, usable_cores()), fits_by
 
 
 @pytest.fixture(scope="module")

@@ -42,6 +42,7 @@ import concurrent.futures.process  # noqa: F401  (cf.process.BrokenProcessPool, 
 import contextlib
 import dataclasses
 import heapq
+import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -173,12 +174,19 @@ def prestart(parallel: Parallel) -> None:
             pool.submit(warm)
 
 
+def _in_process_of(fn, /, *args, **kwargs) -> tuple[int, Any]:
+    """``(os.getpid(), fn(*args, **kwargs))``: a task's result with the id of the process that
+    ran it (module level: picklable; ``kwargs``: the ``batcher=`` of batched fits)."""
+    return os.getpid(), fn(*args, **kwargs)
+
+
 def run_tasks(
     parallel: Parallel | None,
     tasks: Sequence[Task],
     *,
     then: Callable[[int, Any], Sequence[Task]] | None = None,
     label: str = "tasks",
+    ran_in: list | None = None,
 ) -> list:
     """Run ``tasks`` where ``parallel`` says; the results in the tasks' order.
 
@@ -195,6 +203,10 @@ def run_tasks(
         then: ``then(i, result)``, called in this process when task ``i`` is done; it returns
             the further tasks to run (an empty sequence for none).
         label: what the tasks are, in errors and progress.
+        ran_in: a list to which ``(task name, process id)`` is appended as each task finishes:
+            the ``os.getpid()`` of the process that ran it (this one's for a task run in this
+            process or its host thread, a local worker's, a Dask worker's on its own host).
+            A record of where the work went, not a result: the results are the same.
 
     Returns:
         The results, a list: those of ``tasks`` in their order, then those of the tasks
@@ -213,7 +225,7 @@ def run_tasks(
     while True:
         try:
             with open_executor(parallel) as executor:
-                _drive(executor, parallel, all_tasks, results, then, label)
+                _drive(executor, parallel, all_tasks, results, then, label, ran_in)
             break
         except cf.process.BrokenProcessPool:
             attempts += 1
@@ -231,7 +243,7 @@ def run_tasks(
     return [results[i] for i in range(len(all_tasks))]
 
 
-def _drive(executor, parallel, all_tasks, results, then, label) -> None:
+def _drive(executor, parallel, all_tasks, results, then, label, ran_in) -> None:
     """Submit ready tasks costliest first (as many in flight as workers), collect results,
     add the tasks ``then`` makes; the tasks already in ``results`` are not run again."""
     width = 1 if parallel.in_process else max(parallel.local_workers, 1)
@@ -243,18 +255,21 @@ def _drive(executor, parallel, all_tasks, results, then, label) -> None:
             heapq.heappush(ready, (-task.cost, i))
     running: dict[cf.Future, int] = {}
     try:
-        _loop(executor, all_tasks, results, then, label, width, ready, running)
+        _loop(executor, all_tasks, results, then, label, width, ready, running, ran_in)
     finally:
         for future in running:  # after a failure: nothing more of this run starts
             future.cancel()
 
 
-def _loop(executor, all_tasks, results, then, label, width, ready, running) -> None:
+def _loop(executor, all_tasks, results, then, label, width, ready, running, ran_in) -> None:
     while ready or running:
         while ready and len(running) < width:
             _, i = heapq.heappop(ready)
             task = all_tasks[i]
-            running[executor.submit(task.fn, *task.args)] = i
+            if ran_in is None:
+                running[executor.submit(task.fn, *task.args)] = i
+            else:
+                running[executor.submit(_in_process_of, task.fn, *task.args)] = i
         done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
         for future in sorted(done, key=lambda f: running[f]):
             i = running.pop(future)
@@ -266,6 +281,9 @@ def _loop(executor, all_tasks, results, then, label, width, ready, running) -> N
                 raise TaskError(
                     f"{label}: {all_tasks[i].name} failed: {type(err).__name__}: {err}"
                 ) from err
+            if ran_in is not None:
+                pid, result = result
+                ran_in.append((all_tasks[i].name, pid))
             results[i] = result
             for new in then(i, result) if then is not None else ():
                 all_tasks.append(new)

@@ -69,11 +69,13 @@ def run_race(
     fold_kwargs: list[dict],
     race: Race,
     progress: bool,
+    ran_in: list | None = None,
 ) -> RaceOutcome:
     """Run ``full_tasks`` (one full fit per candidate of ``pairs``, then the baseline task) and
     the race's folds where ``parallel`` says (see the module docstring); ``fold_kwargs``: each
-    candidate's fit keywords (its shared structure among them)."""
-    return _Driver(parallel, data, pairs, full_tasks, fold_kwargs, race, progress).run()
+    candidate's fit keywords (its shared structure among them); ``ran_in``: where each task ran
+    (:func:`~rbjax.studies.parallel.executors.run_tasks`)."""
+    return _Driver(parallel, data, pairs, full_tasks, fold_kwargs, race, progress).run(ran_in)
 
 
 class _Driver:
@@ -102,8 +104,8 @@ class _Driver:
         self.t0 = time.perf_counter()
         self._said_bound = False
 
-    def run(self) -> RaceOutcome:
-        run_tasks(self.parallel, self.tasks, then=self.then, label="select")
+    def run(self, ran_in: list | None = None) -> RaceOutcome:
+        run_tasks(self.parallel, self.tasks, then=self.then, label="select", ran_in=ran_in)
         state = self.state
         assert state is not None  # every full fit ran
         if state.live():  # never silently: a candidate neither complete nor dropped

@@ -108,6 +108,12 @@ class Selection:
         race: the race's rounds and what it dropped
             (:class:`~rbjax.studies.selection.race.RaceSummary`); ``None`` for an exhaustive
             selection (every candidate ran every fold).
+        ran_in: where each task ran, ``(task name, process id)`` in the order the tasks
+            finished: the full fits (``"zener/paper (all heights)"``), the folds
+            (``"zener/paper without 0.4 m"``) and the unfitted model's predictions, each with
+            the ``os.getpid()`` of the process that ran it (this one's, a local worker's, a
+            Dask worker's on its host). A record of where the work went, not a result: it is
+            in neither the table nor ``to_dict``, and two runs of one selection differ in it.
     """
 
     candidates: tuple
@@ -118,6 +124,7 @@ class Selection:
     baseline: tuple
     elapsed_s: float
     race: RaceSummary | None = None
+    ran_in: tuple[tuple[str, int], ...] = ()
 
     def table(self) -> str:
 

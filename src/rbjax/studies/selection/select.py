@@ -95,7 +95,8 @@ def select_model(
 
     Returns:
         The :class:`Selection` (its ``race``: the rounds and the candidates dropped, each with
-        the folds it ran, its partial held-out error and why it left).
+        the folds it ran, its partial held-out error and why it left; its ``ran_in``: the
+        process each fit ran in).
 
     Raises:
         ValueError: bad candidates or data; ``parallel`` not an ``rbjax.Parallel``;
@@ -142,11 +143,14 @@ def select_model(
     )
     say(f"select: {len(pairs)} candidates, fitted in {parallel.describe()}", enabled=progress)
     summary = None
+    ran_in: list[tuple[str, int]] = []
     if race is None:
-        fits, folds, baseline = _every_fold(parallel, data, pairs, tasks, kwargs_of, progress)
+        fits, folds, baseline = _every_fold(
+            parallel, data, pairs, tasks, kwargs_of, progress, ran_in
+        )
         out = [Candidate(name, bf, fits[k], folds[k]) for k, (name, bf) in enumerate(pairs)]
     else:
-        outcome = run_race(parallel, data, pairs, tasks, kwargs_of, race, progress)
+        outcome = run_race(parallel, data, pairs, tasks, kwargs_of, race, progress, ran_in)
         out = [
             Candidate(name, bf, outcome.fits[k], outcome.folds[k], outcome.dropped[k])
             for k, (name, bf) in enumerate(pairs)
@@ -162,10 +166,11 @@ def select_model(
         baseline=baseline,
         elapsed_s=time.perf_counter() - t0,
         race=summary,
+        ran_in=tuple(ran_in),
     )
 
 
-def _every_fold(parallel, data, pairs, tasks, kwargs_of, progress):
+def _every_fold(parallel, data, pairs, tasks, kwargs_of, progress, ran_in):
     """The exhaustive selection's fits: every candidate's full fit, and each of its folds as a
     task as soon as that fit is done, the costliest first. Returns (full fits, folds per
     candidate in the order of the heights, the baseline task's result)."""
@@ -188,7 +193,7 @@ def _every_fold(parallel, data, pairs, tasks, kwargs_of, progress):
         folds_of.update({start + j: (i, h) for j, h in enumerate(data.heights_m)})
         return new
 
-    results = run_tasks(parallel, tasks, then=then, label="select")
+    results = run_tasks(parallel, tasks, then=then, label="select", ran_in=ran_in)
     folds = []
     for k in range(len(pairs)):
         mine = sorted((j, h) for j, (kk, h) in folds_of.items() if kk == k)
