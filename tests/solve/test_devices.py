@@ -3,7 +3,8 @@ rows (``rbjax.solve.parallel.cut_rows``: device chunks, tasks, job-array parts),
 (how many devices, chunks of what size), padding and trimming, and ``simulate`` / ``evaluate``
 on two CPU devices (a subprocess: the device count is set before JAX starts) against this
 process's one device, bit for bit, flagged impacts and the ODE fallback included, with no
-collective in the per-device programs."""
+collective in the per-device programs, and each case's chunks run on both devices (the device of
+each chunk's output, noted in the subprocess)."""
 
 from __future__ import annotations
 
@@ -175,9 +176,29 @@ SCRIPT = textwrap.dedent(
     import rbjax
 
     assert jax.local_device_count() == int(sys.argv[3]), jax.devices()
+    # which device ran each chunk: device_map's program for a chunk, wrapped to note the
+    # device its output is on (a jitted call runs where its committed inputs are)
+    import rbjax.solve.devices as engine
+    compile_once, ran = engine.cached_jit, []
+
+    def noting_the_device(fn):
+        program = compile_once(fn)
+
+        def call(rows, shared):
+            result = program(rows, shared)
+            (device,) = jax.tree_util.tree_leaves(result)[0].devices()
+            ran.append(device.id)
+            return result
+
+        return call
+
+    engine.cached_jit = noting_the_device
     out = {}
     for name in t._cases():
+        ran.clear()
         out |= t._run(name)
+        out[f"ran_on.{name}"] = np.array(ran)
+    engine.cached_jit = compile_once
     # a per-device program holds no collective: nothing ties one device's loops to another's
     batch = Rows.of(*as_arrays((np.linspace(0.1, 1.6, 8), rbjax.JIS_RUBBER_BALL, t.ZENER)))
     rows = jax.device_put(batch.rows, jax.devices()[-1])
@@ -217,6 +238,11 @@ def test_two_cpu_devices_equal_one_device_bit_for_bit(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     two = dict(np.load(tmp_path / "two.npz"))
     assert int(two.pop("collectives")) == 0 and int(two.pop("while_loops")) > 0
+    # the split reached every device: each case's chunks (the device of each) ran on both
+    ran_on = {k: two.pop(k) for k in sorted(two) if k.startswith("ran_on.")}
+    assert len(ran_on) == len(_cases())
+    for name, ids in ran_on.items():
+        assert sorted(set(ids.tolist())) == list(range(count)), (name, ids)
     one = {}
     for name in _cases():
         one |= _run(name)
