@@ -193,6 +193,20 @@ def test_a_candidate_a_contender_does_not_beat_somewhere_runs_every_fold():
     assert all(len(o) == 3 for o in state.obs)
 
 
+def test_a_complete_candidate_of_larger_mean_error_no_longer_shields_the_others():
+    # c1 beats the best (c0) at the first height, so c0 never dominates it, but once complete
+    # its mean (2.17 %) exceeds c0's (1 %): it is not the best, and c2, which c0 dominates on its
+    # bound (1.7 % > 1.6 × 1 %), is dropped without a fold although c1 never dominates it
+    errors = [[1.0, 1.0, 1.0], [0.5, 3.0, 3.0], [2.0, 2.0, 2.0]]
+    floors = [[0.9, 0.9, 0.9], [0.4, 2.5, 2.5], [1.7, 1.7, 1.7]]
+    state, rounds = run(errors, floors, [2, 1, 1])
+    assert rounds == [{0: [0, 1, 2]}, {1: [0]}, {1: [1, 2]}]
+    assert state.dropped[2] is not None and state.dropped[2].heights_run == ()
+    assert "worse than c0 at every height" in state.dropped[2].reason
+    full, raced, _ = outcomes(errors, floors, [2, 1, 1])
+    assert raced == full == ("c0", ["c0"])
+
+
 # fold errors on a grid of 0.25 % (ties happen), bounds a fraction of each (the assumption)
 ERRORS = st.integers(1, 40).map(lambda x: 0.25 * x)
 

@@ -18,7 +18,9 @@ remaining folds are never started. The criterion (:data:`RACE_CRITERION`):
   *y* is positive, so its mean exceeds its standard error (for positive excesses d = δ + y,
   y ≥ 0: SE(d) = SE(y) ≤ mean(y) < mean(d)): *c* is neither the best nor within the noise of
   *y*.
-* **Dropped.** The contenders are the candidates no complete candidate dominates; the best
+* **Dropped.** The contenders are the candidates that can still be the best: those no
+  complete candidate dominates, and of the complete ones only those of least mean held-out
+  error (a complete candidate with a larger mean than another one is not the best); the best
   candidate of the exhaustive run is always among them. A candidate dominated by every
   contender is therefore neither the best nor within the noise of the best, and leaving it
   out changes neither the recommendation nor the set within the noise: it is dropped. A
@@ -63,7 +65,8 @@ __all__ = [
 
 RACE_CRITERION = (
     "a candidate is dropped when every contender (a candidate no complete candidate beats at "
-    "every height) beats it at every height: its held-out error, or where its fold has not run "
+    "every height and, once complete, of least mean held-out error) beats it at every height: "
+    "its held-out error, or where its fold has not run "
     "its full fit's in-sample error (a lower bound), exceeds the contender's there, the bound "
     "by (1 + margin); it is then neither the best nor within the noise of the best"
 )
@@ -245,12 +248,24 @@ class RaceState:
         return all(self.beats(y, c, j) for j in range(self.n))
 
     def contenders(self) -> list[int]:
-        """Candidates (not dropped, not failed) that no complete candidate dominates."""
+        """The candidates (not dropped, not failed) that can still be the best: none that a
+        complete candidate dominates, and of the complete ones only those of least mean held-out
+        error (a complete candidate with a larger mean than another is not the best)."""
         standing = [
             k for k in range(len(self.labels)) if self.dropped[k] is None and not self.failed(k)
         ]
         complete = [k for k in standing if self.complete(k)]
-        return [c for c in standing if not any(self.dominates(y, c) for y in complete if y != c)]
+        least = min((self.mean(k) for k in complete), default=math.inf)
+        return [
+            c
+            for c in standing
+            if not any(self.dominates(y, c) for y in complete if y != c)
+            and not (self.complete(c) and self.mean(c) > least)
+        ]
+
+    def mean(self, k: int) -> float:
+        """Candidate ``k``'s mean held-out error over the folds it ran."""
+        return mean_or_inf(list(self.obs[k].values()))
 
     def decide(self, round_no: int) -> list[int]:
         """Drop, after round ``round_no``, the candidates with a failed fold and those every
