@@ -162,7 +162,9 @@ def test_the_loader_page_fits_table(faulty, clean_fit):
         assert abs(own - truth_sigma) <= 0.05, (name, own)
     e0 = clean_fit.parameters["youngs_Pa"].value
     delta_e = 100 * (result.parameters["youngs_Pa"].value / e0 - 1)
-    assert abs(delta_e - 0.0003) <= 5e-4, delta_e
+    # the page's ΔE 0.0003 %, to half a unit of its last digit: measured 0.000319 % (6.06 Pa of
+    # 1.9 MPa); a fault that left E alone (0) or moved it the other way fails
+    assert 0.00025 <= delta_e <= 0.00035, delta_e
     delta_c = (
         result.parameters["damping_Ns_per_m"].value - clean_fit.parameters["damping_Ns_per_m"].value
     ) / c_std

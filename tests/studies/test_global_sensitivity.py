@@ -58,15 +58,17 @@ def test_sobol_indices_of_the_ishigami_function_on_the_sobol_sequence():
     first, total, s2, v = ishigami_indices()
     res = sobol_indices(ishigami, PI_RANGES, 2048, n_bootstrap=100, confidence=0.95)
     assert res.design == "sobol" and res.n_evaluations == 2048 * 8 and res.n_valid["y"] == 2048
-    # The tolerances of the Monte Carlo test this replaced (20 000 random base points, 0.02,
-    # intervals at 95 %): the Sobol' sequence's 2048 points do better (measured: variance 1e-4
-    # relative, first and total order within 0.003, second order within 0.0022).
-    np.testing.assert_allclose(res.variance["y"], v, rtol=0.02)
-    np.testing.assert_allclose(res.first_order["y"], first, atol=0.02)
-    np.testing.assert_allclose(res.total_order["y"], total, atol=0.02)
+    # The Sobol' sequence's 2048 points (seed 0: the same design every run) measured: variance
+    # 1.0e-4 relative, first order within 0.0027, total within 0.00066, second order within
+    # 0.0022 (S13 = 0.244). Held at about 4x what was measured (the Monte Carlo test this
+    # replaced held 0.02, its 20 000 random points' spread; 0.05 for the second order would
+    # pass an S13 a fifth off).
+    np.testing.assert_allclose(res.variance["y"], v, rtol=5e-4)
+    np.testing.assert_allclose(res.first_order["y"], first, atol=0.01)
+    np.testing.assert_allclose(res.total_order["y"], total, atol=0.003)
     assert within(res.first_order_ci["y"], first) and within(res.total_order_ci["y"], total)
     upper = np.triu_indices(3, 1)
-    np.testing.assert_allclose(res.second_order["y"][upper], s2[upper], atol=0.05)
+    np.testing.assert_allclose(res.second_order["y"][upper], s2[upper], atol=0.01)
     lo = res.second_order["y"] - res.second_order_ci["y"]
     hi = res.second_order["y"] + res.second_order_ci["y"]
     assert np.all((lo[upper] <= s2[upper]) & (s2[upper] <= hi[upper]))
