@@ -178,7 +178,30 @@ def test_paper_ball_elastic_fit_matches_the_independent_scipy_figures():
     assert "peak_force_N 1 % of the value" in fit.identifiability  # the default, stated
 
 
+def _reference_figures(youngs_Pa: float, heights) -> dict:
+    """Contact time and peak force of the JIS ball at ``youngs_Pa`` (ν = 0.5, the adiabatic gas,
+    the paper's blocked force) per height, by the independent scipy solve."""
+    import types
+
+    import scipy_reference as ref
+
+    fields = ("radius_m", "wall_m", "mass_kg", "poisson")
+    ball = types.SimpleNamespace(
+        **{k: float(getattr(rbjax.JIS_RUBBER_BALL, k)) for k in fields}, youngs_Pa=youngs_Pa
+    )
+    out = {}
+    for h in heights:
+        r = ref.reference_impact(h, ball)
+        out[h] = {"contact_time_s": r.contact_time_s, "peak_force_N": r.peak_force_N}
+    return out
+
+
 def test_cli_fit_summary_json(tmp_path):
+    """``rbjax fit --summary`` end to end (issue 45, item 2): its JSON is the library's fit of
+    the same table, and its figures are those of the fitted E recomputed by the independent
+    scipy solve: each fitted figure, its normalised error, χ², the E at χ²'s minimum, E's
+    standard deviation (Gauss-Newton, scaled by χ²/(N − p) as the notes say) and each fitted
+    figure's."""
     import json
 
     from cli_runner import run_cli
@@ -200,5 +223,44 @@ def test_cli_fit_summary_json(tmp_path):
     doc = json.loads(out)
     assert doc["kind"] == "summary fit" and doc["parameters"]["poisson"]["fixed"]
     assert (tmp_path / "summary_fit.png").exists() and (tmp_path / "fit.json").exists()
+    library = json.loads(json.dumps(fit_summary(EXAMPLE, "paper").to_dict()))
+    assert {k: v for k, v in doc.items() if k != "time_s"} == {
+        k: v for k, v in library.items() if k != "time_s"
+    }
+    # the figures against the scipy solve at the fitted E and at E ± 0.01 %, held at a few
+    # times what was measured: the fitted figures 8.6e-14 relative from it, their normalised
+    # errors 1.9e-11 (a difference of near numbers), χ² 6.4e-14, E's and the figures' standard
+    # deviations 3.8e-9 and 4.8e-9 (the central differences' step error; 3.7e-7 at ± 0.1 %)
+    e = doc["parameters"]["youngs_Pa"]["value"]
+    rows = doc["figures"]
+    assert [(r["height_m"], r["figure"]) for r in rows] == [
+        (0.1, "contact_time_s"),
+        (0.1, "peak_force_N"),
+        (1.0, "contact_time_s"),
+        (1.6, "contact_time_s"),
+        (1.6, "peak_force_N"),
+    ] and all(r["in_fit"] for r in rows)
+    heights = sorted({r["height_m"] for r in rows})
+    step = 1e-4 * e
+    at, up, down = (_reference_figures(x, heights) for x in (e, e + step, e - step))
+
+    def residuals(figures):
+        return np.array(
+            [(figures[r["height_m"]][r["figure"]] - r["measured"]) / r["sd"] for r in rows]
+        )
+
+    fitted = np.array([at[r["height_m"]][r["figure"]] for r in rows])
+    np.testing.assert_allclose([r["fitted"] for r in rows], fitted, rtol=1e-12)
+    np.testing.assert_allclose([r["normalised_error"] for r in rows], residuals(at), rtol=1e-10)
+    chi2 = float(np.sum(residuals(at) ** 2))
+    assert doc["chi2"] == pytest.approx(chi2, rel=5e-13)
+    assert chi2 < np.sum(residuals(up) ** 2) and chi2 < np.sum(residuals(down) ** 2)
+    slope = (residuals(up) - residuals(down)) / (2 * step)  # ∂r/∂E
+    scale = chi2 / (doc["n_figures"] - doc["n_free"])
+    std = float(np.sqrt(scale / np.sum(slope**2)))
+    assert doc["parameters"]["youngs_Pa"]["std"] == pytest.approx(std, rel=2e-8)
+    np.testing.assert_allclose(
+        [r["fitted_sd"] for r in rows], np.abs(slope * [r["sd"] for r in rows]) * std, rtol=2e-8
+    )
     code, _, err = run_cli(["fit", "--summary", str(tmp_path / "none.csv")])
     assert code == 2 and "none.csv" in err
