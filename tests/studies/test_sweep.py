@@ -348,19 +348,19 @@ def _same_samples(result, reference, rtol=1e-12):
         np.testing.assert_allclose(result.samples[k], v, rtol=rtol, atol=0, err_msg=k)
 
 
-def _same_summary(a, b, path="summary"):
-    """Two JSON-like summaries equal, their numbers to rtol 1e-12 (a sharded program's
-    rounding)."""
+def _same_summary(a, b, path="summary", rtol=1e-12):
+    """Two JSON-like summaries equal, their numbers to ``rtol`` (default 1e-12: a sharded
+    program's rounding; 0: bit for bit, NaN where NaN)."""
     if isinstance(a, dict):
         assert isinstance(b, dict) and set(a) == set(b), path
         for k in a:
-            _same_summary(a[k], b[k], f"{path}.{k}")
+            _same_summary(a[k], b[k], f"{path}.{k}", rtol)
     elif isinstance(a, (list, tuple)):
         assert isinstance(b, (list, tuple)) and len(a) == len(b), path
         for i, (x, y) in enumerate(zip(a, b)):
-            _same_summary(x, y, f"{path}[{i}]")
+            _same_summary(x, y, f"{path}[{i}]", rtol)
     elif isinstance(a, float) and not isinstance(b, str):
-        np.testing.assert_allclose(b, a, rtol=1e-12, atol=0, err_msg=path)
+        np.testing.assert_allclose(b, a, rtol=rtol, atol=0, err_msg=path)
     else:
         assert a == b, path
 
@@ -428,10 +428,20 @@ def test_a_sweep_in_parts_merges_to_the_single_run(tmp_path, capsys, in_process)
     merged = json.loads(capsys.readouterr().out)
     assert merged == json.loads(out.read_text())
     assert merged["n_evaluations"] == 256 and merged["config"] == CHUNKED
+    # the parts, merged, are the single run bit for bit (every row computed by the same
+    # program in a chunk of the same length), its summary and every sample
     summary = {k: v for k, v in merged.items() if k != "config"}
-    _same_summary(summary, json.loads(rbjax.terms.serialize.to_json(in_process.to_dict())))
-    samples = np.load(tmp_path / "merged.samples.npz")
-    _same_samples(types.SimpleNamespace(samples=dict(samples)), in_process)
+    single = json.loads(rbjax.terms.serialize.to_json(in_process.to_dict()))
+    _same_summary(summary, single, rtol=0)
+    samples = dict(np.load(tmp_path / "merged.samples.npz"))
+    _same_samples(types.SimpleNamespace(samples=samples), in_process, rtol=0)
+    # and each row's values are the impact of its inputs by rbjax.simulate (the quadrature:
+    # measured bit for bit)
+    ball = rbjax.JIS_RUBBER_BALL.replace(youngs_Pa=samples["youngs_Pa"])
+    direct = rbjax.simulate(samples["height_m"], ball)
+    assert direct.path == "quadrature" and np.all(np.asarray(direct.status) == 0)
+    for name in ("contact_time_s", "restitution"):
+        np.testing.assert_array_equal(samples[name], np.asarray(getattr(direct, name)), name)
 
     def refused(*paths, config=config):
         code = main(["sweep", str(config), "--merge", *map(str, paths), "--no-progress"])
