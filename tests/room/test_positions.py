@@ -30,7 +30,17 @@ def average():
     return position_average(SLAB, ROOM, POINTS)
 
 
-def test_the_average_is_the_energy_mean_of_the_positions_and_its_rating_formula_d1(average):
+@pytest.fixture(scope="module")
+def independent():
+    """Each position's band levels by the independent numpy/scipy chain (its own force, modes
+    and room), dB."""
+    force = reference.Force(JIS_RUBBER_BALL, 1.0, 0.15)
+    return np.array([reference.levels(force, 0.15, drive=p) for p in POINTS])
+
+
+def test_the_average_is_the_energy_mean_of_the_positions_and_its_rating_formula_d1(
+    average, independent
+):
     singles = [
         impact_sound(Slab.of_material("concrete", 0.15, drive_x_m=x, drive_y_m=y), ROOM)
         for x, y in POINTS
@@ -53,10 +63,8 @@ def test_the_average_is_the_energy_mean_of_the_positions_and_its_rating_formula_
         r.LiA_Fmax_unrounded_dB for r in average.results[1:]
     )
     assert average.positions_m == tuple(POINTS)
-    # each position's levels against the independent chain (its own force, modes and room;
-    # measured ≤ 1.5e-4 dB apart), and their energy mean's rating
-    force = reference.Force(JIS_RUBBER_BALL, 1.0, 0.15)
-    independent = np.array([reference.levels(force, 0.15, drive=p) for p in POINTS])
+    # each position's levels against the independent chain (measured ≤ 1.5e-4 dB apart), and
+    # their energy mean's rating
     np.testing.assert_allclose(levels, independent, atol=1e-3)
     mean = 10 * np.log10(np.mean(10 ** (independent / 10), axis=0))
     assert average.LiA_Fmax_unrounded_dB == pytest.approx(reference.rating(mean), abs=1e-3)
@@ -88,7 +96,7 @@ def test_bad_positions(positions, match):
         position_average(SLAB, ROOM, positions)
 
 
-def test_cli_drive_points(average, tmp_path):
+def test_cli_drive_points(average, independent, tmp_path):
     room = ["--room-volume-m3", "50", "--reverberation-s", "0.5"]
     points = [arg for x, y in POINTS for arg in ("--drive-point", f"{x},{y}")]
     plot = tmp_path / "positions.png"
@@ -97,6 +105,17 @@ def test_cli_drive_points(average, tmp_path):
     data = json.loads(out)
     assert data["LiA_Fmax_unrounded_dB"] == pytest.approx(average.LiA_Fmax_unrounded_dB, abs=1e-9)
     assert data["positions_m"] == [list(p) for p in POINTS] and len(data["positions"]) == 5
+    # its figures against the independent chain: each position's bands and their energy mean
+    # (measured ≤ 1.5e-4 dB apart), the mean's rating and its rounding; V = 50 m³ and
+    # T = 0.5 s are the reference room, so normalised = measured
+    assert data["bands_Hz"] == ["31.5", "63", "125", "250", "500", "1000"]
+    got = np.array([p["Li_Fmax_dB"] for p in data["positions"]])
+    np.testing.assert_allclose(got, independent, atol=1e-3)
+    mean = 10 * np.log10(np.mean(10 ** (independent / 10), axis=0))
+    np.testing.assert_allclose(data["Li_Fmax_dB"], mean, atol=1e-3)
+    np.testing.assert_allclose(data["Li_Fmax_normalised_dB"], data["Li_Fmax_dB"], atol=1e-12)
+    assert data["LiA_Fmax_unrounded_dB"] == pytest.approx(reference.rating(mean), abs=1e-3)
+    assert data["LiA_Fmax_dB"] == data["LiA_Fmax_normalised_dB"] == 57  # 57.4 dB, rounded
     code, out, _ = run_cli(
         ["room", "--floor", "concrete-150mm", *room, *points, "--plot", str(plot)]
     )
