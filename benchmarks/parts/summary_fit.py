@@ -10,9 +10,8 @@ parameter within its reported 2σ (the fraction of draws is printed: ~95 % expec
 Writes ``results/summary_fit.json``. ``--quick``: the paper's model, two draws (Kelvin–Voigt's first
 fit compiles for a minute).
 
-``rbjax.fit.summary.fit_summary`` and ``rbjax.fit.summary_table.summary_table`` are not in
-``rbjax.fit.__all__`` (the command line's ``rbjax fit --summary`` reaches them): the benchmark
-times the fit itself, without a process and a file around it.
+The benchmark calls ``rbjax.fit.fit_summary`` (what ``rbjax fit --summary`` runs) to time the fit
+itself, without a process and a file around it.
 """
 
 from __future__ import annotations
@@ -23,9 +22,7 @@ import time
 import numpy as np
 
 import rbjax
-from rbjax.fit import model_from_name
-from rbjax.fit.summary import fit_summary
-from rbjax.fit.summary_table import summary_table
+from rbjax.fit import fit_summary, model_from_name, summary_table
 
 from _common import finish_machine_info, machine_info, write_json
 

@@ -31,9 +31,6 @@ CHEAPEST = {
 # benchmarks/… that import a name outside the public surface (a package's ``__all__``), each
 # because the measurement needs what no public name exposes. Only shrinks.
 PENDING = {
-    # the design's own margins beside the tolerance check's: `design` and `DesignSearch` are not
-    # in rbjax.studies.__all__ (`rbjax design` is their public face)
-    "parts/design_check.py": {"rbjax.studies.design"},
     # one LM evaluation of the fit's compiled program against the forward histories alone: the
     # program (Problem, fit_solver) and the sampled forward (record_forces) are the fit's insides
     "parts/fit_time.py": {"rbjax.fit.problem", "rbjax.fit.record_forces"},
@@ -41,9 +38,6 @@ PENDING = {
     # count is the measurement (BatchedFitExecutor, run_lanes, STEPS_PER_ROUND are the fit's
     # insides)
     "parts/selection_lanes.py": {"rbjax.fit.batching", "rbjax.fit.problem", "rbjax.fit.program"},
-    # times the summary fit itself: fit_summary and summary_table are not in rbjax.fit.__all__
-    # (`rbjax fit --summary FILE` is their public face, with a process and a file around them)
-    "parts/summary_fit.py": {"rbjax.fit.summary", "rbjax.fit.summary_table"},
 }
 
 

@@ -28,6 +28,8 @@ from .prediction import model_histories, predict
 from .program import OPTIMIZERS
 from .records import FitData, load_data, prepare_data, record_features
 from .result import FitResult, ParameterEstimate, Prediction
+from .summary import fit_summary
+from .summary_table import SummaryTable, read_summary, summary_table
 
 __all__ = [
     "BALL_MODE_SUFFIX",
@@ -37,10 +39,12 @@ __all__ = [
     "FitData",
     "FitOptions",
     "FitResult",
+    "SummaryTable",
     "ParameterEstimate",
     "Prediction",
     "all_model_names",
     "fit",
+    "fit_summary",
     "fitted_parameter_names",
     "load_data",
     "model_from_name",
@@ -49,5 +53,7 @@ __all__ = [
     "parse_model_terms",
     "predict",
     "prepare_data",
+    "read_summary",
     "record_features",
+    "summary_table",
 ]

@@ -165,6 +165,15 @@ def fit_summary(
         hold_poisson: ν where it is not fixed (it is never separately identifiable).
         held_out: (height_m, figure) pairs of the table left out of the fit and predicted.
         progress: one line on stderr when done.
+
+    Returns:
+        A :class:`~rbjax.fit.summary_result.SummaryFitResult`: the fitted ball and model, each
+        parameter with its standard deviation, each figure fitted and predicted, χ².
+
+    Raises:
+        ValueError: an option outside its range, an unknown parameter in ``fix`` or
+            ``start`` (the message names it and lists the valid ones).
+        SummaryTableError: a table that cannot be read, or fewer figures than free parameters.
     """
     t0 = time.perf_counter()
     table = as_table(table)

@@ -68,10 +68,17 @@ class SummaryTableError(DataError):
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class SummaryTable:
-    """Figures per drop height: ``values[figure]`` and ``sd[figure]`` are arrays over
-    ``heights_m`` (NaN where not measured). ``source`` names the file (or ``"<table>"``);
-    ``rows`` the row label of each height in it; ``notes`` what was assumed (default
-    uncertainties)."""
+    """Figures per drop height (build one with :func:`summary_table` or
+    :func:`read_summary`, which check it).
+
+    Args:
+        heights_m: the drop heights, m.
+        values: figure → array over ``heights_m`` (NaN where not measured).
+        sd: figure → the figure's standard deviation over ``heights_m``.
+        source: the file the table came from (or ``"<table>"``).
+        rows: the row label of each height in it.
+        notes: what was assumed (default uncertainties).
+    """
 
     heights_m: np.ndarray
     values: Mapping[str, np.ndarray]
@@ -116,7 +123,22 @@ def _nulls(arr) -> list:
 def summary_table(
     rows: list[Mapping], source: str = "<table>", row_labels: list[str] | None = None
 ) -> SummaryTable:
-    """A :class:`SummaryTable` from rows (mappings of column → number or None), checked."""
+    """A :class:`SummaryTable` from rows, checked.
+
+    Args:
+        rows: one mapping per drop height, column → number or None: ``height_m`` and any of
+            the figures (contact time, peak force, restitution, L_FE per band), each optionally
+            with its standard deviation (the figure + ``_sd``; a default where absent).
+        source: what the rows came from, for the messages.
+        row_labels: each row's label in the messages (default ``row 1``, ``row 2``, …).
+
+    Returns:
+        The :class:`SummaryTable`.
+
+    Raises:
+        SummaryTableError: no rows, an unknown column, a cell that is not a finite number, or
+            a height given twice (the message names the source, row and column).
+    """
     labels = row_labels or [f"row {k + 1}" for k in range(len(rows))]
     where = lambda k, col: f"{source}, {labels[k]}, column {col!r}"  # noqa: E731
     valid = (HEIGHT_COLUMN,) + FIGURES + tuple(f + SD_SUFFIX for f in FIGURES)
@@ -223,7 +245,18 @@ def _number(cell, where: str) -> float | None:
 
 
 def read_summary(path) -> SummaryTable:
-    """Read a summary table from a ``.csv`` or ``.toml`` file (see the module docstring)."""
+    """Read a summary table from a ``.csv`` or ``.toml`` file (see the module docstring).
+
+    Args:
+        path: the file.
+
+    Returns:
+        The :class:`SummaryTable`, checked as :func:`summary_table` checks rows.
+
+    Raises:
+        SummaryTableError: no such file, an unknown format, or a table that cannot be used
+            (the message names the file, row and column).
+    """
     path = Path(path)
     if not path.is_file():
         raise SummaryTableError(f"{path}: no such file (a summary table: .csv or .toml)")

@@ -5,6 +5,7 @@ sweeps (:mod:`~rbjax.studies.sweeps.sweep`), their independent tasks run where a
 :class:`rbjax.Parallel` says (in process, worker processes, a Dask cluster;
 :mod:`rbjax.studies.parallel`)."""
 
+from .design import DesignResult, DesignSearch, design
 from .growth import (
     Growth,
     GrowthError,
@@ -24,6 +25,9 @@ from .sweeps.parts import merge_parts, run_part
 from .sweeps.sweep import load_config, run_sweep, write_outputs
 
 __all__ = [
+    "DesignResult",
+    "DesignSearch",
+    "design",
     "Task",
     "TaskError",
     "run_tasks",

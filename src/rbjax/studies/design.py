@@ -283,10 +283,18 @@ class DesignResult:
 
 @dataclasses.dataclass(frozen=True)
 class DesignSearch:
-    """How :func:`design` searches: ``n_starts`` starts (an integer ≥ 1; the first at the ball's
-    E and the terms' start rules, the others drawn uniformly in φ over :data:`DESIGN_RANGES`,
-    seeded by ``seed``), each ``steps`` Adam steps (an integer ≥ 0) of ``learning_rate`` (> 0,
-    in φ)."""
+    """How :func:`design` searches.
+
+    Args:
+        n_starts: how many starts (an integer ≥ 1): the first at the ball's E and the terms'
+            start rules, the others drawn uniformly in φ over :data:`DESIGN_RANGES`.
+        steps: Adam steps per start (an integer ≥ 0).
+        learning_rate: Adam's step size in φ (> 0).
+        seed: the seed of the starts drawn.
+
+    Raises:
+        ValueError: a field outside its range (the message names it).
+    """
 
     n_starts: int = 8
     steps: int = 150
@@ -330,6 +338,16 @@ def design(
             step size, seed.
         vary_wall: also vary the wall thickness (``WALL_RANGE_M``), the mass following it.
         gas, blocked_force: the model name's options (as :func:`rbjax.fit.fit`).
+        progress: one line on stderr per start and when done.
+
+    Returns:
+        A :class:`DesignResult`: the designed parameters, each item's margin (the tolerance
+        check's and the optimiser's), the verdict, and ``save_params`` for a parameter file
+        that ``rbjax simulate --params`` takes.
+
+    Raises:
+        ValueError: an unknown model name, geometry or option, or a ``search`` of the wrong
+            kind (the message names it).
     """
     # lazy: optax costs 0.2 s at import
     import optax  # type: ignore[import-untyped]
