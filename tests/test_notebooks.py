@@ -2,8 +2,8 @@
 
 A reader on the code host or on the documentation site (mkdocs-jupyter renders them as stored,
 without executing them) sees what is stored: a notebook stored without outputs shows no figure.
-The test command executes them once (``pytest --overwrite``: nbmake writes the outputs back) and
-then builds the site. Here the stored files are read: every code cell has been run, in order,
+The test command executes them without writing to them (nbmake; ``pytest notebooks --overwrite``
+refreshes the stored outputs, CONTRIBUTING.md) and then builds the site. Here the stored files are read: every code cell has been run, in order,
 no cell stores an error, and every notebook stores its figures (each of them draws).
 """
 
