@@ -3,8 +3,9 @@
 A reader on the code host or on the documentation site (mkdocs-jupyter renders them as stored,
 without executing them) sees what is stored: a notebook stored without outputs shows no figure.
 The test command executes them without writing to them (nbmake; ``pytest notebooks --overwrite``
-refreshes the stored outputs, CONTRIBUTING.md) and then builds the site. Here the stored files are read: every code cell has been run, in order,
-no cell stores an error, and every notebook stores its figures (each of them draws).
+refreshes the stored outputs, CONTRIBUTING.md) and then builds the site. Here the stored files
+are read: every code cell has been run, in order, no cell stores an error, and every notebook
+stores its figures (each of them draws).
 """
 
 from __future__ import annotations
