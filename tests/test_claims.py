@@ -11,8 +11,8 @@ markdown cells state, with what holds it:
   stated measurement);
 - ``input = "..."``: a setting or a definition the page states (a drop height, a tolerance a
   bar is set to), not a result;
-- ``unheld = "..."``: a result nothing holds yet, said so; ``test_no_figure_is_unheld`` lists
-  them (strict xfail: it fails once the last one is held, and is then made a plain test).
+- ``unheld = "..."``: a result nothing holds yet, said so; ``test_no_figure_is_unheld`` fails
+  on any (issue 45 held the last of them).
 
 An entry is keyed by its page and its figure as written (spaces normalised; ``figures`` lists
 several of one page held the same way); where one figure
@@ -31,8 +31,6 @@ import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-
-import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 REGISTRY = ROOT / "docs" / "claims.toml"
@@ -254,10 +252,6 @@ def test_every_entry_is_held_by_a_test_a_dated_measurement_or_a_source():
     assert not problems, "\n".join(problems)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 45: notebook figures that no assert in their notebook holds yet",
-)
 def test_no_figure_is_unheld():
     unheld = [f"{e['page']} {e['figure']!r}: {e['unheld']}" for e in registry() if "unheld" in e]
     assert not unheld, f"{len(unheld)} figures held by nothing:\n" + "\n".join(unheld)
