@@ -135,7 +135,7 @@ def _cases():
     phase-angle path with rows it flags and the ODE solves again, the ODE, and evaluate's
     scalars and L_FE histories."""
     rng = np.random.default_rng(3)
-    mixed = np.concatenate([rng.uniform(0.1, 1.6, 8000), rng.uniform(9.0, 12.0, 1300)])
+    mixed = np.concatenate([rng.uniform(0.1, 1.6, 16_000), rng.uniform(9.0, 12.0, 1300)])
     return {  # name: (function, heights, model, method or lfe, the path that splits)
         "quadrature": (
             "simulate",

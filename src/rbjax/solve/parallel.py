@@ -46,7 +46,10 @@ __all__ = [
 #: 32 768; the sampled L_FE history is best at 128–512). An ODE chunk is small, since a vmapped
 #: while loop runs until its slowest row is done, and so that a batch of a few thousand splits
 #: over many devices (one core: 34 000/s at 256 rows a chunk, 39 000/s at 1024, 28 000/s at 64).
-CPU_CHUNK_SIZE = {"quadrature": 8192, "angle": 8192, "sampled": 256, "ode": 512}
+#: The phase-angle path takes 16 384, where it still runs at its best: at 8192 a batch of 10 000
+#: damped impacts (the forward benchmark's) was cut in two padded chunks and ran ~0.8× as fast on
+#: one device as in one call (issue 42; ``benchmarks/forward.py --only paired_forward``).
+CPU_CHUNK_SIZE = {"quadrature": 8192, "angle": 16384, "sampled": 256, "ode": 512}
 #: Rows per chunk on an accelerator (a GPU wants wide launches; one call below this size).
 ACCELERATOR_CHUNK_SIZE = {
     "quadrature": 1 << 20,
