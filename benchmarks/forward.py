@@ -14,7 +14,10 @@ speed"):
 * ``history_speed``: force histories, the ODE's dense interpolant against the sampled path;
 * ``pulse_spectrum``: octave L_FE from the contact samples against the padded FFT;
 * ``term_cost``: the cost per impact of each optional term;
-* ``floors``: impacts/s and accuracy on moving floors.
+* ``floors``: impacts/s and accuracy on moving floors;
+* ``paired_forward``: ``simulate`` (damped and elastic, 10 000 heights) paired against an older
+  revision (default ``fc0325d``; ``parts/paired_forward.py --against REV``), fresh processes
+  taking turns.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ SECTIONS = [
     Section("pulse_spectrum", "L_FE from contact samples vs the padded FFT"),
     Section("term_cost", "cost per impact of each optional term"),
     Section("floors", "speed and accuracy on moving floors"),
+    Section("paired_forward", "simulate paired against fc0325d, fresh processes in turn"),
 ]
 
 
