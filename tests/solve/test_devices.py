@@ -22,6 +22,10 @@ from rbjax.solve.batch import evaluate
 from rbjax.solve.devices import device_map
 from rbjax.solve.parallel import Parallel, cut_rows, default_chunk_size
 
+# one program against the same program elsewhere (chunks, devices), bit for bit: no accuracy claim
+# at the optimisation level, so it compiles as a smoke test (tests/conftest.py)
+pytestmark = pytest.mark.xla_smoke
+
 
 def plan(n: int, n_devices: int, chunk_size: int) -> tuple[int, int]:
     """(devices used, rows per chunk) of ``Parallel.device_plan``, whose chunks are cut by
