@@ -158,7 +158,8 @@ def fit_summary(
         model: a model name (``paper``, ``kelvin-voigt``, ``hunt-crossley``, ``zener``, …,
             ``+stiffening``, ``+ball-mode``; :func:`rbjax.fit.all_model_names`) or an
             ``rbjax.Model`` (its values are the start).
-        blocked_force, gas: the model name's options (as :func:`rbjax.fit.fit`).
+        blocked_force: the model name's blocked force (as :func:`rbjax.fit.fit`).
+        gas: the model name's gas law (as :func:`rbjax.fit.fit`).
         ball: geometry and mass (R, h, M; held) and the starting E.
         fix: name → value of parameters held (E, ν, the terms' parameters, R, h, M).
         start: name → start value of free parameters.

@@ -337,7 +337,8 @@ def design(
         search: a :class:`DesignSearch` (default ``DesignSearch()``): starts, Adam's steps and
             step size, seed.
         vary_wall: also vary the wall thickness (``WALL_RANGE_M``), the mass following it.
-        gas, blocked_force: the model name's options (as :func:`rbjax.fit.fit`).
+        gas: the model name's gas law (as :func:`rbjax.fit.fit`).
+        blocked_force: the model name's blocked force (as :func:`rbjax.fit.fit`).
         progress: one line on stderr per start and when done.
 
     Returns:
