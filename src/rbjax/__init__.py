@@ -14,7 +14,7 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 # float64 before anything touches JAX, here and only here (every rbjax module relies on it;
 # entry points check it with rbjax._x64.require_x64): JAX reads JAX_ENABLE_X64 when it is first

@@ -44,7 +44,7 @@ def test_help_and_version_import_no_library():
     )
     assert out["heavy"] == []
     assert len(out["codes"]) == len(command_modules()) + 2 >= 10
-    # every one answers (a usage text, or "rbjax 0.1.0")
+    # every one answers (a usage text, or "rbjax 0.2.0")
     assert all(code == 0 and size > 10 for code, size in out["codes"].values()), out["codes"]
 
 
