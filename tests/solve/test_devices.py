@@ -84,8 +84,8 @@ def test_plan_cuts_even_aligned_chunks_that_do_not_depend_on_the_devices():
 
 def test_default_chunk_sizes_on_a_cpu():
     assert jax.local_devices()[0].platform == "cpu"
-    assert default_chunk_size("quadrature") == 8192
-    assert default_chunk_size("quadrature", width=4) == 2048  # a Jacobian of three parameters
+    assert default_chunk_size("quadrature") == 16384
+    assert default_chunk_size("quadrature", width=4) == 4096  # a Jacobian of three parameters
     assert default_chunk_size("ode", width=3) == 128  # rounded down to a power of two
     assert default_chunk_size("sampled", width=100) == 32  # and at least 32
     assert Parallel(chunk_size=100).chunk_rows("ode", jax.local_devices()) == 100
@@ -105,7 +105,7 @@ def test_device_map_pads_the_last_chunk_and_trims_the_padding():
 
 
 def test_a_large_batch_in_chunks_agrees_with_one_call():
-    # 20 000 impacts: three chunks of 6784 (the last one padded) against one call of them all
+    # 20 000 impacts: two chunks of 10 112 (the last one padded) against one call of them all
     # (XLA may round a row differently in a loop of another length: ~1e-16, not bit for bit)
     from rbjax.solve.inputs import as_arrays
     from rbjax.solve.path_runner import fast_program
@@ -126,7 +126,7 @@ def test_a_large_batch_in_chunks_agrees_with_one_call():
 
 
 def test_simulate_inside_jit_is_one_staged_program():
-    heights = np.linspace(0.1, 1.6, 20_000)  # three chunks outside jit
+    heights = np.linspace(0.1, 1.6, 20_000)  # two chunks outside jit
     staged = jax.jit(lambda: rbjax.simulate(heights).contact_time_s)()
     np.testing.assert_allclose(staged, rbjax.simulate(heights).contact_time_s, rtol=1e-14)
 
@@ -143,14 +143,14 @@ def _cases():
     return {  # name: (function, heights, model, method or lfe, the path that splits)
         "quadrature": (
             "simulate",
-            np.linspace(0.05, 12.0, 9001),
+            np.linspace(0.05, 12.0, 17_001),
             rbjax.Model(),
             "auto",
             "quadrature",
         ),
         "angle+ode": ("simulate", mixed, ZENER, "auto", "angle"),
         "ode": ("simulate", rng.uniform(0.1, 1.6, 1024), ZENER, "ode", "ode"),
-        "evaluate": ("evaluate", rng.uniform(0.1, 1.6, 9000), rbjax.Model(), False, "quadrature"),
+        "evaluate": ("evaluate", rng.uniform(0.1, 1.6, 17_000), rbjax.Model(), False, "quadrature"),
         "evaluate-lfe": ("evaluate", rng.uniform(0.1, 1.6, 300), rbjax.Model(), True, "sampled"),
     }
 

@@ -46,10 +46,12 @@ __all__ = [
 #: 32 768; the sampled L_FE history is best at 128–512). An ODE chunk is small, since a vmapped
 #: while loop runs until its slowest row is done, and so that a batch of a few thousand splits
 #: over many devices (one core: 34 000/s at 256 rows a chunk, 39 000/s at 1024, 28 000/s at 64).
-#: The phase-angle path takes 16 384, where it still runs at its best: at 8192 a batch of 10 000
-#: damped impacts (the forward benchmark's) was cut in two padded chunks and ran ~0.8× as fast on
-#: one device as in one call (issue 42; ``benchmarks/forward.py --only paired_forward``).
-CPU_CHUNK_SIZE = {"quadrature": 8192, "angle": 16384, "sampled": 256, "ode": 512}
+#: Both fast paths take 16 384, where they still run at their best: at 8192 a batch of 10 000
+#: impacts (the forward benchmark's) was cut in two padded chunks and ran ~0.8× (phase angle) and
+#: ~0.7× (quadrature: 1.3 against 1.9 M/s) as fast on one device as in one call; at 2¹⁸ rows the
+#: quadrature runs 2.32–2.40 M/s in chunks of 16 384 against 2.26–2.27 M/s in chunks of 8192
+#: (2026-11-29, one core, quiet; issue 42, ``benchmarks/forward.py --only paired_forward``).
+CPU_CHUNK_SIZE = {"quadrature": 16384, "angle": 16384, "sampled": 256, "ode": 512}
 #: Rows per chunk on an accelerator (a GPU wants wide launches; one call below this size).
 ACCELERATOR_CHUNK_SIZE = {
     "quadrature": 1 << 20,
