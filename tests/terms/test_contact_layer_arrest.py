@@ -316,10 +316,13 @@ def test_a_parameter_out_of_range_is_named(make, name):
 
 
 def test_the_declared_bounds_are_accepted():
-    ContactLayer(0.05, 1.0)
-    ContactLayer(1e-12, 6.0)
-    WaveLimitedArrest(0.2, 0.5)
-    WaveLimitedArrest(20.0, 12.0)
+    # at each end of its declared range a term is built and holds the value given
+    for y_ref, p in ((0.05, 1.0), (1e-12, 6.0)):
+        layer = ContactLayer(y_ref, p)
+        assert (layer.layer_deflection_m, layer.layer_exponent) == (y_ref, p)
+    for v_a, n in ((0.2, 0.5), (20.0, 12.0)):
+        arrest = WaveLimitedArrest(v_a, n)
+        assert (arrest.arrest_speed_m_per_s, arrest.arrest_exponent) == (v_a, n)
 
 
 @pytest.mark.parametrize("weight", [dict(blocked_force="momentum"), dict(momentum_flux_weight=0.5)])

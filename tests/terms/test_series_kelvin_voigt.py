@@ -145,14 +145,9 @@ def test_names_files_and_the_fit_layer():
     name = "hunt-crossley+series-kelvin-voigt"
     assert name in all_model_names() and "zener+stiffening+series-kelvin-voigt" in all_model_names()
     assert parse_model_terms(name) == ((HuntCrossley,), False, False, True, False, False)
-    assert parse_model_terms("hunt-crossley+ball-mode") == (
-        (HuntCrossley,),
-        False,
-        True,
-        False,
-        False,
-        False,
-    )
+    # the ball mode is the other term, not the series element (its full tuple: test_ball_mode)
+    mode = parse_model_terms("hunt-crossley+ball-mode")
+    assert mode.ball_mode and not mode.series
     model = model_from_name(
         name, blocked_force="momentum", values={"series_compliance_m_per_N": 3e-6}
     )
