@@ -6,7 +6,9 @@ L_iA,Fmax against finite differences, bad input and the command line.
 
 Compile budget: the ball on the bare 150 mm slab is solved once (``bare``) and the command
 line runs the same slab (its preset), so it reuses that program; the gradient check compiles
-one forward-mode program whose primal outputs give the finite differences too. The energy
+one forward-mode program whose primal outputs give the finite differences too, and the levels
+at the other drop heights (the height is its runtime argument; its primal levels are those of
+the default Solver() to 4e-14 dB, measured). The energy
 references are ``tests/scipy_floor_reference.py`` (its own ODE, DOP853 at rtol 1e-12), not a
 second diffrax solve. The reference chain costs about 0.1 s a slab (its forces and mode shapes
 are cached for the module).
@@ -175,19 +177,24 @@ def test_modal_floor_energy_balance():
 
 def _thickness_program(edge):
     """One forward-mode program of the bare 4 m × 5 m slab of thickness t (concrete C30/37, room
-    50 m³, T = 0.5 s) with ``edge``: (rating, band levels) and their derivatives in t. The
-    finite slab's modes in the 31.5 and 63 Hz octaves (Chain(slab="modal"), the default) over
-    the mode set of the 150 mm slab (a shape, given from the concrete slab; thicker slabs have
-    fewer modes below the cutoff, so it holds theirs)."""
+    50 m³, T = 0.5 s) with ``edge``, the ball dropped from ``height_m`` (default 1 m): (rating,
+    band levels) and their derivatives in t. The finite slab's modes in the 31.5 and 63 Hz
+    octaves (Chain(slab="modal"), the default) over the mode set of the 150 mm slab (a shape,
+    given from the concrete slab; thicker slabs have fewer modes below the cutoff, so it holds
+    theirs). The height is a runtime argument: the drop-height test runs this program too."""
     solver = Solver(adjoint="forward")
     orders = slab_mode_orders(SLAB, 1)
 
-    def outputs(thickness):
+    def outputs(thickness, height_m):
         slab = Slab.of_material("concrete", thickness, edge=edge)
-        lv = room_levels(slab, ROOM, n_samples=1000, solver=solver, orders=orders)
+        lv = room_levels(
+            slab, ROOM, height_m=height_m, n_samples=1000, solver=solver, orders=orders
+        )
         return rating_unrounded_dB(lv, 1), lv.level_dB
 
-    return jax.jit(lambda t: jax.jvp(outputs, (t,), (1.0,)))
+    program = jax.jit(lambda t, h: jax.jvp(lambda tt: outputs(tt, h), (t,), (1.0,)))
+    # the height always passed (a float): one compiled program for every call
+    return lambda thickness_m, height_m=1.0: program(thickness_m, float(height_m))
 
 
 @pytest.fixture(scope="module")
@@ -288,7 +295,7 @@ DROP_HEIGHTS_M = (0.25, 0.5, 1.0, 1.6)
 ROOM_MD_DROP_HEIGHT_RATINGS_dB = (52.7, 56.2, 59.8, 62.4)
 
 
-def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
+def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says(thickness_program):
     """The chain is linear in the force's energy per band: between two drop heights each band's
     level moves by the blocked force's own L_FE change, computed apart from the room chain
     (rbjax.simulate and rbjax.spectrum's octave L_FE on the rigid floor), to 0.01 dB in the
@@ -299,15 +306,11 @@ def test_a_lower_drop_height_rates_lower_as_the_force_spectrum_says():
     spectrum changes shape with the height; measured 0.13, 0.18 and 0.16 dB between successive
     heights (the simply supported centre drives no mode in that octave). The modal levels
     themselves are held to the independent chain to 1e-3 dB at every height. So the rating
-    falls with the height as the force does: ~3.5 dB per halving (docs/guides/room.md)."""
-    orders = slab_mode_orders(SLAB, 1)
-
-    @jax.jit
-    def program(height):
-        levels = room_levels(SLAB, ROOM, height_m=height, n_samples=1000, orders=orders)
-        return rating_unrounded_dB(levels, 1), levels.level_dB
-
-    out = [program(h) for h in DROP_HEIGHTS_M]
+    falls with the height as the force does: ~3.5 dB per halving (docs/guides/room.md).
+    The levels by the 150 mm slab's program of the thickness tests (the same chain and slab,
+    the height a runtime argument; its derivative in t is not used here): no program of its own.
+    """
+    out = [thickness_program(0.15, h)[0] for h in DROP_HEIGHTS_M]
     force = [np.asarray(lfe_octave_dB(rbjax.simulate(h).force_N, RATE)) for h in DROP_HEIGHTS_M]
     for k in range(len(DROP_HEIGHTS_M) - 1):
         moved = np.asarray(out[k + 1][1]) - np.asarray(out[k][1])
