@@ -10,9 +10,10 @@ of the wall column, on the rigid floor. Nothing here calls rbjax; the shell and 
 * The arrest: the column of wall above the contact area 2πRδ, of density
   ρ = M / (4π(R³ − (R − h)³)/3), has the mass μ = 2πRhρ per unit deflection; the floor
   receives the share s = x^n / (1 + x^n), x = δ̇/v_a, of its flux μδ̇² while δ̇ > 0.
-* Equation of motion (Eq. 7, Eqs. 6, 8, 9 as in ``scipy_reference``):
-  M(1 − δ/2R) δ̈ = −F_c + (M/2R) δ̇² H(−δ̇),  F_c = F(δ) + c δ̇ (Kelvin–Voigt, c ≥ 0);
-  the arrest changes the floor force F_c + s μ δ̇² H(δ̇) only, never the motion.
+* Equation of motion (Eq. 7, Eqs. 6, 8, 9 as in ``scipy_reference``), with the cap's mass per
+  unit deflection m′ = M/2R (the paper's thin shell) or, with an arrest, the column μ:
+  (M − m′δ) δ̈ = −F_c + m′ δ̇² H(−δ̇),  F_c = F(δ) + c δ̇ (Kelvin–Voigt, c ≥ 0);
+  the floor force is F_c + s μ δ̇² H(δ̇).
 
 Phases and outputs, defined as rbjax defines them (``rbjax.solve.ode``):
 
@@ -21,7 +22,7 @@ Phases and outputs, defined as rbjax defines them (``rbjax.solve.ode``):
   force is the larger of the floor force there and at first contact;
 * restitution from rest at maximum compression to the first fall of F_c (or of δ) through 0:
   the contact time;
-* restitution coefficient M(1 − δ_end/2R)(−δ̇_end) / (M v0).
+* restitution coefficient (M − m′δ_end)(−δ̇_end) / (M v0).
 
 ``ReferenceImpact.global_peak_N`` is the largest floor force over the compression on a dense
 grid, to check that the peak so defined is the maximum.
@@ -140,12 +141,14 @@ def reference_impact(
     damping_Ns_per_m=0.0,
     gas="adiabatic",
     rtol=RTOL,
+    column_cap=None,
 ):
     """One impact: ``layer`` = (y_ref, p) or None (F_e alone), ``arrest`` = (v_a, n), ``"full"``
     (s = 1: the column's whole flux μδ̇²) or None (the paper's blocked force, no flux on the
-    floor), Kelvin–Voigt ``damping_Ns_per_m``.
+    floor), Kelvin–Voigt ``damping_Ns_per_m``; ``column_cap`` (default: whether an arrest is
+    given) takes the column μ for the cap's mass per unit deflection m′, else M/2R.
 
-    The state carries two integrals besides (δ, δ̇): ∫½(M/2R)|δ̇|³ dt and ∫F_c δ̇ dt.
+    The state carries two integrals besides (δ, δ̇): ∫½m′|δ̇|³ dt and ∫F_c δ̇ dt.
     """
     radius, wall, mass, youngs, poisson = ball_parameters(ball)
     c = float(damping_Ns_per_m)
@@ -164,8 +167,10 @@ def reference_impact(
         law = SeriesLaw(ball, layer[0], layer[1], gas)
         elastic, elastic_rate = law.force, law.stiffness
 
-    per_speed = mass / (2.0 * radius)
     mu = column_mass_rate(radius, wall, mass)
+    if column_cap is None:
+        column_cap = arrest is not None
+    per_speed = mu if column_cap else mass / (2.0 * radius)
 
     def share(v):
         return 1.0 if arrest == "full" else arrest_share(v, *arrest)
@@ -194,7 +199,7 @@ def reference_impact(
             d, v = y[0], y[1]
             force = contact_force(y)
             thrust = per_speed * v * v if (flux_on and v < 0.0) else 0.0
-            accel = (thrust - force) / (mass * (1.0 - d / (2.0 * radius)))
+            accel = (thrust - force) / (mass - per_speed * d)
             return np.array([v, accel, 0.5 * per_speed * abs(v) ** 3, force * v])
 
         return f
@@ -266,7 +271,7 @@ def reference_impact(
         raise RuntimeError(f"restitution did not reach the end of contact: {sol2.message}")
     t_end = float(sol2.t[-1])
     y_end = sol2.y[:, -1]
-    moving = mass * (1.0 - y_end[0] / (2.0 * radius))
+    moving = mass - per_speed * y_end[0]
     return ReferenceImpact(
         height_m=float(height_m),
         contact_time_s=t_end,

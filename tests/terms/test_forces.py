@@ -165,6 +165,26 @@ def test_momentum_flux_term():
     )
 
 
+def test_with_an_arrest_the_cap_is_the_wall_column():
+    """With an arrest law the cap's mass per unit deflection is the wall column μ = 2πRhρ the law
+    puts on the floor (ρ from M and the wall's volume, written again here): dynamic mass M − μδ,
+    flux μδ̇², singular at δ = M/μ; without one, the paper's M/2R whatever else the model has."""
+    r, h, m, _, _ = _params(JIS)
+    mu = 2.0 * math.pi * r * h * m / (4.0 * math.pi * (r**3 - (r - h) ** 3) / 3.0)
+    model = rbjax.Model(arrest=rbjax.WaveLimitedArrest(2.5, 6.0))
+    d, v = np.array([0.0, 0.01, 0.03]), np.array([-3.0, 0.0, 4.4])
+    np.testing.assert_allclose(
+        np.asarray(forces.dynamic_mass_kg(d, JIS, model)), m - mu * d, rtol=1e-14
+    )
+    np.testing.assert_allclose(np.asarray(forces.momentum_flux_N(v, JIS, model)), mu * v**2)
+    assert float(forces.singular_deflection_m(JIS, model)) == pytest.approx(m / mu, rel=1e-14)
+    plain = rbjax.Model(damping=rbjax.KelvinVoigt(20.0), blocked_force="momentum")
+    np.testing.assert_allclose(
+        np.asarray(forces.dynamic_mass_kg(d, JIS, plain)), m * (1 - d / (2 * r)), rtol=1e-15
+    )
+    assert float(forces.singular_deflection_m(JIS, plain)) == 2.0 * r
+
+
 # --- damping extensions -----------------------------------------------------------------------
 
 

@@ -84,7 +84,7 @@ def _balance(height_m, ball, model, solver) -> EnergyBalance:
     t_end, y_end = final_state(sol3)
     y_end, acc = split_energy(y_end, model)
     speed = body_velocity_m_per_s(y_end, ball, model)
-    rebound = 0.5 * dynamic_mass_kg(y_end[0], ball) * speed**2
+    rebound = 0.5 * dynamic_mass_kg(y_end[0], ball, model) * speed**2
     status = impact_status((sol1, sol3), y_max[:2], jnp.stack([t_end, rebound, *acc]), ball, model)
     failed = status != 0
     return EnergyBalance(

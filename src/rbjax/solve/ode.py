@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from ..terms.floors.kinds import AbstractModalFloor
-from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m
+from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m, singular_deflection_m
 from ..terms.model import Model
 from ..terms.series_element import free_oscillation
 from .outcome import (
@@ -147,7 +147,7 @@ def solve_phases(
         if energy
         else (COMPRESSION_FIELD, RESTITUTION_FIELD)
     )
-    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+    singular = SINGULAR_FRACTION * singular_deflection_m(ball, model)
 
     # Event functions are scaled to O(1) so that the root finder's tolerances (which also
     # bound |cond| at the root) sit above round-off for every one of them.
@@ -237,7 +237,7 @@ def impact_status(sols, y_max, outputs, ball, model: Model):
     solved = [s for s in sols if s is not None]
     step_limit = jnp.any(jnp.stack([s.result == dfx.RESULTS.max_steps_reached for s in solved]))
     failed = ~jnp.all(jnp.stack([_ok(s) for s in solved]))
-    singular = y_max[0] >= SINGULAR_FRACTION * 2.0 * ball.radius_m * (1.0 - 1e-9)
+    singular = y_max[0] >= SINGULAR_FRACTION * singular_deflection_m(ball, model) * (1.0 - 1e-9)
     nonfinite = ~jnp.all(jnp.isfinite(outputs))
     too_deep = y_max[0] > model.max_deflection_ratio * ball.wall_m
     return jnp.select(
@@ -399,7 +399,7 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
         peak = jnp.maximum(peak, global_peak)
     peak_force = jnp.maximum(peak, first)
     peak_time = jnp.where(peak >= first, t_peak, 0.0)
-    momentum_out = -dynamic_mass_kg(y_end[0], ball) * body_velocity_m_per_s(y_end, *args)
+    momentum_out = -dynamic_mass_kg(y_end[0], ball, model) * body_velocity_m_per_s(y_end, *args)
     restitution = momentum_out / (ball.mass_kg * v0)
 
     solved = [s for s in sols if s is not None]

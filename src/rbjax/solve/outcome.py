@@ -26,7 +26,8 @@ STATUS_NAMES = {
 STATUS_CODES = {v: k for k, v in STATUS_NAMES.items()}
 
 
-#: Fraction of 2R at which the dynamic mass M(1 − δ/2R) is taken as singular.
+#: Fraction of the deflection at which the dynamic mass vanishes (2R for the paper's M(1 − δ/2R);
+#: ``rbjax.terms.forces.singular_deflection_m``) at which it is taken as singular.
 SINGULAR_FRACTION = 0.999
 
 

@@ -38,6 +38,7 @@ import math
 import jax
 import jax.numpy as jnp
 
+from ..terms.forces import singular_deflection_m
 from ..terms.model import Model
 from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s, nan_where
 from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
@@ -113,7 +114,7 @@ def record_samples(
     a = n0 + 1.0 - x  # in-contact fraction of the first sample's interval, (0, 1]
     args = (ball, model)
     y0 = initial_state(impact_velocity_m_per_s(height_m), ball, model)
-    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+    singular = SINGULAR_FRACTION * singular_deflection_m(ball, model)
     # Sample j of the contact is reached by a step of h_j from the previous one: aΔ/2 to the
     # first sample's in-contact midpoint, (a + 1)Δ/2 to the second sample, Δ after that. The
     # first sample's value is a·F and its shift derivative −F/Δ − (a/2)Ḟ; the others' F and −Ḟ.

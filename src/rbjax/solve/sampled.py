@@ -42,6 +42,7 @@ from jaxtyping import ArrayLike
 
 from .._validate import check_range
 from ..terms.ball import JIS_RUBBER_BALL, Ball
+from ..terms.forces import singular_deflection_m
 from ..terms.model import Model
 from .inputs import PAPER_RATE_Hz, as_arrays, broadcast_inputs, check_inputs
 from .outcome import (
@@ -128,7 +129,7 @@ def sampled_impact(height_m, ball, model: Model, rate_Hz, num_samples: int, subs
     v0 = impact_velocity_m_per_s(height_m)
     y0 = initial_state(v0, ball, model)
     h = 1.0 / (rate_Hz * substeps)
-    singular = SINGULAR_FRACTION * 2.0 * ball.radius_m
+    singular = SINGULAR_FRACTION * singular_deflection_m(ball, model)
     arrays, static = eqx.partition((ball, model), eqx.is_array)
 
     def step(carry, _):

@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 
 from ..terms.forces import (
+    cap_mass_rate_kg_per_m,
     contact_force_N,
     damping_force_N,
     dynamic_mass_kg,
@@ -44,7 +45,7 @@ def floor_flux_N(v, ball, model):
     ``model.momentum_flux_weight`` of the paper's (M/2R)δ̇²."""
     if model.arrest is not None:
         return model.arrest.flux_N(v, ball)
-    return model.momentum_flux_weight * jnp.where(v > 0.0, momentum_flux_N(v, ball), 0.0)
+    return model.momentum_flux_weight * jnp.where(v > 0.0, momentum_flux_N(v, ball, model), 0.0)
 
 
 def floor_velocity_m_per_s(y, ball, model):
@@ -105,8 +106,8 @@ def _vector_field(flux_on: bool, energy: bool = False):
             h_c = jax.jvp(
                 lambda vv: damping_force_N(d, vv, zd, ball, model), (v,), (jnp.ones_like(v),)
             )[1]
-        thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball), 0.0) if flux_on else 0.0
-        accel = (thrust - force) / dynamic_mass_kg(d, ball)
+        thrust = jnp.where(v < 0.0, momentum_flux_N(v, ball, model), 0.0) if flux_on else 0.0
+        accel = (thrust - force) / dynamic_mass_kg(d, ball, model)
         # Massless elements make δ̈ appear on both sides: each adds −a(G + H δ̈) (+ c) to δ̈,
         # with dF/dt = G + H δ̈ of the force it carries (F depends on δ, δ̇ and the damping
         # states only); δ̈ (1 + Σ a H) = Ẍ + … − Σ a G is solved in closed form.
@@ -156,8 +157,8 @@ def _energy_rates(y, ball, model):
     _, v, _ = _split(y)
     ff = floor_force_N(y, ball, model)
     u_dot = floor_velocity_m_per_s(y, ball, model)
-    flux = momentum_flux_N(v, ball)
-    per_speed = ball.mass_kg / (2.0 * ball.radius_m)
+    flux = momentum_flux_N(v, ball, model)
+    per_speed = cap_mass_rate_kg_per_m(ball, model)
     cap = 0.5 * per_speed * v * u_dot**2 + _flux_left_out(v, flux, ball, model) * u_dot
     return jnp.stack(
         [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, contact_force(y, ball, model) * v, cap]

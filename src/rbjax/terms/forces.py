@@ -115,14 +115,37 @@ def _power_jvp(a, primals, tangents):
     return y, a * y / x * dx
 
 
-def dynamic_mass_kg(deflection_m, ball):
-    """Mass M − M_c of the moving part, M_c = Mδ/(2R) the flattened cap at rest (Eq. 6)."""
-    return ball.mass_kg * (1.0 - deflection_m / (2.0 * ball.radius_m))
+def cap_mass_rate_kg_per_m(ball, model=None):
+    """dM_c/dδ, the mass the flattened cap gains per unit deflection: the paper's thin-shell
+    M/2R (Eq. 6), or the wall column of the model's arrest law (``model.arrest``,
+    :meth:`rbjax.terms.arrest.AbstractArrest.mass_rate_kg_per_m`), so that the mass the moving
+    part loses is the mass whose flux the arrest law puts on the floor."""
+    arrest = getattr(model, "arrest", None)
+    if arrest is not None:
+        return arrest.mass_rate_kg_per_m(ball)
+    return ball.mass_kg / (2.0 * ball.radius_m)
 
 
-def momentum_flux_N(velocity_m_per_s, ball):
-    """Rate (M/2R)δ̇² at which momentum is carried by mass joining or leaving the cap (Eq. 7)."""
-    return ball.mass_kg / (2.0 * ball.radius_m) * velocity_m_per_s**2
+def dynamic_mass_kg(deflection_m, ball, model=None):
+    """Mass M − M_c of the moving part, M_c = (dM_c/dδ) δ the flattened cap at rest (Eq. 6:
+    Mδ/(2R); :func:`cap_mass_rate_kg_per_m`)."""
+    if getattr(model, "arrest", None) is None:
+        return ball.mass_kg * (1.0 - deflection_m / (2.0 * ball.radius_m))
+    return ball.mass_kg - cap_mass_rate_kg_per_m(ball, model) * deflection_m
+
+
+def momentum_flux_N(velocity_m_per_s, ball, model=None):
+    """Rate (dM_c/dδ) δ̇² at which momentum is carried by mass joining or leaving the cap (Eq. 7:
+    (M/2R)δ̇²; :func:`cap_mass_rate_kg_per_m`)."""
+    return cap_mass_rate_kg_per_m(ball, model) * velocity_m_per_s**2
+
+
+def singular_deflection_m(ball, model=None):
+    """The deflection at which the dynamic mass vanishes: 2R for the paper's, M / (dM_c/dδ)
+    with an arrest law's column."""
+    if getattr(model, "arrest", None) is None:
+        return 2.0 * ball.radius_m
+    return ball.mass_kg / cap_mass_rate_kg_per_m(ball, model)
 
 
 # ----------------------------------------------------------------------------------------------
