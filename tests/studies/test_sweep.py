@@ -180,6 +180,7 @@ SHARDED_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.xla_smoke  # one program against its split over devices (as test_devices.py)
 def test_sharded_sweep_on_four_cpu_devices_equals_one_device(tmp_path):
     rng = np.random.default_rng(0)
     n = 150  # not a multiple of the 64-impact step: the last step is padded
