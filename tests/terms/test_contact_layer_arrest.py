@@ -304,7 +304,7 @@ def test_an_arrest_far_above_every_speed_gives_the_paper_blocked_force(impacts, 
         (lambda: WaveLimitedArrest(20.1, 6.0), "arrest_speed_m_per_s"),
         (lambda: WaveLimitedArrest(float("nan"), 6.0), "arrest_speed_m_per_s"),
         (lambda: WaveLimitedArrest(2.5, 0.49), "arrest_exponent"),
-        (lambda: WaveLimitedArrest(2.5, 12.1), "arrest_exponent"),
+        (lambda: WaveLimitedArrest(2.5, 100.1), "arrest_exponent"),
         (
             lambda: replace({"layer_exponent": 0.5}, 1.0, BALL, MODEL),
             "layer_exponent",
@@ -325,9 +325,31 @@ def test_the_declared_bounds_are_accepted():
     for y_ref, p in ((0.05, 1.0), (1e-12, 6.0)):
         layer = ContactLayer(y_ref, p)
         assert (layer.layer_deflection_m, layer.layer_exponent) == (y_ref, p)
-    for v_a, n in ((0.2, 0.5), (20.0, 12.0)):
+    for v_a, n in ((0.2, 0.5), (20.0, 100.0)):
         arrest = WaveLimitedArrest(v_a, n)
         assert (arrest.arrest_speed_m_per_s, arrest.arrest_exponent) == (v_a, n)
+
+
+@pytest.mark.parametrize("n", [0.5, 12.0, 100.0])
+def test_the_share_and_its_derivatives_are_finite_at_every_speed(n):
+    """x^n/(1 + x^n) against its closed form where it is representable, and finite derivatives
+    (forward and reverse) in δ̇ and n down to δ̇ = 0 (x^−n overflows below x = 10^(−308/n))."""
+    arrest = WaveLimitedArrest(3.0, n)
+
+    def share(v, n_):
+        return WaveLimitedArrest(3.0, n_).share(v)
+
+    for v in (0.0, 1e-30, 1e-9, 1e-3, 2.9, 3.0, 3.1, 5.6):
+        z = n * math.log(v / 3.0) if v > 0.0 else -math.inf  # x^n/(1 + x^n) = e^z/(1 + e^z)
+        expected = math.exp(z) / (1.0 + math.exp(z)) if z < 0.0 else 1.0 / (1.0 + math.exp(-z))
+        assert float(arrest.share(v)) == pytest.approx(expected, rel=1e-13, abs=1e-300)
+        for grads in (
+            jax.grad(share, argnums=(0, 1))(v, n),
+            jax.jacfwd(share, argnums=(0, 1))(v, n),
+        ):
+            assert all(np.isfinite(float(g)) for g in grads), (v, n, grads)
+    # and the slope at v_a is n/(4 v_a)
+    assert float(jax.grad(share)(3.0, n)) == pytest.approx(n / 12.0, rel=1e-12)
 
 
 @pytest.mark.parametrize("weight", [dict(blocked_force="momentum"), dict(momentum_flux_weight=0.5)])

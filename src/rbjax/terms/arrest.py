@@ -46,6 +46,7 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import ArrayLike
 
@@ -104,7 +105,9 @@ class WaveLimitedArrest(AbstractArrest):
     Attributes:
         arrest_speed_m_per_s: v_a > 0, the deflection speed at which half of the flux arrives
             abruptly (0.2–20 m/s: a tenth of the impact speeds of 0.1–1.6 m drops to ten times).
-        arrest_exponent: n, 0.5 ≤ n ≤ 12, how sharply the share rises with speed.
+        arrest_exponent: n, 0.5 ≤ n ≤ 100, how sharply the share rises with speed (n = 100:
+            from 10 % to 90 % of the flux within ±2.2 % of v_a, the sharp threshold of an edge
+            turning supersonic).
 
     Raises:
         ValueError: a field outside its range or not finite, named in the message (concrete
@@ -130,7 +133,7 @@ class WaveLimitedArrest(AbstractArrest):
         "arrest_exponent": Parameter(
             "1",
             lower=0.5,
-            upper=12.0,
+            upper=100.0,
             lower_open=False,
             upper_open=False,
             transform="interval",
@@ -139,10 +142,13 @@ class WaveLimitedArrest(AbstractArrest):
     }
 
     def share(self, velocity_m_per_s):
-        """s(δ̇/v_a) = x^n/(1 + x^n), 0 for δ̇ ≤ 0 (written as 1/(1 + x^−n): no overflow)."""
+        """s(δ̇/v_a) = x^n/(1 + x^n), 0 for δ̇ ≤ 0, written as the logistic function of n log x:
+        no overflow, and finite derivatives at every speed (x^−n overflowed below
+        x = 10^(−308/n), and its derivative there was NaN)."""
         v = jnp.asarray(velocity_m_per_s)
         x = jnp.maximum(v, 1e-300) / self.arrest_speed_m_per_s
-        return jnp.where(v > 0.0, 1.0 / (1.0 + x ** (-jnp.asarray(self.arrest_exponent))), 0.0)
+        n = jnp.asarray(self.arrest_exponent)
+        return jnp.where(v > 0.0, jax.nn.sigmoid(n * jnp.log(x)), 0.0)
 
     def flux_N(self, velocity_m_per_s, ball):
         """s(δ̇/v_a) μ δ̇² during compression (δ̇ > 0), 0 otherwise."""
