@@ -17,6 +17,8 @@ so over the contact ½Mv0² = ½(M − M_c)Ẋ_end² + W_floor + D_flux + W_cont
   order of (M/2R)v0/Z of W_floor on a floor of impedance Z.
 
 Each integral is an extra state of the ODE, so the balance closes to the solver's tolerance.
+M/2R stands for the cap's mass per unit deflection throughout: the wall column μ where the model
+has an arrest law (``rbjax.terms.forces.cap_mass_rate_kg_per_m``).
 """
 
 from __future__ import annotations

@@ -79,6 +79,9 @@ def _vector_field(flux_on: bool, energy: bool = False):
 
         (M − M_c) Ẍ = −F_c + (M/2R) δ̇² H(−δ̇),      δ = X + w − u,  δ̈ = Ẍ + ẅ − ü,
 
+    (M/2R, M_c = (M/2R)δ: the column μ and μδ where the model has an arrest law,
+    ``rbjax.terms.forces.cap_mass_rate_kg_per_m``)
+
     with w the displacement the elements in series with the shell add and u the floor's surface
     (``rbjax.terms.floors.kinds``); on the rigid floor without elements in series δ̈ = Ẍ,
     Eq. 7. Each element in series with the shell (``rbjax.terms.series_element``) adds its
