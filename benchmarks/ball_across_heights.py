@@ -205,7 +205,7 @@ QUICK = ("paper", "momentum", "composite (rbjax)")
 # (scipy, cap="column"), each row a change from its starting point.
 _N12 = dict(E=1.877e6, y1k=1.332e-3, p=3.011, va=3.195, n=11.65, alpha=0.0716, cap="column")
 _N100 = dict(E=1.8676e6, y1k=1.295e-3, p=2.906, va=3.467, n=34.94, alpha=0.06706, cap="column")
-_SHIPPED = dict(_N100, va=3.43, y1k=1.33e-3, alpha=0.064)
+_SHIPPED = dict(CANDIDATES["composite (rbjax)"]["params"], cap="column")
 SCAN = {
     "n ≤ 12: none": _N12,
     "n ≤ 12: y_ref = 1.45 mm": dict(_N12, y1k=1.45e-3),

@@ -315,8 +315,7 @@ def evaluate(
     ``parallel`` (an ``rbjax.Parallel``, default ``Parallel()``) says where: the samples are
     cut into chunks of its ``chunk_size`` impacts (default: sized for the path and the
     platform, ``rbjax.solve.parallel.default_chunk_size``; on a CPU 16 384 for the fast
-    paths) and
-    the chunks split over its ``devices`` (default: all local devices; see
+    paths) and the chunks split over its ``devices`` (default: all local devices; see
     ``rbjax.solve.devices`` for how to give JAX one CPU device per core), each device running
     its own program: the results are those of a one-device run, bit for bit.
     """

@@ -160,8 +160,8 @@ def _energy_rates(y, ball, model):
     _, v, _ = _split(y)
     ff = floor_force_N(y, ball, model)
     u_dot = floor_velocity_m_per_s(y, ball, model)
-    flux = momentum_flux_N(v, ball, model)
     per_speed = cap_mass_rate_kg_per_m(ball, model)
+    flux = per_speed * v**2  # momentum_flux_N
     cap = 0.5 * per_speed * v * u_dot**2 + _flux_left_out(v, flux, ball, model) * u_dot
     return jnp.stack(
         [ff * u_dot, 0.5 * per_speed * jnp.abs(v) ** 3, contact_force(y, ball, model) * v, cap]

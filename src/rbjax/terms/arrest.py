@@ -153,7 +153,7 @@ class WaveLimitedArrest(AbstractArrest):
     def flux_N(self, velocity_m_per_s, ball):
         """s(δ̇/v_a) μ δ̇² during compression (δ̇ > 0), 0 otherwise."""
         v = jnp.asarray(velocity_m_per_s)
-        return self.share(v) * column_mass_rate_kg_per_m(ball) * jnp.where(v > 0.0, v * v, 0.0)
+        return self.share(v) * self.mass_rate_kg_per_m(ball) * jnp.where(v > 0.0, v * v, 0.0)
 
     @classmethod
     def start(cls, speed_m_per_s: float) -> dict:
