@@ -17,15 +17,16 @@ of the wall column, on the rigid floor. Nothing here calls rbjax; the shell and 
 
 Phases and outputs, defined as rbjax defines them (``rbjax.solve.ode``):
 
-* compression from δ = 0, δ̇ = √(2 g h_D) to δ̇ = 0; the first fall of dF/dt through 0 in it
-  (dF/dt written out along the flow: dF/dδ δ̇ + (c + dflux/dδ̇) δ̈) is the force peak; the peak
-  force is the larger of the floor force there and at first contact;
+* compression from δ = 0, δ̇ = √(2 g h_D) to δ̇ = 0; every fall of dF/dt through 0 in it
+  (dF/dt written out along the flow: dF/dδ δ̇ + (c + dflux/dδ̇) δ̈) is a local maximum of the
+  floor force; the peak force is the largest of the floor force at these, at maximum compression
+  and at first contact (a steep arrest share makes a first local maximum where δ̇ passes v_a);
 * restitution from rest at maximum compression to the first fall of F_c (or of δ) through 0:
   the contact time;
 * restitution coefficient (M − m′δ_end)(−δ̇_end) / (M v0).
 
 ``ReferenceImpact.global_peak_N`` is the largest floor force over the compression on a dense
-grid, to check that the peak so defined is the maximum.
+grid and at the maxima, to check that the peak so defined is the maximum.
 """
 
 from __future__ import annotations
@@ -241,8 +242,8 @@ def reference_impact(
     y_max[1] = 0.0
     first = floor_force(y0)
     maxima = [t for t in sol1.t_events[1] if 0.0 < t < t_max]
-    t_peak = maxima[0] if maxima else t_max
-    peak = floor_force(sol1.sol(t_peak)) if maxima else floor_force(y_max)
+    candidates = [(floor_force(sol1.sol(t)), t) for t in maxima] + [(floor_force(y_max), t_max)]
+    peak, t_peak = max(candidates)
     if first > peak:
         peak, t_peak = first, 0.0
     grid = np.linspace(0.0, t_max, 4001)

@@ -375,10 +375,13 @@ def _recontacts(y_end, args):
 
 def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     # An arrest law's floor force falls steeply where δ̇ passes its arrest speed, which can make
-    # a first local maximum of the floor force before the largest one.
+    # a first local maximum of the floor force before the largest one, so the peak is the
+    # largest over the saved steps (``_coupled_maxima``), and compression is one solve: an event
+    # on dF/dt there asks Newton for a root where the force's rate turns within a step (a steep
+    # arrest share), and Newton can cycle there without converging (the impact then failed).
     arrest = model.arrest is not None
     v0, sols, (t_peak, y_peak), (t_max, y_max) = solve_phases(
-        height_m, ball, model, solver, dense=False, steps=model.coupled or arrest
+        height_m, ball, model, solver, dense=False, peak=not arrest, steps=model.coupled or arrest
     )
     sol3 = sols[2]
     t_end, y_end = final_state(sol3)
@@ -392,8 +395,8 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
         peak, t_peak, max_deflection = _coupled_maxima(sols, v0, args, solver)
         recontact = _recontacts(y_end, args)
     elif arrest:
-        # the larger of the first maximum (the compression's dF/dt event) and the largest over
-        # the saved steps, refined: each is a value the force takes, the larger the peak
+        # the larger of the force at maximum compression and the largest over the saved steps,
+        # refined: each is a value the force takes, the larger the peak
         global_peak, t_global, _ = _coupled_maxima(sols, v0, args, solver)
         t_peak = jnp.where(global_peak > peak, t_global, t_peak)
         peak = jnp.maximum(peak, global_peak)
