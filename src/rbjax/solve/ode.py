@@ -77,9 +77,13 @@ def _solve(
     steps=False,
     max_steps=None,
     root_finder=None,
+    dtmax=None,
 ):
     root_finder = solver.root_finder() if root_finder is None else root_finder
     event = dfx.Event(conds, root_finder, direction=directions)
+    controller = solver.controller()
+    if dtmax is not None and isinstance(controller, dfx.PIDController):
+        controller = dfx.PIDController(rtol=solver.rtol, atol=solver.atol, dtmax=dtmax)
     return dfx.diffeqsolve(
         dfx.ODETerm(rhs),
         solver.diffrax_solver(),
@@ -89,7 +93,7 @@ def _solve(
         y0,
         args,
         saveat=_saveat(dense, steps),
-        stepsize_controller=solver.controller(),
+        stepsize_controller=controller,
         adjoint=solver.diffrax_adjoint(),
         event=event,
         max_steps=solver.max_steps if max_steps is None else max_steps,
@@ -256,11 +260,21 @@ def impact_status(sols, y_max, outputs, ball, model: Model):
 REFINE_MAX_STEPS = 64
 
 
-def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
+#: A refinement on a steep rate (an arrest law's share): its root by bisection, which keeps
+#: the sign change where Newton can cycle (the rate falls through 0: ``flip``; times to 1 ns,
+#: |rate| below 1e-9 of its O(1) scale), and steps of at most 1/``STEEP_SUBSTEPS`` of the
+#: bracket (the floor's flux is no state of the motion, so the step control does not see it: a
+#: maximum and a minimum of the floor force can lie within one step of the motion).
+STEEP_ROOT_FINDER: optx.AbstractRootFinder = optx.Bisection(rtol=1e-12, atol=1e-9, flip=True)  # type: ignore[call-arg]
+STEEP_SUBSTEPS = 16
+
+
+def _refine(start, t_end, value_of, rate_of, args, solver: Solver, *, steep: bool = False):
     """The maximum of ``value_of(y)`` on [t_start, t_end], where it has one interior maximum
     or none: a short solve from ``start`` = (t_start, y_start) with an event where ``rate_of``
     (its rate along the flow, scaled to O(1)) falls through 0; (value, time) at the event, or
-    ``value_of`` at t_start if no event occurs."""
+    ``value_of`` at t_start if no event occurs. ``steep``: ``STEEP_ROOT_FINDER`` and
+    ``STEEP_SUBSTEPS``."""
     t0, y0 = start
     sol = _solve(
         RESTITUTION_FIELD,
@@ -272,13 +286,15 @@ def _refine(start, t_end, value_of, rate_of, args, solver: Solver):
         solver,
         t1=t_end,
         max_steps=REFINE_MAX_STEPS,
+        root_finder=STEEP_ROOT_FINDER if steep else None,
+        dtmax=jnp.maximum(t_end - t0, 1e-12) / STEEP_SUBSTEPS if steep else None,
     )
     t, y = final_state(sol)
     hit = sol.result == dfx.RESULTS.event_occurred
     return jnp.where(hit, value_of(y), value_of(y0)), jnp.where(hit, t, t0)
 
 
-def _coupled_maxima(sols, v0, args, solver: Solver):
+def _coupled_maxima(sols, v0, args, solver: Solver, *, steep: bool = False):
     """Global maxima of the floor force (and its time) and of δ over the contact.
 
     A ball mode or a moving floor can give several local maxima, and the phase events find
@@ -286,6 +302,11 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
     largest value over the step ends and the step ends either side of it bracket the global
     maximum, located exactly by a short solve to the event dF/dt = 0 (or δ̇ = 0) between them.
     The restitution vector field is valid in every phase (its thrust acts only where δ̇ < 0).
+
+    With ``steep`` (an arrest law, whose share falls within a fraction of a millisecond as δ̇
+    passes the arrest speed) the force can also peak narrowly inside one step, above every
+    step end: the first step over which dF/dt turns from positive to negative is refined too,
+    and both refinements find their root by bisection (``STEEP_ROOT_FINDER``).
     """
     ball, model = args
     ts = jnp.concatenate([s.ts[1] for s in sols if s is not None])
@@ -323,9 +344,22 @@ def _coupled_maxima(sols, v0, args, solver: Solver):
         return values[i], ts_safe[i], start, end
 
     f_best, t_best, start, end = best(forces)
-    f_ref, t_ref = _refine(start, end, force, force_rate, args, solver)
+    f_ref, t_ref = _refine(start, end, force, force_rate, args, solver, steep=steep)
     peak = jnp.maximum(f_best, f_ref)
     peak_time = jnp.where(f_ref > f_best, t_ref, t_best)
+    if steep:
+        order = jnp.argsort(jnp.where(valid, ts_safe, jnp.inf))
+        rate = jax.vmap(force_rate)(ys)[order]
+        ok = valid[order]
+        turns = ok[:-1] & ok[1:] & (rate[:-1] > 0.0) & (rate[1:] <= 0.0)
+        k = jnp.argmax(turns)  # the first turn (0 where there is none: not used then)
+        i, j = order[k], order[k + 1]
+        f_turn, t_turn = _refine(
+            (ts_safe[i], ys[i]), ts_safe[j], force, force_rate, args, solver, steep=True
+        )
+        f_turn = jnp.where(jnp.any(turns), f_turn, -jnp.inf)
+        peak_time = jnp.where(f_turn > peak, t_turn, peak_time)
+        peak = jnp.maximum(peak, f_turn)
     d_best, _, start, end = best(ys[:, 0])
     d_ref, _ = _refine(start, end, deflection, velocity, args, solver)
     return peak, peak_time, jnp.maximum(d_best, d_ref)
@@ -375,10 +409,11 @@ def _recontacts(y_end, args):
 
 def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     # An arrest law's floor force falls steeply where δ̇ passes its arrest speed, which can make
-    # a first local maximum of the floor force before the largest one, so the peak is the
-    # largest over the saved steps (``_coupled_maxima``), and compression is one solve: an event
-    # on dF/dt there asks Newton for a root where the force's rate turns within a step (a steep
-    # arrest share), and Newton can cycle there without converging (the impact then failed).
+    # a first, narrow local maximum of the floor force before the largest one, so the peak is
+    # the largest of both over the saved steps (``_coupled_maxima(steep=True)``), and
+    # compression is one solve: an event on dF/dt there asked Newton for a root where the
+    # force's rate turns within a step, and Newton can cycle there without converging (the
+    # impact then failed).
     arrest = model.arrest is not None
     v0, sols, (t_peak, y_peak), (t_max, y_max) = solve_phases(
         height_m, ball, model, solver, dense=False, peak=not arrest, steps=model.coupled or arrest
@@ -395,9 +430,9 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
         peak, t_peak, max_deflection = _coupled_maxima(sols, v0, args, solver)
         recontact = _recontacts(y_end, args)
     elif arrest:
-        # the larger of the force at maximum compression and the largest over the saved steps,
-        # refined: each is a value the force takes, the larger the peak
-        global_peak, t_global, _ = _coupled_maxima(sols, v0, args, solver)
+        # the largest of the force at maximum compression and the maxima over the saved
+        # steps, refined: each is a value the force takes, the largest the peak
+        global_peak, t_global, _ = _coupled_maxima(sols, v0, args, solver, steep=True)
         t_peak = jnp.where(global_peak > peak, t_global, t_peak)
         peak = jnp.maximum(peak, global_peak)
     peak_force = jnp.maximum(peak, first)
