@@ -265,7 +265,8 @@ REFINE_MAX_STEPS = 64
 #: |rate| below 1e-9 of its O(1) scale), and steps of at most 1/``STEEP_SUBSTEPS`` of the
 #: bracket (the floor's flux is no state of the motion, so the step control does not see it: a
 #: maximum and a minimum of the floor force can lie within one step of the motion).
-STEEP_ROOT_FINDER: optx.AbstractRootFinder = optx.Bisection(rtol=1e-12, atol=1e-9, flip=True)  # type: ignore[call-arg]
+STEEP_ROOT_FINDER: optx.AbstractRootFinder
+STEEP_ROOT_FINDER = optx.Bisection(rtol=1e-12, atol=1e-9, flip=True)  # type: ignore[call-arg]
 STEEP_SUBSTEPS = 16
 
 
@@ -306,7 +307,7 @@ def _coupled_maxima(sols, v0, args, solver: Solver, *, steep: bool = False):
     With ``steep`` (an arrest law, whose share falls within a fraction of a millisecond as δ̇
     passes the arrest speed) the force can also peak narrowly inside one step, above every
     step end: the first step over which dF/dt turns from positive to negative is refined too,
-    and both refinements find their root by bisection (``STEEP_ROOT_FINDER``).
+    and both refinements are ``steep`` (bisection on sub-steps: see ``_refine``).
     """
     ball, model = args
     ts = jnp.concatenate([s.ts[1] for s in sols if s is not None])
