@@ -149,5 +149,6 @@ def report_section(result: dict) -> list[str]:
         f"{mark[b['growth_rising_from_125Hz']]}; ≥ 10 at 1 kHz: "
         f"{mark[b['growth_at_least_10dB_at_1kHz']]} |",
         "",
-        "What the model leaves short, and why: docs/guides/ball-across-heights.md.",
+        "How it was found, how thin its margins are, and the mechanisms that failed: "
+        "docs/guides/ball-across-heights.md.",
     ]
