@@ -9,7 +9,9 @@ against the independent scipy reference" and "Work–precision and stability"):
 * ``reference_agreement``: the default settings against the scipy reference, every model;
 * ``work_precision``: error against cost per diffrax method and tolerance, and the quadrature;
 * ``stability_map``: where each method fails over the parameter space;
-* ``opt_levels``: the difference XLA's optimisation level makes, per path.
+* ``opt_levels``: the difference XLA's optimisation level makes, per path;
+* ``arrest_peaks``: arrest laws over their parameters: every impact solved, its peak the largest
+  floor force.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ SECTIONS = [
     Section("work_precision", "error against cost per method"),
     Section("stability_map", "where each method fails"),
     Section("opt_levels", "XLA optimisation level: output differences"),
+    Section("arrest_peaks", "arrest laws: every impact solved, the peak the largest force"),
 ]
 
 
