@@ -18,7 +18,7 @@ from .angle import impact_angle
 from .batch import evaluate, evaluate_jacobian
 from .energy import EnergyBalance, energy_balance
 from .inputs import PAPER_DURATION_S, PAPER_RATE_Hz, check_inputs
-from .ode import impact_batch, recontact_horizon_s, trajectory_batch
+from .ode import impact_batch, trajectory_batch
 from .options import PATHS, EvaluationSpec, ModelShortcuts
 from .outcome import (
     STATUS_CODES,
@@ -30,6 +30,7 @@ from .outcome import (
 from .parallel import Parallel
 from .quadrature import impact_quadrature, impact_quadrature_batch
 from .quadrature_history import force_history_quadrature
+from .recontact import recontact_horizon_s
 from .sampled import sampled_history
 from .simulate import ImpactResult, force_history, simulate, trajectory
 from .solver import Solver

@@ -15,7 +15,10 @@ the solver's dense interpolant, never by a sign change on a sample grid:
    contact force returning to zero (or δ = 0) for damped ones.
 
 The contact time is the time of the last event; the peak force is the floor force at the
-end of phase 1; the restitution coefficient is the rebound momentum over the impact momentum.
+end of phase 1 (with a ball mode, a moving floor or an arrest law, which can make several local
+maxima, the largest over every step, refined); the restitution coefficient is the rebound
+momentum over the impact momentum. Whether the free motion after separation recontacts:
+:mod:`rbjax.solve.recontact`.
 The vector field and the state at first contact are :mod:`rbjax.solve.vector_field`.
 """
 
@@ -29,10 +32,8 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from ..terms.floors.kinds import AbstractModalFloor
 from ..terms.forces import dynamic_mass_kg, reissner_stiffness_N_per_m, singular_deflection_m
 from ..terms.model import Model
-from ..terms.series_element import free_oscillation
 from .outcome import (
     SINGULAR_FRACTION,
     STATUS_CODES,
@@ -41,6 +42,7 @@ from .outcome import (
     impact_velocity_m_per_s,
     nan_where,
 )
+from .recontact import recontacts
 from .solver import Solver
 from .vector_field import (
     COMPRESSION_ENERGY_FIELD,
@@ -366,48 +368,6 @@ def _coupled_maxima(sols, v0, args, solver: Solver, *, steep: bool = False):
     return peak, peak_time, jnp.maximum(d_best, d_ref)
 
 
-def recontact_horizon_s(model: Model):
-    """How long after separation ``_recontacts`` follows the free motion: two periods of the
-    slowest floor mode, each element in series with the shell's own horizon (two periods of
-    the ball mode, two relaxation times of the series element), at least 10 ms."""
-    floor = model.floor
-    horizon: jax.Array | float = 0.01
-    if isinstance(floor, AbstractModalFloor):
-        omega = floor.modes()[1]
-        periods = jnp.where(omega > 0.0, 4.0 * jnp.pi / jnp.where(omega > 0.0, omega, 1.0), 0.0)
-        horizon = jnp.maximum(jnp.max(periods), horizon)
-    for element in model.series_elements:
-        horizon = jnp.maximum(horizon, element.recontact_horizon_s())
-    return horizon
-
-
-def _recontacts(y_end, args):
-    """True if, after separation, the free motion brings the shell back onto the floor.
-
-    After the end of contact the ball's moving part flies off at Ẋ (gravity is neglected over
-    the short horizon), the elements in series move freely (``free_change_m``: the ball mode
-    rings, the series element relaxes) and a modal floor rings (a massless floor stops).
-    The gap closes again where δ(τ) = δ_end + Ẋτ + Δw(τ) − Δu(τ) > δ_end, checked on 256 times
-    over ``recontact_horizon_s``. The model does not follow a second contact within one
-    record: such an impact is flagged ``recontact``.
-    """
-    ball, model = args
-    taus = jnp.linspace(0.0, recontact_horizon_s(model), 257)[1:]
-    z = y_end[2:]
-    gap_close = body_velocity_m_per_s(y_end, ball, model) * taus
-    for element, states in zip(model.series_elements, model.element_states(z)):
-        gap_close = gap_close + element.free_change_m(states, taus)
-    if isinstance(model.floor, AbstractModalFloor):
-        s = model.floor_states(z)
-        n = model.floor.num_modes
-        q, qd = s[:n], s[n:]
-        _, omega, eta = model.floor.modes()
-        free = free_oscillation(q, qd, omega, eta, taus[:, None])  # (times, modes)
-        gap_close = gap_close - jnp.sum(free - q, axis=1)
-    scale = 1e-9 * ball.wall_m
-    return jnp.any(gap_close > scale)
-
-
 def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     # An arrest law's floor force falls steeply where δ̇ passes its arrest speed, which can make
     # a first, narrow local maximum of the floor force before the largest one, so the peak is
@@ -429,7 +389,7 @@ def impact_ode(height_m, ball, model: Model, solver: Solver) -> ImpactScalars:
     recontact = jnp.asarray(False)
     if model.coupled:
         peak, t_peak, max_deflection = _coupled_maxima(sols, v0, args, solver)
-        recontact = _recontacts(y_end, args)
+        recontact = recontacts(y_end, args)
     elif arrest:
         # the largest of the force at maximum compression and the maxima over the saved
         # steps, refined: each is a value the force takes, the largest the peak
