@@ -15,17 +15,78 @@ Almost all of the suite's time is XLA compiling diffrax solves once per process,
 
 Either is left as the caller set it where the variable is already in the environment (an empty
 ``JAX_COMPILATION_CACHE_DIR`` or ``JAX_DISABLE_MOST_OPTIMIZATIONS=0`` switches it off).
+
+``--compile-report=PATH`` writes where each test's time went: its wall time (setup, call and
+teardown) and the seconds JAX reported (``jax.monitoring``) for tracing, lowering and XLA
+compiling in the test's process, as JSON ``{test id: {event: seconds}}``; under xdist one file
+per worker (``PATH`` with the worker's name before the suffix). A notebook's kernel and a
+test's subprocesses are other processes: their time is wall time only.
 """
 
+import json
 import os
 import shutil
 import tempfile
+import time
+from collections import Counter, defaultdict
+from pathlib import Path
+
+import pytest
 
 os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
 _OWN_CACHE = "JAX_COMPILATION_CACHE_DIR" not in os.environ
 if _OWN_CACHE:  # the first process of the session (the xdist controller): made once, inherited
     os.environ["JAX_COMPILATION_CACHE_DIR"] = tempfile.mkdtemp(prefix="rbjax-test-jax-cache-")
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--compile-report",
+        metavar="PATH",
+        default=None,
+        help="write each test's wall time and JAX's tracing, lowering and XLA compile seconds "
+        "to PATH (JSON; under xdist one file per worker)",
+    )
+
+
+class CompileReport:
+    """Seconds per test: ``wall`` and every duration event JAX reports while the test runs."""
+
+    def __init__(self, path: Path):
+        self.path, self.current, self.seconds = path, None, defaultdict(Counter)
+        import jax.monitoring  # lazy: only with the option
+
+        jax.monitoring.register_event_duration_secs_listener(self.record)
+
+    def record(self, event: str, duration: float, **_) -> None:
+        if self.current is not None:
+            self.seconds[self.current][event] += duration
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(self, item, nextitem):
+        self.current, start = item.nodeid, time.perf_counter()
+        yield
+        self.seconds[item.nodeid]["wall"] += time.perf_counter() - start
+        self.current = None
+
+    def pytest_sessionfinish(self, session):
+        worker = os.environ.get("PYTEST_XDIST_WORKER")
+        path = (
+            self.path.with_name(f"{self.path.stem}.{worker}{self.path.suffix}")
+            if worker
+            else self.path
+        )
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps({k: dict(v) for k, v in self.seconds.items()}, indent=1))
+
+
+def pytest_configure(config):
+    path = config.getoption("--compile-report")
+    # the xdist controller runs no test: its workers (``workerinput``) report
+    controller = config.getoption("numprocesses", None) and not hasattr(config, "workerinput")
+    if path and not controller:
+        config.pluginmanager.register(CompileReport(Path(path).resolve()), "compile-report")
 
 
 def pytest_unconfigure(config):
