@@ -1,6 +1,7 @@
 """``pytest --compile-report=PATH`` (the root conftest.py): where each test's time went, its wall
 time and JAX's tracing, lowering and XLA compile seconds, as JSON (one file per xdist worker);
-run here in a subprocess on tests/test_xla_level.py, whose first test compiles one program."""
+run here in a subprocess on tests/test_xla_level.py, whose first test compiles one program (no
+persistent compilation cache there, so that it compiles whatever ran before)."""
 
 import json
 import os
@@ -15,10 +16,11 @@ LEVEL_TESTS = "tests/test_xla_level.py"
 def test_the_report_holds_each_tests_wall_time_and_its_compile_seconds(tmp_path):
     report = tmp_path / "report" / "times.json"
     proc = subprocess.run(
-        [sys.executable, "-m", "pytest", LEVEL_TESTS, "-q", "-n", "0", "-p", "no:randomly"]
-        + ["-p", "no:cacheprovider", f"--compile-report={report}"],
+        [sys.executable, "-m", "pytest", LEVEL_TESTS, "-q", "-n", "0", "-p", "no:cacheprovider"]
+        + [f"--compile-report={report}"],
         cwd=ROOT,
-        env={k: v for k, v in os.environ.items() if k != "PYTEST_XDIST_WORKER"},
+        env={k: v for k, v in os.environ.items() if k != "PYTEST_XDIST_WORKER"}
+        | {"JAX_COMPILATION_CACHE_DIR": ""},
         capture_output=True,
         text=True,
         timeout=300,
