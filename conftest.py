@@ -18,13 +18,18 @@ Either is left as the caller set it where the variable is already in the environ
 
 ``--compile-report=PATH`` writes where each test's time went: its wall time (setup, call and
 teardown) and the seconds JAX reported (``jax.monitoring``) for tracing, lowering and XLA
-compiling in the test's process, as JSON ``{test id: {event: seconds}}``; under xdist one file
-per worker (``PATH`` with the worker's name before the suffix). A notebook's kernel and a
+compiling in the test's process, as JSON ``{test id: {event: seconds}}``, and under
+``"programs"`` the programs themselves in order, from JAX's own log: ``["trace", name, s]``,
+``["args", "jit(name) with global shapes and types …", 0]`` and ``["xla", "jit(name)", s]`` (which
+programs a test compiled, for which shapes, and whether one was traced again); under xdist one
+file per worker (``PATH`` with the worker's name before the suffix). A notebook's kernel and a
 test's subprocesses are other processes: their time is wall time only.
 """
 
 import json
+import logging
 import os
+import re
 import shutil
 import tempfile
 import time
@@ -50,18 +55,39 @@ def pytest_addoption(parser):
     )
 
 
-class CompileReport:
-    """Seconds per test: ``wall`` and every duration event JAX reports while the test runs."""
+class CompileReport(logging.Handler):
+    """Seconds per test: ``wall`` and every duration event JAX reports while the test runs; the
+    programs from JAX's log (its dispatch and pxla loggers at DEBUG, not propagated)."""
+
+    TIMED = re.compile(r"Finished (tracing|XLA compilation of) (.+?) (?:for jit )?in ([0-9.]+) sec")
 
     def __init__(self, path: Path):
+        super().__init__(logging.DEBUG)
         self.path, self.current, self.seconds = path, None, defaultdict(Counter)
+        self.programs: defaultdict[str, list] = defaultdict(list)
         import jax.monitoring  # lazy: only with the option
 
         jax.monitoring.register_event_duration_secs_listener(self.record)
+        for name in ("jax._src.dispatch", "jax._src.interpreters.pxla"):
+            log = logging.getLogger(name)
+            log.setLevel(logging.DEBUG)
+            log.addHandler(self)
+            log.propagate = False
 
     def record(self, event: str, duration: float, **_) -> None:
         if self.current is not None:
             self.seconds[self.current][event] += duration
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if self.current is None:
+            return
+        message = record.getMessage()
+        if message.startswith("Compiling "):
+            args = message.removeprefix("Compiling ").split(". Argument mapping")[0]
+            self.programs[self.current].append(["args", args, 0.0])
+        elif timed := self.TIMED.match(message):
+            kind = "trace" if timed[1] == "tracing" else "xla"
+            self.programs[self.current].append([kind, timed[2], float(timed[3])])
 
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item, nextitem):
@@ -78,7 +104,10 @@ class CompileReport:
             else self.path
         )
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({k: dict(v) for k, v in self.seconds.items()}, indent=1))
+        rows = {
+            k: dict(v) | {"programs": self.programs.get(k, [])} for k, v in self.seconds.items()
+        }
+        path.write_text(json.dumps(rows, indent=1))
 
 
 def pytest_configure(config):

@@ -1,7 +1,8 @@
 """``pytest --compile-report=PATH`` (the root conftest.py): where each test's time went, its wall
 time and JAX's tracing, lowering and XLA compile seconds, as JSON (one file per xdist worker);
 run here in a subprocess on tests/test_xla_level.py, whose first test compiles one program (no
-persistent compilation cache there, so that it compiles whatever ran before)."""
+persistent compilation cache there, so that it compiles whatever ran before); with the programs
+each test traced and compiled."""
 
 import json
 import os
@@ -44,3 +45,14 @@ def test_the_report_holds_each_tests_wall_time_and_its_compile_seconds(tmp_path)
     ):
         assert first[f"/jax/core/compile/{event}"] > 0.0
     assert "/jax/core/compile/backend_compile_duration" not in seconds[ids[1]]  # compiles nothing
+    # the program itself, in order: traced, its arguments' shapes, compiled by XLA
+    assert [row[:2] for row in first["programs"]] == [
+        ["trace", "<lambda>"],
+        [
+            "args",
+            "jit(<lambda>) with global shapes and types (ShapedArray(float64[], weak_type=True),)",
+        ],
+        ["xla", "jit(<lambda>)"],
+    ]
+    assert all(s > 0.0 for kind, _, s in first["programs"] if kind != "args")
+    assert seconds[ids[1]]["programs"] == []
