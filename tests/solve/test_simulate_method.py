@@ -247,3 +247,26 @@ def test_a_model_is_the_one_calling_convention():
         rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, model, gas="none")
     with pytest.raises(ValueError, match="model="):
         rbjax.simulate(1.0, rbjax.JIS_RUBBER_BALL, "kelvin-voigt")
+
+
+def test_batches_up_to_a_power_of_two_share_one_program_and_keep_each_impact():
+    """A concrete batch that fits one chunk is solved padded to the next power of two: batches
+    of 5 to 8 impacts compile one program, and each impact is the one the unpadded program
+    (the same batch staged under ``jax.jit``) computes."""
+    from rbjax.solve.devices import cached_jit
+    from rbjax.solve.inputs import as_arrays
+    from rbjax.solve.path_runner import Rows, rows_program
+
+    model = rbjax.Model()
+    heights = np.linspace(0.2, 1.6, 8)
+    spec = Rows.of(*as_arrays((heights, BALL, model))).spec
+    program = cached_jit(rows_program("quadrature", spec, rbjax.Solver()))
+    program.clear_cache()
+    for n in (5, 6, 7, 8):
+        res = rbjax.simulate(heights[:n], model=model)
+        staged = jax.jit(lambda h: rbjax.simulate(h, model=model))(jnp.asarray(heights[:n]))
+        assert res.path == staged.path == "quadrature"
+        assert res.contact_time_s.shape == (n,)
+        for name in STATED_FIELDS:
+            np.testing.assert_allclose(getattr(res, name), getattr(staged, name), rtol=1e-13)
+    assert program._cache_size() == 1
