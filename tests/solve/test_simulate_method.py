@@ -250,7 +250,7 @@ def test_a_model_is_the_one_calling_convention():
 
 
 def test_batches_up_to_a_power_of_two_share_one_program_and_keep_each_impact():
-    """A concrete batch that fits one chunk is solved padded to the next power of two: batches
+    """A concrete batch of up to 128 impacts is solved padded to the next power of two: batches
     of 5 to 8 impacts compile one program, and each impact is the one the unpadded program
     (the same batch staged under ``jax.jit``) computes."""
     from rbjax.solve.devices import cached_jit

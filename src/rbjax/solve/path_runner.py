@@ -133,8 +133,9 @@ def rows_program(path: str, spec: tuple, solver: Solver):
 def run_rows(path: str, batch: Rows, solver: Solver, parallel: Parallel):
     """ImpactScalars of the rows of ``batch`` (1-D): one call on the default device where the
     batch fits one chunk of one device (JAX arrays), else chunks split over the devices of
-    ``parallel`` (NumPy arrays). One chunk is padded to :func:`bucket_rows` rows (repeating its
-    first row; the outputs cut back), so that batches of 5 to 8 impacts share one program."""
+    ``parallel`` (NumPy arrays). One chunk of up to ``ALIGN`` rows is padded to
+    :func:`bucket_rows` rows (repeating its first row; the outputs cut back), so that batches of 5
+    to 8 impacts share one program."""
 
     fn = rows_program(path, batch.spec, solver)
     chunk = parallel.chunk_rows(path, parallel.local_devices())
