@@ -74,8 +74,9 @@ def as_arrays(tree):
 FALLBACK_MIN_BATCH = 64
 
 
-def padded_rows(rows: np.ndarray) -> np.ndarray:
-    """``rows`` padded with its first entry to a power of two, at least ``FALLBACK_MIN_BATCH``,
-    so that the batches solved again by the ODE come in few shapes (few compiles)."""
-    size = max(FALLBACK_MIN_BATCH, 1 << int(rows.size - 1).bit_length())
+def padded_rows(rows: np.ndarray, size: int | None = None) -> np.ndarray:
+    """``rows`` padded with its first entry to ``size`` rows (default: a power of two, at least
+    ``FALLBACK_MIN_BATCH``, so that the batches solved again by the ODE come in few shapes)."""
+    if size is None:
+        size = max(FALLBACK_MIN_BATCH, 1 << int(rows.size - 1).bit_length())
     return np.concatenate([rows, np.full(size - rows.size, rows[0])])

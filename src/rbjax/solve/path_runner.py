@@ -143,7 +143,7 @@ def run_rows(path: str, batch: Rows, solver: Solver, parallel: Parallel):
         n, size = batch.size, bucket_rows(batch.size, chunk)
         if size == n:
             return cached_jit(fn)(batch.rows, batch.shared)
-        padded = batch.take(np.concatenate([np.arange(n), np.zeros(size - n, dtype=int)]))
+        padded = batch.take(padded_rows(np.arange(n), size))
         return _first_rows(cached_jit(fn)(padded.rows, batch.shared), n)
     return device_map(fn, batch.rows, batch.shared, parallel=parallel, path=path)
 
