@@ -65,8 +65,8 @@ CONSTANT_PARAMETERS = ("radius_m", "wall_m", "mass_kg", "momentum_flux_weight")
 #: (C < 2e-5 m/N; about the JIS ball's shell stiffness) and its relaxation time from 0.5 ms
 #: (faster, the element is a bare spring and the equations stiff) to 0.1 s (slower, a rigid
 #: damper); the fit on the bundled recordings lands at C = 3.0e-6 m/N, τ = 4.6 ms. Wider
-#: ranges would raise the sampled path's sub-steps (``fit_substeps``, set by the fastest
-#: corner) for every candidate of a selection.
+#: ranges would raise the sampled path's most sub-steps (``fit_substeps``, set by the fastest
+#: corner; each evaluation takes those its own values need).
 FIT_RANGES = {
     "mode_mass_ratio": (0.0, 100.0),
     "mode_frequency_Hz": (20.0, 2500.0),

@@ -13,10 +13,12 @@ import jax
 import numpy as np
 
 from .._validate import check_choice
-from ..solve.outcome import impact_velocity_m_per_s
-from ..solve.record_samples import record_samples_unsupported, substeps_for_rate
+from ..solve.record_samples import (
+    first_contact_jacobian,
+    record_samples_unsupported,
+    substeps_for_rate,
+)
 from ..solve.solver import Solver
-from ..solve.vector_field import RESTITUTION_FIELD, initial_state
 from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model
@@ -61,10 +63,12 @@ def fit_path(path: str, model: Model, solver) -> tuple[str, str | None]:
 
 
 def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
-    """Runge–Kutta steps per sample of the sampled path for every value a fit of ``model`` can
-    reach: the fastest rate of the vector field at first contact (its Jacobian's spectral
-    radius), at the model's values and with each ``FIT_RANGES`` parameter at the bound where it
-    is fastest (the upper, or the lower for those in ``FASTEST_AT_LOWER``)."""
+    """The most Runge–Kutta steps per sample the sampled path takes for any value a fit of
+    ``model`` can reach (each evaluation takes the count its own values need, up to this:
+    :func:`~rbjax.solve.record_samples.substeps_at`): by the fastest rate of the vector field at
+    first contact (its Jacobian's spectral radius), at the model's values and with each
+    ``FIT_RANGES`` parameter at the bound where it is fastest (the upper, or the lower for those
+    in ``FASTEST_AT_LOWER``)."""
     names = set(parameter_names(1.0, ball, model))
     corner = {
         n: (lo if n in FASTEST_AT_LOWER else hi) for n, (lo, hi) in FIT_RANGES.items() if n in names
@@ -78,11 +82,7 @@ def fit_substeps(ball: Ball, model: Model, rate_Hz: float) -> int:
     return substeps_for_rate(fastest, rate_Hz)
 
 
-@jax.jit
-def _first_contact_jacobian(ball: Ball, model: Model):
-    """The vector field's Jacobian at first contact from 5 m/s (the fastest impact a fit meets)."""
-    state = initial_state(impact_velocity_m_per_s(5.0), ball, model)
-    return jax.jacfwd(lambda y: RESTITUTION_FIELD(0.0, y, (ball, model)))(state)
+_first_contact_jacobian = jax.jit(first_contact_jacobian)
 
 
 class Problem:
@@ -132,7 +132,7 @@ class Problem:
             solver=solver,
             path=path,
             feature_rows=feature_rows,
-            substeps=fit_substeps(ball, structure_model, float(data.rate_Hz))
+            max_substeps=fit_substeps(ball, structure_model, float(data.rate_Hz))
             if path == "samples"
             else 0,
         )

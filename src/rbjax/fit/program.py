@@ -87,7 +87,10 @@ class Structure(eqx.Module):
     #: (:mod:`rbjax.fit.record_forces`); ``"ode"``: the diffrax ODE with its events, every column
     #: carried through it (moving floors).
     path: str = eqx.field(static=True, default="samples")
-    substeps: int = eqx.field(static=True, default=2)
+    #: the sampled path's most Runge–Kutta steps per sample (those of the fit range's fastest
+    #: corner); each evaluation takes the count its parameters need, up to this
+    #: (:func:`rbjax.solve.record_samples.substeps_at`)
+    max_substeps: int = eqx.field(static=True, default=2)
     #: False when no extra weight is given: the feature rows are then 0 and their Jacobian is
     #: not computed (the features are still returned, for the onsets and the report).
     feature_rows: bool = eqx.field(static=True, default=True)

@@ -149,18 +149,24 @@ def load_or_export(description, make: Callable[[], Callable], args) -> Callable:
     path = folder / f"{key}.jaxexport"
     exported = _read(path)
     if exported is None:
-        # One process a machine traces a program: the others (worker processes of a model
-        # selection, started together) wait for its export instead of tracing it too.
+        # One process a machine traces and compiles a program: the others (worker processes
+        # of a model selection, started together) wait for it instead of tracing and compiling
+        # it too on the same cores, then find its export and its compilation in the caches.
+        # The export is written once it is compiled, so a process that reads it never compiles.
         with _exclusive(folder / f"{key}.lock"):
             exported = _read(path)
             if exported is None:
                 exported = _export(make(), args)
                 if exported is None:
                     return make()
+                program = jax.jit(exported.call)
+                program.lower(*args).compile()  # kept by the jit and the compilation cache
                 try:
                     _write_atomic(path, exported.serialize())
                 except OSError:
                     pass  # a read-only cache: this process still runs the exported program
+                _LOADED[key] = program
+                return program
     _LOADED[key] = jax.jit(exported.call)
     return _LOADED[key]
 

@@ -11,6 +11,11 @@ dF(t − s)/ds = −Ḟ, which the solve records beside the force.
 :func:`record_forces` is a ``jax.custom_jvp`` whose tangent rule computes that Jacobian once and
 returns J·dθ; under ``jax.jacfwd`` (which batches the tangent rule over the columns of θ) the
 solve and its p + 1 tangents run once, not once per column.
+
+The Runge–Kutta steps per sample are those the physical parameters of the moment need
+(:func:`~rbjax.solve.record_samples.substeps_at`, a count, not differentiated), up to the
+structure's ``max_substeps`` (its fit range's fastest corner): a fit spends the steps of the
+values it is at, not those of the fastest values it could reach.
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..solve.record_samples import record_samples
+from ..solve.record_samples import record_samples, substeps_at
 
 
 def ball_and_model(s, physical, constants):
@@ -36,10 +41,16 @@ def record_forces(s, theta, constants, heights_m):
     """Forces (K, N) of the K records at their N samples (before the measuring chain)."""
     p, k = len(s.physical_positions), s.n_records
 
-    def one(physical, height, shift):
+    def substeps(physical):
+        if s.max_substeps == 1:
+            return 1
+        ball, model = ball_and_model(s, physical, constants)
+        return substeps_at(ball, model, s.rate_Hz, s.max_substeps)
+
+    def one(physical, height, shift, count):
         ball, model = ball_and_model(s, physical, constants)
         force, d_shift, _ = record_samples(
-            height, shift, ball, model, s.rate_Hz, s.n_samples, s.substeps
+            height, shift, ball, model, s.rate_Hz, s.n_samples, count
         )
         return force, d_shift
 
@@ -50,17 +61,21 @@ def record_forces(s, theta, constants, heights_m):
     @jax.custom_jvp
     def forces(th):
         physical, shifts, dh = split(th)
-        return jax.vmap(lambda h, sh: one(physical, h, sh)[0])(heights_m + dh, shifts)
+        count = substeps(physical)
+        return jax.vmap(lambda h, sh: one(physical, h, sh, count)[0])(heights_m + dh, shifts)
 
     @forces.defjvp
     def forces_jvp(primals, tangents):
         (th,), (dth,) = primals, tangents
         physical, shifts, dh = split(th)
         d_physical, d_shifts, d_dh = split(dth)
+        count = substeps(physical)
 
         def per_record(height, shift):
             def g(x):
-                force, d_shift = one(x[:p], height + (x[p] if s.height_error else 0.0), shift)
+                force, d_shift = one(
+                    x[:p], height + (x[p] if s.height_error else 0.0), shift, count
+                )
                 return force, (force, d_shift)
 
             x = jnp.concatenate([physical, jnp.zeros(1)]) if s.height_error else physical

@@ -26,8 +26,9 @@ Statuses as the other paths (``outcome.STATUS_CODES``): ``solver_failed`` for a 
 state, ``mass_singularity`` for δ ≥ 0.999·2R; a failed impact gives NaN samples. A contact
 still going at the end of the record is not a failure here (the record is a window).
 
-The number of samples and ``substeps`` are static; everything else is a runtime value, and the
-function works under ``jax.jit``, ``jax.vmap`` and ``jax.jacfwd``. Moving floors are not
+The number of samples is static; ``substeps`` is a Python int or a traced integer (the fit's
+count for the parameters of the moment, :func:`substeps_at`); everything else is a runtime value,
+and the function works under ``jax.jit``, ``jax.vmap`` and ``jax.jacfwd``. Moving floors are not
 handled (``record_samples_unsupported``).
 """
 
@@ -44,11 +45,15 @@ from .outcome import SINGULAR_FRACTION, STATUS_CODES, impact_velocity_m_per_s, n
 from .vector_field import RESTITUTION_FIELD, contact_force, floor_force_N, initial_state
 
 #: The largest |λ|·h of a Runge–Kutta step the sub-steps allow for the fastest rate λ of the
-#: model over its fit range (a ball mode's damping ηω at η = 4, f = 2.5 kHz; a Zener
+#: model (a ball mode's damping ηω, up to η = 4, f = 2.5 kHz at its fit range's corner; a Zener
 #: relaxation 1/τ): inside RK4's stability limit |λh| ≈ 2.8 with a margin of ~3. Components
 #: that fast are overdamped and gone within a few steps; the contact's own motion, ~1/100 of
 #: that rate, is resolved to ~1e-9 of the peak force (tests/fit/test_record_forces.py).
-MAX_RATE_STEP = 1.0
+MAX_RATE_STEP = 0.5
+
+#: The impact speed at which the fastest rate is taken (first contact from 5 m/s, a drop of
+#: 1.27 m more than the standard's 1 m: the fastest impact a fit meets).
+RATE_SPEED_M_PER_S = 5.0
 
 
 def record_samples_unsupported(model: Model) -> str | None:
@@ -63,19 +68,56 @@ def record_samples_unsupported(model: Model) -> str | None:
 
 
 def substeps_for_rate(fastest_rate_per_s: float, rate_Hz: float) -> int:
-    """Runge–Kutta steps per sample so that |λ|·h ≤ ``MAX_RATE_STEP`` for the fastest rate λ of
-    the model (at least 2: the contact's own oscillation then has ≥ 1 600 steps per period at
-    44.1 kHz, ~1e-9 of the peak force)."""
+    """Runge–Kutta steps per sample so that |λ|·h ≤ ``MAX_RATE_STEP`` for the fastest rate λ
+    (at least one: the contact's own oscillation then has ≥ 800 steps per period at 44.1 kHz,
+    ~1e-10 of the peak force)."""
     if not (math.isfinite(fastest_rate_per_s) and fastest_rate_per_s > 0):
-        return 2
-    return max(2, math.ceil(fastest_rate_per_s / (MAX_RATE_STEP * rate_Hz)))
+        return 1
+    return max(1, math.ceil(fastest_rate_per_s / (MAX_RATE_STEP * rate_Hz)))
 
 
-def _rk4(y, k1, h, args, substeps: int):
+def first_contact_jacobian(ball, model: Model):
+    """The restitution vector field's Jacobian at first contact from ``RATE_SPEED_M_PER_S``:
+    its spectral radius is the fastest rate of the model's motion."""
+    state = initial_state(impact_velocity_m_per_s(RATE_SPEED_M_PER_S), ball, model)
+    return jax.jacfwd(lambda y: RESTITUTION_FIELD(0.0, y, (ball, model)))(state)
+
+
+def spectral_radius_bound(matrix, squarings: int = 10):
+    """An upper bound of the spectral radius ρ(A) of a small square matrix that any backend
+    computes (no nonsymmetric eigensolver): Gelfand's ‖A^k‖^{1/k} ≥ ρ(A) at k = 2^squarings,
+    by repeated squaring with the scale carried as a logarithm (within a factor
+    κ(V)^{1/1024} of ρ for a diagonalisable A with eigenvectors V: 2 % for κ = 1e10)."""
+    a = jnp.asarray(matrix)
+    log_scale = jnp.zeros((), a.dtype)
+    tiny = jnp.finfo(a.dtype).tiny
+    for _ in range(squarings):
+        norm = jnp.maximum(jnp.linalg.norm(a), tiny)
+        a = a / norm
+        log_scale = 2.0 * (log_scale + jnp.log(norm))
+        a = a @ a
+    norm = jnp.maximum(jnp.linalg.norm(a), tiny)
+    return jnp.exp((log_scale + jnp.log(norm)) / 2.0**squarings)
+
+
+def substeps_at(ball, model: Model, rate_Hz: float, most: int):
+    """The Runge–Kutta steps per sample for the model's values of the moment (traced): the
+    ``substeps_for_rate`` rule on :func:`spectral_radius_bound` of the first-contact Jacobian,
+    at most ``most`` (the count for the fastest values the caller allows: a fit's range
+    corners), at least one. Not differentiated (a count)."""
+    ball, model = jax.lax.stop_gradient((ball, model))
+    fastest = spectral_radius_bound(first_contact_jacobian(ball, model))
+    count = jnp.ceil(fastest / (MAX_RATE_STEP * rate_Hz))
+    count = jnp.where(jnp.isfinite(count), count, most)
+    return jnp.clip(count, 1, most).astype(jnp.int32)
+
+
+def _rk4(y, k1, h, args, substeps):
     """``substeps`` classic Runge–Kutta steps of h/substeps from y, with k1 = dy/dt at y given;
     returns the new state and dy/dt there (the next step's k1, and ẏ for Ḟ at the sample: the
     vector field is evaluated four times a substep, never twice at one state). A loop: one copy
-    of the vector field in the compiled program, whatever ``substeps``."""
+    of the vector field in the compiled program, whatever ``substeps`` (a Python int, or a
+    traced count: then a loop of that many turns)."""
 
     def f(yy):
         return RESTITUTION_FIELD(0.0, yy, args)
@@ -90,7 +132,9 @@ def _rk4(y, k1, h, args, substeps: int):
         y = y + (step / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         return y, f(y)
 
-    return jax.lax.fori_loop(0, substeps, one, (y, k1)) if substeps > 1 else one(0, (y, k1))
+    if isinstance(substeps, int) and substeps == 1:
+        return one(0, (y, k1))
+    return jax.lax.fori_loop(0, substeps, one, (y, k1))
 
 
 def _force_and_rate(y, ydot, ball, model):
@@ -103,7 +147,7 @@ def _force_and_rate(y, ydot, ball, model):
 
 
 def record_samples(
-    height_m, shift_s, ball, model: Model, rate_Hz: float, num_samples: int, substeps: int
+    height_m, shift_s, ball, model: Model, rate_Hz: float, num_samples: int, substeps
 ):
     """(force (N,), dforce/dshift (N,), status) of one impact at the record's samples
     t_i = i/rate_Hz, i < ``num_samples``, the contact starting at ``shift_s`` (see the module
