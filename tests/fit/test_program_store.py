@@ -3,6 +3,7 @@
 The reference for every value is the same computation in NumPy.
 """
 
+import logging
 from pathlib import Path
 
 import jax
@@ -124,3 +125,30 @@ def test_the_key_covers_the_source_of_every_layer():
         "__init__.py",
     } <= files
     assert files == {p.relative_to(root).as_posix() for p in root.rglob("*.py")}
+
+
+def test_the_export_is_written_once_its_program_is_compiled(store, monkeypatch, caplog):
+    """Worker processes that need a new program wait for the one that traces it, then read its
+    export: the export is written only after the program is compiled (so a reader finds the
+    compilation in the cache and never compiles it beside the writer), and the program returned
+    runs without compiling again."""
+    written_after = []
+
+    def spy(path, blob):
+        written_after.append("XLA compilation of jit(call)" in caplog.text)
+        return write(path, blob)
+
+    write = program_store._write_atomic
+    monkeypatch.setattr(program_store, "_write_atomic", spy)
+    before = jax.config.jax_log_compiles
+    jax.config.update("jax_log_compiles", True)
+    try:
+        with caplog.at_level(logging.WARNING):
+            fn = program_store.load_or_export("toy-compiled-first", _program, ARGS)
+            assert written_after == [True]
+            caplog.clear()
+            out = fn(*ARGS)
+            assert "XLA compilation of jit(call)" not in caplog.text
+    finally:
+        jax.config.update("jax_log_compiles", before)
+    np.testing.assert_allclose(out["y"], _expected(*ARGS)["y"], rtol=1e-14)
