@@ -223,6 +223,40 @@ def test_max_steps_zero_evaluates_the_start_and_says_so(recovered):
     assert start.residual_rms_N > 2 * lm.residual_rms_N
 
 
+def test_an_evaluation_with_free_parameters_stays_at_its_point(recovered):
+    """The program evaluates by running its optimiser with an infinite tolerance (no second
+    copy of the model for evaluating): with every parameter free and far from the optimum, the
+    evaluation must still be at the given point: u = 0, no step counted, and the residuals and
+    Jacobian those of the evaluation with every parameter held (θ = θ_held there, whatever the
+    optimiser does), to the round-off of θ's transform there and back."""
+    from rbjax.fit.setup import set_up
+
+    data, _ = recovered["hunt-crossley"]
+    setup = set_up(
+        data,
+        "hunt-crossley",
+        blocked_force="momentum",
+        gas="adiabatic",
+        ball=JIS_RUBBER_BALL,
+        fix=None,
+        options=FitOptions(),
+    )
+    problem = setup.problem
+    lay = problem.layout
+    theta = lay.theta(JIS_RUBBER_BALL.replace(youngs_Pa=2.6e6), setup.candidate, data.onset_s)
+    weights = problem.weights(setup.fit_mask)
+    n = len(lay.names)
+    held = problem.run(theta, np.zeros(n, bool), weights, setup.constants)
+    free = problem.run(theta, np.ones(n, bool), weights, setup.constants)
+    assert free["steps"] == 0 and np.all(free["u"] == 0) and free["successful"]
+    for key in ("r", "jac_theta", "force", "features"):
+        scale = np.max(np.abs(held[key]))
+        np.testing.assert_allclose(free[key], held[key], rtol=0, atol=1e-9 * scale, err_msg=key)
+    # the optimiser would have moved from here: one round from the same point does
+    stepped = problem.run(theta, np.ones(n, bool), weights, setup.constants, atol=1e-9)
+    assert stepped["steps"] > 0 and stepped["r"] @ stepped["r"] < 0.5 * (held["r"] @ held["r"])
+
+
 def test_the_histories_reported_are_those_of_the_parameters_reported(recovered):
     """With ``max_steps=0`` the fit reports its start: the E–ν check holds ν at 0.5 after the
     start was evaluated at ν = 0.45, so the start is evaluated again there (the reported
