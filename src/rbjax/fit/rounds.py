@@ -25,6 +25,7 @@ MAX_ROUNDS = 8
 
 #: A start still going after two rounds at a cost this many times that of a converged start is
 #: abandoned (its lane would keep the others' batch running; it is reported as not converged).
+#: See :func:`abandoned`.
 ABANDON_FACTOR = 1.5
 
 
@@ -34,6 +35,7 @@ class Lane:
 
     theta: np.ndarray
     out: dict
+    previous_cost: float = math.inf
     steps: int = 0
     done: bool = False
     converged: bool = False
@@ -113,12 +115,9 @@ def optimise(
                 )
                 continue
             best = min((other.cost for other in lanes if other.converged), default=math.inf)
-            if rounds >= 2 and lane.cost > ABANDON_FACTOR * best:
-                lane.done = True
-                lane.message = (
-                    f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× "
-                    f"that of a converged start ({best:.4g})"
-                )
+            why = abandoned(lane, best, rounds)
+            if why:
+                lane.done, lane.message = True, why
                 continue
             if lane.steps >= max_steps or rounds >= MAX_ROUNDS:
                 lane.done = True
@@ -157,12 +156,37 @@ def optimise(
             if not np.all(np.isfinite(new_theta)):
                 lane.done, lane.message = True, "the optimiser produced non-finite parameters"
                 continue
+            lane.previous_cost = lane.cost
             lane.theta, lane.out = new_theta, res
             if not res["successful"]:
                 lane.message = f"not converged after {lane.steps} optimiser steps" + (
                     " (step limit)" if res["max_steps_reached"] else " (the optimiser stopped)"
                 )
     return lanes
+
+
+def abandoned(lane: Lane, best: float, rounds: int) -> str:
+    """Why a start still going after ``rounds`` rounds is given up, where a converged start
+    costs ``best`` ("" if it goes on). After two rounds: a cost over ``ABANDON_FACTOR`` times
+    ``best``. Before its last round: a cost that would still be above ``best`` when its rounds
+    run out, were it to fall in each round left by as much as in its last (a start crawling
+    towards a bound or along a valley, which could only end not converged or above ``best``;
+    crawls slow down, so the last round's descent is a generous rate)."""
+    if rounds >= 2 and lane.cost > ABANDON_FACTOR * best:
+        return (
+            f"abandoned after {rounds} rounds: cost {lane.cost:.4g} > {ABANDON_FACTOR:g}× "
+            f"that of a converged start ({best:.4g})"
+        )
+    left = MAX_ROUNDS - rounds
+    descent = lane.previous_cost - lane.cost
+    if math.isfinite(best) and math.isfinite(descent) and left > 0:
+        if lane.cost - left * descent > best:
+            return (
+                f"abandoned after {rounds} rounds: at its last round's descent ({descent:.3g}) "
+                f"its cost {lane.cost:.6g} would stay above that of a converged start "
+                f"({best:.6g}) in the {left} rounds left"
+            )
+    return ""
 
 
 def pressed_on_bound(lay, phi, free_idx, jac_phi, r) -> np.ndarray:
