@@ -16,7 +16,14 @@ SRC = Path(rbjax.__file__).parent
 #: layers below it, never one above.
 LAYERS = ("terms", "spectrum", "solve", "room", "data", "fit", "studies", "report", "commands")
 #: Top-level helpers beside the packages, and the layers they may import.
-HELPERS = {"_x64": (), "_validate": (), "_progress": (), "text": (), "plot": ("spectrum",)}
+HELPERS = {
+    "_x64": (),
+    "_validate": (),
+    "_progress": (),
+    "_exit": (),
+    "text": (),
+    "plot": ("spectrum",),
+}
 #: A module holds one idea: at most this many statements (``ast.stmt`` nodes, nested ones
 #: included). Statements, not lines, so that the formatter's wrapping never forces a split;
 #: 300 is what the largest modules held under the former 500-line cap.

@@ -16,6 +16,7 @@ import pkgutil
 import sys
 
 from . import __version__, commands
+from ._exit import skip_final_collection
 from .commands import ArgumentParser, UsageError, add_json_flag
 
 
@@ -94,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.print_help(sys.stderr)
             return 2
         _enable_compile_cache()
+        skip_final_collection()
         return int(args.func(args) or 0)
     except (UsageError, ValueError, OSError) as err:  # rbjax.data.DataError is a ValueError
         print(f"rbjax: error: {_one_line(err)}", file=sys.stderr)

@@ -274,3 +274,27 @@ def test_prepare_data_reads_any_path_like_and_an_iterator_of_paths():
         prepare_data([D.load(files[0])[0], np.zeros(100)])
     with pytest.raises(D.DataError, match="no recordings to fit"):
         prepare_data(p for p in ())
+
+
+def test_fit_data_carries_its_features_and_filter_to_a_worker():
+    # computed once and pickled with the data (what a selection's worker process receives),
+    # against independent computations: the features of the force array, scipy's filter design
+    import pickle
+
+    import scipy.signal
+
+    files = [D.examples_dir() / "h010_d1.csv", D.examples_dir() / "h040_d1.csv"]
+    data = prepare_data(files)
+    features, sos = data.measured_features, data.lowpass_sos
+    copy = pickle.loads(pickle.dumps(data))
+    assert {"measured_features", "lowpass_sos"} <= set(vars(copy))  # carried, not recomputed
+    expected = record_features(np.array(data.force_N), data.rate_Hz)
+    for name, value in expected.items():
+        np.testing.assert_array_equal(copy.measured_features[name], value)
+        assert not features[name].flags.writeable
+    ref = scipy.signal.butter(4, 1250.0, fs=data.rate_Hz, output="sos")
+    np.testing.assert_array_equal(copy.lowpass_sos, ref)
+    assert not sos.flags.writeable
+    unfiltered = data.replace(lowpass_Hz=None)  # a new record set: computed afresh
+    assert "lowpass_sos" not in vars(unfiltered)
+    np.testing.assert_array_equal(unfiltered.lowpass_sos, np.zeros((1, 6)))

@@ -19,7 +19,6 @@ from ..solve.record_samples import (
     substeps_for_rate,
 )
 from ..solve.solver import Solver
-from ..spectrum.filters import butter_lowpass_sos
 from ..terms.ball import Ball
 from ..terms.model import Model
 from ..terms.parameters import parameter_names, parameter_table, replace
@@ -27,7 +26,7 @@ from . import uncertainty as unc
 from .batching import FitBatcher
 from .layout import FASTEST_AT_LOWER, FIT_RANGES, FitLayout, model_from_name, parse_model_name
 from .program import Structure, run_program
-from .records import FitData, prepare_data, record_features
+from .records import FitData, prepare_data
 from .result import plain_value
 
 #: Optimiser steps per compiled call (a static size of the program).
@@ -110,11 +109,6 @@ class Problem:
         self.layout = FitLayout(ball, structure_model, data.n_records, height_error)
         lay = self.layout
         filtered = data.lowpass_Hz is not None
-        sos = (
-            butter_lowpass_sos(4, data.lowpass_Hz, data.rate_Hz)
-            if data.lowpass_Hz is not None
-            else np.zeros((1, 6))
-        )
 
         treedef = jax.tree_util.tree_structure((0.0, ball, structure_model))
         self.structure = Structure(
@@ -136,7 +130,7 @@ class Problem:
             if path == "samples"
             else 0,
         )
-        self.measured = record_features(data.force_N, data.rate_Hz)
+        self.measured = data.measured_features
         feats = np.stack(
             [
                 self.measured["onset_s"],
@@ -147,7 +141,7 @@ class Problem:
         )
         self.arrays = {
             "heights": np.asarray(data.height_m, dtype=float),
-            "sos": np.asarray(sos, dtype=float),
+            "sos": data.lowpass_sos,
             "measured": np.asarray(data.force_N, dtype=float),
             "features": np.concatenate([feats, self.measured["lfe_octave_dB"]], axis=1),
         }

@@ -18,6 +18,8 @@ import os
 import jax
 from threadpoolctl import threadpool_limits
 
+from ..._exit import skip_final_collection
+
 
 class HostAndPool(cf.Executor):
     """This process runs one task at a time in a thread beside a pool of local workers: the
@@ -82,8 +84,9 @@ def single_threaded_blas() -> None:
 
 def worker_start(options: dict) -> None:
     """A worker process's JAX: one CPU device, float64, the parent's options; BLAS on one
-    thread."""
+    thread; a quick exit (:mod:`rbjax._exit`)."""
     single_threaded_blas()
+    skip_final_collection()
     jax.config.update("jax_platforms", "cpu")
     try:
         jax.config.update("jax_num_cpu_devices", 1)

@@ -119,6 +119,8 @@ def select_model(
     pairs = candidate_pairs(candidates, blocked_forces)
     data = prepare_data(data)
     check_folds(data)
+    # computed here, once: the tasks' copies of the data carry them to the workers
+    data.measured_features, data.lowpass_sos  # noqa: B018  (cached properties)
     structures = shared_structures(
         [name for name, _ in pairs],
         fit_kwargs.get("gas", "adiabatic"),
