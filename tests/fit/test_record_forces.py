@@ -23,6 +23,7 @@ from rbjax.fit.rounds import Lane, pick_best
 from rbjax.fit.start import alternative_starts
 from rbjax.solve.record_samples import (
     MAX_RATE_STEP,
+    StiffnessKnown,
     first_contact_jacobian,
     record_samples,
     spectral_radius_bound,
@@ -323,3 +324,17 @@ def test_the_best_converged_start_is_kept():
     assert pick_best(lanes) is lanes[2]  # the cheapest start that did not converge is not taken
     none = [lane(5.0, False), lane(4.0, False)]
     assert pick_best(none) is none[1]  # none converged: the least cost, reported as not converged
+
+
+def test_a_ball_with_its_stiffness_known_reads_through_and_gives_reissners():
+    # the sample loop's ball: its fields and the stiffness of the ball it wraps, also under a
+    # trace (where it is made, inside the fit's program); k = 4Eh²/(R√(3(1−ν²))), Reissner
+    from rbjax.terms.forces import reissner_stiffness_N_per_m
+
+    ball = JIS_RUBBER_BALL
+    k = 4 * ball.youngs_Pa * ball.wall_m**2 / (ball.radius_m * math.sqrt(3 * (1 - ball.poisson**2)))
+    known = StiffnessKnown(ball)
+    assert known.radius_m == ball.radius_m and known.mass_kg == ball.mass_kg
+    np.testing.assert_allclose(float(reissner_stiffness_N_per_m(known)), k, rtol=1e-12)
+    traced = jax.jit(lambda b: reissner_stiffness_N_per_m(StiffnessKnown(b)))(ball)
+    np.testing.assert_allclose(float(traced), k, rtol=1e-12)

@@ -42,8 +42,13 @@ def reissner_stiffness_N_per_m(ball) -> jnp.ndarray:
             and ``poisson``; array fields broadcast).
 
     Returns:
-        The stiffness k = F_B/δ of the shell (N/m), with the broadcast shape of the ball's fields.
+        The stiffness k = F_B/δ of the shell (N/m), with the broadcast shape of the ball's fields
+        (a ball that carries it already, ``known_stiffness_N_per_m``, gives that: see
+        :class:`rbjax.solve.record_samples.StiffnessKnown`).
     """
+    known = getattr(ball, "known_stiffness_N_per_m", None)
+    if known is not None:
+        return known
     e, h, r, nu = ball.youngs_Pa, ball.wall_m, ball.radius_m, ball.poisson
     bending = e * h**3 / (12.0 * (1.0 - nu**2))
     reduced_wall = h / jnp.sqrt(12.0 * (1.0 - nu**2))
