@@ -96,7 +96,7 @@ class FitData:
         if self.lowpass_Hz is None:
             sos = np.zeros((1, 6))
         else:
-            sos = np.asarray(butter_lowpass_sos(4, self.lowpass_Hz, self.rate_Hz), dtype=float)
+            sos = butter_lowpass_sos(4, self.lowpass_Hz, self.rate_Hz)
         sos.flags.writeable = False
         return sos
 
